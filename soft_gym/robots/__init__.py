@@ -1,0 +1,6 @@
+"""Arm descriptions, presets, the PyBullet builder and the pneumatics."""
+
+from soft_gym.robots.presets import PRESETS, get_preset
+from soft_gym.robots.spec import ArmSpec, SegmentSpec
+
+__all__ = ["ArmSpec", "SegmentSpec", "PRESETS", "get_preset"]

@@ -1,0 +1,79 @@
+"""Pneumatic actuation: first-order pressure lag and the pressure -> force/moment map.
+
+DESIGN.md section 3: chamber ``i`` at gauge pressure ``p_i`` over area ``A_c`` pushes
+``F_i = p_i A_c``; its segment receives the axial force ``sum_i F_i`` and the bending moment
+``sum_i F_i d (sin sigma_i, -cos sigma_i)`` about the local x and y axes. Equal pressures give no
+moment, so pre-pressure only lengthens the arm.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from soft_gym._validation import as_finite_array
+from soft_gym.robots.spec import ArmSpec
+
+
+class PneumaticSupply:
+    """Chamber pressures following their commands with a first-order lag, within [0, p_max].
+
+    The lag is integrated exactly over each update interval:
+    ``p <- p + (p_cmd - p) (1 - exp(-dt / tau))``.
+    """
+
+    def __init__(self, spec: ArmSpec) -> None:
+        self.spec = spec
+        self.p_max_pa = spec.p_max_pa
+        self.pressure_pa = spec.p_pre_pa.copy()
+        self.command_pa = spec.p_pre_pa.copy()
+        self.time_constant_s = spec.pneumatic_time_constant_s
+
+    def reset(self, pressure_pa: np.ndarray | None = None) -> None:
+        """Set pressures and commands to ``pressure_pa`` (default: the pre-pressure)."""
+        start = self.spec.p_pre_pa if pressure_pa is None else self.check_command(pressure_pa)
+        self.pressure_pa = np.array(start, dtype=float)
+        self.command_pa = self.pressure_pa.copy()
+
+    def check_command(self, pressure_pa: np.ndarray) -> np.ndarray:
+        """Validate a pressure command: shape (n_chambers,), finite, within [0, p_max]."""
+        n = self.spec.n_chambers
+        command = as_finite_array("pressures_pa", pressure_pa, shape=(n,))
+        if np.any(command < 0) or np.any(command > self.p_max_pa * (1 + 1e-9)):
+            raise ValueError(
+                f"pressures_pa must lie within [0, p_max_pa={self.p_max_pa.tolist()}], "
+                f"got {command.tolist()}")
+        return np.minimum(command, self.p_max_pa)
+
+    def command(self, pressure_pa: np.ndarray) -> None:
+        """Set the commanded pressures (Pa)."""
+        self.command_pa = self.check_command(pressure_pa)
+
+    def advance(self, dt_s: float) -> np.ndarray:
+        """Advance the lag by ``dt_s`` seconds and return the chamber pressures (Pa)."""
+        alpha = 1.0 - math.exp(-dt_s / self.time_constant_s)
+        self.pressure_pa = self.pressure_pa + (self.command_pa - self.pressure_pa) * alpha
+        return self.pressure_pa
+
+
+def chamber_loads(spec: ArmSpec, pressure_pa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-segment axial force (N) and bending moment (N m) from chamber pressures.
+
+    Args:
+        spec: the arm.
+        pressure_pa: chamber gauge pressures, shape (n_chambers,).
+
+    Returns:
+        ``(axial_force_n, moment_nm)`` with shapes (n_segments,) and (n_segments, 2); the moment
+        is about the segment's local x and y axes (DESIGN.md section 3).
+    """
+    pressure = np.asarray(pressure_pa, dtype=float).reshape(spec.n_segments, 3)
+    area = np.array([segment.chamber_area_m2 for segment in spec.segments])[:, None]
+    offset = spec.chamber_offset_m[:, None]
+    sigma = 2.0 * np.pi * np.arange(3) / 3.0
+    force = pressure * area
+    axial = force.sum(axis=1)
+    moment = np.stack([(force * offset * np.sin(sigma)).sum(axis=1),
+                       (-force * offset * np.cos(sigma)).sum(axis=1)], axis=1)
+    return axial, moment

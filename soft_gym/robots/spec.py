@@ -1,0 +1,233 @@
+"""Arm and segment descriptions: geometry, material and actuation, validated on construction.
+
+All quantities are SI (m, kg, s, Pa, rad). The derived section properties follow from a solid
+silicone cylinder with three chamber bores at distance ``chamber_offset_m`` from the axis at angles
+``sigma_i = 2 pi i / 3`` (DESIGN.md section 2):
+
+* cross-section area ``A = pi R^2 - 3 A_c``
+* second moment of area about any diameter ``I = pi R^4 / 4 - 3 A_c^2 / (4 pi) - 1.5 A_c d^2``
+  (each bore treated as a circle of area ``A_c``; the parallel-axis terms sum to ``1.5 A_c d^2``
+  whatever the bending direction, since ``sum_i sin^2(sigma_i - phi) = 3/2``)
+* polar moment ``J = 2 I``; shear modulus ``G = E / (2 (1 + nu))``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from soft_gym._validation import require_in_range, require_non_negative, require_positive
+
+MOUNTS = ("hanging", "upright", "horizontal")
+"""How the arm base is mounted: hanging (tip down, the papers' setups), upright, horizontal."""
+
+
+@dataclass(frozen=True)
+class SegmentSpec:
+    """One pneumatic segment with three chambers.
+
+    Attributes:
+        length_m: rest length of the backbone (m).
+        outer_radius_m: outer radius of the silicone body (m).
+        chamber_offset_m: distance ``d`` of each chamber centre from the axis (m).
+        chamber_area_m2: pressurised cross-section ``A_c`` of one chamber (m^2).
+        youngs_modulus_pa: small-strain Young's modulus ``E`` of the body (Pa).
+        poisson_ratio: ``nu`` (silicone is nearly incompressible, about 0.48).
+        density_kg_m3: body density (kg/m^3).
+        n_links: rigid links the segment is cut into in the simulator.
+        p_max_pa: highest chamber pressure (gauge, Pa).
+        p_pre_pa: pre-pressure every chamber rests at (gauge, Pa); ho2018 uses 0.04 MPa.
+        bending_stiffening: dimensionless ``beta_b`` of the hyperelastic stiffening
+            ``k_b(kappa) = k_b0 (1 + beta_b (kappa R)^2)`` (secant stiffness).
+        axial_stiffening: ``beta_a`` in ``k_a(eps) = k_a0 (1 + beta_a eps^2)``.
+        axial_modulus_pa: axial modulus if it differs from ``E`` (e.g. a braided PMA bundle).
+        max_extension_ratio: longest allowed link length over rest length (joint limit).
+        max_bend_per_m_rad: largest curvature allowed by the joint limits (rad/m).
+        damping_ratio: damping ratio of each joint against its own link's inertia.
+        torsion: whether links get a torsion joint (stiffness ``G J / ds``).
+        extra_tip_mass_kg: mass fixed at this segment's distal end (connector, tip cap, camera).
+        rotary_inertia_scale: factor on each link's transverse inertia about its centre of mass
+            (explicit-dynamics mass scaling: slows the stiffest, link-local bending modes and so
+            allows a longer physics step, while the arm's low modes, dominated by the links'
+            translational inertia, change little; 1 is the physical value).
+    """
+
+    length_m: float
+    outer_radius_m: float
+    chamber_offset_m: float
+    chamber_area_m2: float
+    youngs_modulus_pa: float
+    poisson_ratio: float = 0.48
+    density_kg_m3: float = 1070.0
+    n_links: int = 4
+    p_max_pa: float = 100e3
+    p_pre_pa: float = 0.0
+    bending_stiffening: float = 0.0
+    axial_stiffening: float = 0.0
+    axial_modulus_pa: float | None = None
+    max_extension_ratio: float = 1.6
+    max_bend_per_m_rad: float = 40.0
+    damping_ratio: float = 0.7
+    torsion: bool = False
+    extra_tip_mass_kg: float = 0.0
+    rotary_inertia_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("length_m", "outer_radius_m", "chamber_offset_m", "chamber_area_m2",
+                     "youngs_modulus_pa", "density_kg_m3", "p_max_pa", "max_bend_per_m_rad",
+                     "damping_ratio", "rotary_inertia_scale"):
+            require_positive(name, getattr(self, name))
+        for name in ("p_pre_pa", "bending_stiffening", "axial_stiffening", "extra_tip_mass_kg"):
+            require_non_negative(name, getattr(self, name))
+        require_in_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5)
+        if self.axial_modulus_pa is not None:
+            require_positive("axial_modulus_pa", self.axial_modulus_pa)
+        if not isinstance(self.n_links, (int, np.integer)) or not 2 <= self.n_links <= 40:
+            raise ValueError(f"n_links must be an integer in [2, 40], got {self.n_links!r}")
+        if self.max_extension_ratio <= 1.0 or not np.isfinite(self.max_extension_ratio):
+            raise ValueError(f"max_extension_ratio must be > 1, got {self.max_extension_ratio!r}")
+        if self.chamber_offset_m >= self.outer_radius_m:
+            raise ValueError(
+                f"chamber_offset_m must be smaller than outer_radius_m={self.outer_radius_m}, "
+                f"got {self.chamber_offset_m!r}")
+        if self.area_m2 <= 0 or self.second_moment_m4 <= 0:
+            raise ValueError(
+                f"chamber_area_m2={self.chamber_area_m2!r} leaves no solid cross-section for "
+                f"outer_radius_m={self.outer_radius_m} and chamber_offset_m={self.chamber_offset_m}")
+        if self.p_pre_pa > self.p_max_pa:
+            raise ValueError(f"p_pre_pa must be <= p_max_pa={self.p_max_pa}, got {self.p_pre_pa!r}")
+
+    # --- derived section properties -------------------------------------------------------------
+    @property
+    def area_m2(self) -> float:
+        """Solid cross-section area ``pi R^2 - 3 A_c`` (m^2)."""
+        return math.pi * self.outer_radius_m**2 - 3.0 * self.chamber_area_m2
+
+    @property
+    def second_moment_m4(self) -> float:
+        """Second moment of area ``I`` about any diameter (m^4), see the module docstring."""
+        a_c, d = self.chamber_area_m2, self.chamber_offset_m
+        return (math.pi * self.outer_radius_m**4 / 4.0 - 3.0 * a_c**2 / (4.0 * math.pi)
+                - 1.5 * a_c * d**2)
+
+    @property
+    def bending_rigidity_nm2(self) -> float:
+        """``E I`` (N m^2)."""
+        return self.youngs_modulus_pa * self.second_moment_m4
+
+    @property
+    def axial_rigidity_n(self) -> float:
+        """``E_a A`` (N)."""
+        modulus = self.axial_modulus_pa if self.axial_modulus_pa is not None else self.youngs_modulus_pa
+        return modulus * self.area_m2
+
+    @property
+    def torsional_rigidity_nm2(self) -> float:
+        """``G J`` with ``J = 2 I`` (N m^2)."""
+        shear = self.youngs_modulus_pa / (2.0 * (1.0 + self.poisson_ratio))
+        return shear * 2.0 * self.second_moment_m4
+
+    @property
+    def link_length_m(self) -> float:
+        """Rest length ``ds = L / n_links`` of one link (m)."""
+        return self.length_m / self.n_links
+
+    @property
+    def mass_kg(self) -> float:
+        """Body mass without ``extra_tip_mass_kg`` (kg)."""
+        return self.density_kg_m3 * self.area_m2 * self.length_m
+
+    @property
+    def chamber_angles_rad(self) -> np.ndarray:
+        """Chamber angles ``sigma_i = 2 pi i / 3`` (rad)."""
+        return 2.0 * np.pi * np.arange(3) / 3.0
+
+
+@dataclass(frozen=True)
+class ArmSpec:
+    """A whole arm: segments from base to tip plus mounting, pneumatics and timing.
+
+    Attributes:
+        name: preset name.
+        segments: segments from base to tip.
+        mount: one of :data:`MOUNTS`; sets gravity in the base frame (hanging: +z).
+        pneumatic_time_constant_s: first-order lag from commanded to chamber pressure (s).
+        control_period_s: environment step (s).
+        physics_dt_s: physics substep (s); must divide ``control_period_s``.
+        actuation_update_s: how often pressures, stiffening and scenario masses are refreshed
+            inside a control step (s); a multiple of ``physics_dt_s``.
+        description: where the numbers come from.
+    """
+
+    name: str
+    segments: tuple[SegmentSpec, ...]
+    mount: str = "hanging"
+    pneumatic_time_constant_s: float = 0.15
+    control_period_s: float = 0.05
+    physics_dt_s: float = 1e-3
+    actuation_update_s: float = 5e-3
+    description: str = ""
+    notes: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        if not self.segments:
+            raise ValueError("segments must hold at least one SegmentSpec, got an empty tuple")
+        for i, segment in enumerate(self.segments):
+            if not isinstance(segment, SegmentSpec):
+                raise ValueError(f"segments[{i}] must be a SegmentSpec, got {type(segment).__name__}")
+        if self.mount not in MOUNTS:
+            raise ValueError(f"mount must be one of {list(MOUNTS)}, got {self.mount!r}")
+        for name in ("pneumatic_time_constant_s", "control_period_s", "physics_dt_s",
+                     "actuation_update_s"):
+            require_positive(name, getattr(self, name))
+        for name, value in (("control_period_s", self.control_period_s),
+                            ("actuation_update_s", self.actuation_update_s)):
+            ratio = value / self.physics_dt_s
+            if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
+                raise ValueError(
+                    f"{name}={value} must be a whole multiple of physics_dt_s={self.physics_dt_s}")
+
+    @property
+    def n_segments(self) -> int:
+        return len(self.segments)
+
+    @property
+    def n_chambers(self) -> int:
+        return 3 * len(self.segments)
+
+    @property
+    def length_m(self) -> float:
+        """Total rest length (m)."""
+        return sum(segment.length_m for segment in self.segments)
+
+    @property
+    def p_max_pa(self) -> np.ndarray:
+        """Per-chamber pressure limit (Pa), shape (n_chambers,)."""
+        return np.repeat([segment.p_max_pa for segment in self.segments], 3).astype(float)
+
+    @property
+    def p_pre_pa(self) -> np.ndarray:
+        """Per-chamber pre-pressure (Pa), shape (n_chambers,)."""
+        return np.repeat([segment.p_pre_pa for segment in self.segments], 3).astype(float)
+
+    @property
+    def chamber_offset_m(self) -> np.ndarray:
+        """Per-segment chamber offset ``d`` (m), shape (n_segments,)."""
+        return np.array([segment.chamber_offset_m for segment in self.segments])
+
+    @property
+    def substeps_per_control(self) -> int:
+        return int(round(self.control_period_s / self.physics_dt_s))
+
+    @property
+    def substeps_per_actuation(self) -> int:
+        return int(round(self.actuation_update_s / self.physics_dt_s))
+
+    @property
+    def gravity_base(self) -> np.ndarray:
+        """Gravity in the base frame (m/s^2) for the mount."""
+        g = 9.81
+        return {"hanging": np.array([0.0, 0.0, g]), "upright": np.array([0.0, 0.0, -g]),
+                "horizontal": np.array([-g, 0.0, 0.0])}[self.mount]
