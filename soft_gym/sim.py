@@ -26,6 +26,8 @@ class Load(Protocol):
 
     def update(self, sim: "ArmSimulator", time_s: float) -> None: ...
 
+    def reset(self, sim: "ArmSimulator") -> None: ...
+
     def detach(self, sim: "ArmSimulator") -> None: ...
 
 
@@ -187,6 +189,7 @@ class ArmSimulator:
         self.time_s = 0.0
         self._substep = 0
         for load in self.loads:
+            load.reset(self)
             load.update(self, 0.0)
         if settle_s > 0:
             self.step_physics(settle_s)

@@ -1,0 +1,5 @@
+"""Environments and their registration with Gymnasium."""
+
+from soft_gym.envs.soft_arm_env import SoftArmEnv
+
+__all__ = ["SoftArmEnv"]

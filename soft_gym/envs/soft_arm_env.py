@@ -1,0 +1,222 @@
+"""``SoftArmEnv``: a simulator, an arm preset, a task and a scenario composed into one Gymnasium env.
+
+## Action space
+``Box(-1, 1, (3 * n_segments,), float32)``: one entry per chamber (segment ``k`` owns chambers
+``3k..3k+2`` at angles ``2 pi i / 3``).
+
+* ``action_mode="absolute"`` (default): ``p = p_pre + (a + 1) / 2 (p_max - p_pre)`` (Pa).
+* ``action_mode="delta"``: ``p_cmd <- clip(p_cmd + a * delta_fraction * p_max, p_pre, p_max)``.
+
+Actions outside [-1, 1], non-finite or of the wrong shape raise ``ValueError``.
+
+## Observation space
+A flat ``Box(float32)`` concatenating the parts named in ``obs`` (in that order):
+
+| part       | size            | content                                                   | unit |
+|------------|-----------------|-----------------------------------------------------------|------|
+| `pose`     | 7               | tip position (x, y, z) and quaternion (x, y, z, w)        | m, - |
+| `target`   | 6               | current target and next target positions                  | m    |
+| `pressure` | 3 * n_segments  | chamber pressures over p_max                              | -    |
+
+## Reward
+``-||tip - target|| (m) - action_rate_weight * ||a_t - a_{t-1}||^2``.
+
+## Episode end
+Reach: truncated after ``episode_steps`` (default 100, 5 s). Track: truncated when the path's
+last target has been presented.
+
+## Info
+``tip_position_m``, ``tip_quaternion``, ``target_m``, ``error_mm``, ``backbone_m``,
+``chamber_lengths_m``, ``pressures_pa``, ``time_s``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from soft_gym.robots.presets import get_preset
+from soft_gym.robots.spec import ArmSpec
+from soft_gym.scenarios import make_scenario
+from soft_gym.sim import ArmSimulator
+from soft_gym.tasks import ReachTask, TrackTask
+
+OBSERVATION_PARTS = ("pose", "target", "pressure")
+ACTION_MODES = ("absolute", "delta")
+TASKS = ("reach", "track")
+
+
+class SoftArmEnv(gym.Env):
+    """Pneumatic soft continuum arm in PyBullet (see the module docstring for the spaces).
+
+    Args:
+        preset: arm preset name (``wang2023``, ``zhao2021``, ``zou2022``, ``ho2018``) or an ArmSpec.
+        task: ``"reach"`` or ``"track"``.
+        path: tracking path (``circle``, ``pentagram``, ``rectangle``, ``spiral``, ``star``,
+            ``waypoints``); track only.
+        cycles: path repetitions; track only.
+        speed_m_s: target speed (m/s); track only (default: a circle cycle in 20 s).
+        waypoints_m: user path points (m), with ``path="waypoints"``.
+        scenario: loads and disturbances (see :mod:`soft_gym.scenarios`).
+        obs: observation parts, a subset of ``("pose", "target", "pressure")`` in any order.
+        action_mode: ``"absolute"`` or ``"delta"``.
+        delta_fraction: pressure change per unit action in delta mode, as a fraction of p_max.
+        action_rate_weight: weight of the action-rate penalty.
+        episode_steps: reach episode length in control steps.
+        settle_s: simulated time the arm rests before each episode (s).
+        render_mode: ``None`` or ``"rgb_array"``.
+        render_size: (width, height) of rendered frames in pixels.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+
+    def __init__(self, preset: str | ArmSpec = "wang2023", task: str = "reach",
+                 path: str = "circle", cycles: int = 1, speed_m_s: float | None = None,
+                 waypoints_m: Any = None, scenario: Any = None,
+                 obs: tuple[str, ...] = OBSERVATION_PARTS, action_mode: str = "absolute",
+                 delta_fraction: float = 0.1, action_rate_weight: float = 0.001,
+                 episode_steps: int = 100, settle_s: float = 0.5,
+                 render_mode: str | None = None, render_size: tuple[int, int] = (320, 240)) -> None:
+        self.spec_arm = preset if isinstance(preset, ArmSpec) else get_preset(preset)
+        if task not in TASKS:
+            raise ValueError(f"task must be one of {list(TASKS)}, got {task!r}")
+        if action_mode not in ACTION_MODES:
+            raise ValueError(f"action_mode must be one of {list(ACTION_MODES)}, got {action_mode!r}")
+        obs = (obs,) if isinstance(obs, str) else tuple(obs)
+        unknown = [part for part in obs if part not in OBSERVATION_PARTS]
+        if unknown or not obs or len(set(obs)) != len(obs):
+            raise ValueError(
+                f"obs must be a non-empty tuple of distinct parts from {list(OBSERVATION_PARTS)}, "
+                f"got {obs!r}")
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if not 0 < delta_fraction <= 1:
+            raise ValueError(f"delta_fraction must be in (0, 1], got {delta_fraction!r}")
+        if action_rate_weight < 0:
+            raise ValueError(f"action_rate_weight must be >= 0, got {action_rate_weight!r}")
+        self.loads = make_scenario(scenario)
+        self.task = (ReachTask(self.spec_arm, episode_steps) if task == "reach" else
+                     TrackTask(self.spec_arm, path=path, cycles=cycles, speed_m_s=speed_m_s,
+                               waypoints_m=waypoints_m))
+        self.sim = ArmSimulator(self.spec_arm)
+        for load in self.loads:
+            self.sim.add_load(load)
+        self.obs_parts = obs
+        self.action_mode = action_mode
+        self.delta_fraction = float(delta_fraction)
+        self.action_rate_weight = float(action_rate_weight)
+        self.settle_s = float(settle_s)
+        self.render_mode = render_mode
+        self.render_size = tuple(render_size)
+
+        n = self.spec_arm.n_chambers
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
+        reach = 5.0 * self.spec_arm.length_m * max(s.max_extension_ratio for s in self.spec_arm.segments)
+        sizes = {"pose": 7, "target": 6, "pressure": n}
+        low = np.concatenate([self._part_bounds(p, reach, sizes[p])[0] for p in obs])
+        high = np.concatenate([self._part_bounds(p, reach, sizes[p])[1] for p in obs])
+        self.observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32),
+                                            dtype=np.float32)
+        self._p_low = self.spec_arm.p_pre_pa
+        self._p_high = self.spec_arm.p_max_pa
+        self._step = 0
+        self._last_action = np.zeros(n)
+        self._command = self._p_low.copy()
+
+    @staticmethod
+    def _part_bounds(part: str, reach: float, size: int) -> tuple[np.ndarray, np.ndarray]:
+        if part == "pose":
+            return (np.r_[np.full(3, -reach), np.full(4, -1.0)],
+                    np.r_[np.full(3, reach), np.full(4, 1.0)])
+        if part == "target":
+            return np.full(size, -reach), np.full(size, reach)
+        return np.zeros(size), np.full(size, 1.0)
+
+    # ------------------------------------------------------------------ gymnasium API
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        self.sim.reset(settle_s=self.settle_s)
+        self.task.reset(self.np_random)
+        self._step = 0
+        self._last_action = np.zeros(self.spec_arm.n_chambers)
+        self._command = self._p_low.copy()
+        return self._observation(), self._info()
+
+    def step(self, action):
+        action = self._check_action(action)
+        if self.action_mode == "absolute":
+            self._command = self._p_low + (action + 1.0) / 2.0 * (self._p_high - self._p_low)
+        else:
+            self._command = np.clip(self._command + action * self.delta_fraction * self._p_high,
+                                    self._p_low, self._p_high)
+        self.sim.set_pressures(self._command)
+        self.sim.step_physics(self.spec_arm.control_period_s)
+        self._step += 1
+        tip, _ = self.sim.tip_pose()
+        target, _ = self.task.target(self._step - 1)
+        error_m = float(np.linalg.norm(tip - target))
+        rate = float(np.sum((action - self._last_action) ** 2))
+        reward = -error_m - self.action_rate_weight * rate
+        self._last_action = action
+        truncated = self.task.is_over(self._step)
+        info = self._info(tip_target=(tip, target))
+        return self._observation(), reward, False, truncated, info
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        width, height = self.render_size
+        length = self.spec_arm.length_m
+        view = self.sim.client.computeViewMatrix(
+            cameraEyePosition=[2.2 * length, -2.2 * length, 0.4 * length],
+            cameraTargetPosition=[0, 0, 0.6 * length], cameraUpVector=[0, 0, -1])
+        projection = self.sim.client.computeProjectionMatrixFOV(
+            fov=50, aspect=width / height, nearVal=0.01, farVal=10 * length)
+        image = self.sim.client.getCameraImage(width, height, view, projection,
+                                               renderer=self.sim.client.ER_TINY_RENDERER)[2]
+        return np.asarray(image, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+
+    def close(self):
+        self.sim.close()
+
+    # ------------------------------------------------------------------ helpers
+    def _check_action(self, action) -> np.ndarray:
+        try:
+            array = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"action must be numeric, got {action!r}") from error
+        if array.shape != self.action_space.shape:
+            raise ValueError(f"action must have shape {self.action_space.shape}, got {array.shape}")
+        if not np.all(np.isfinite(array)):
+            raise ValueError(f"action must be finite, got {array.tolist()}")
+        if np.any(np.abs(array) > 1.0 + 1e-6):
+            raise ValueError(f"action must lie in [-1, 1], got {array.tolist()}")
+        return np.clip(array, -1.0, 1.0)  # only float32 rounding beyond +-1 reaches here
+
+    def _observation(self) -> np.ndarray:
+        parts = []
+        for part in self.obs_parts:
+            if part == "pose":
+                position, quaternion = self.sim.tip_pose()
+                parts.append(np.r_[position, quaternion])
+            elif part == "target":
+                current, upcoming = self.task.target(self._step)
+                parts.append(np.r_[current, upcoming])
+            else:
+                parts.append(self.sim.pressures_pa / self._p_high)
+        return np.concatenate(parts).astype(np.float32)
+
+    def _info(self, tip_target: tuple[np.ndarray, np.ndarray] | None = None) -> dict:
+        position, quaternion = self.sim.tip_pose()
+        target = self.task.target(self._step)[0] if tip_target is None else tip_target[1]
+        return {
+            "tip_position_m": position, "tip_quaternion": quaternion,
+            "target_m": np.array(target, dtype=float),
+            "error_mm": float(np.linalg.norm(position - target) * 1000.0),
+            "backbone_m": self.sim.backbone(), "chamber_lengths_m": self.sim.chamber_lengths(),
+            "pressures_pa": self.sim.pressures_pa, "time_s": self.sim.time_s,
+            "step": self._step,
+        }
