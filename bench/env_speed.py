@@ -1,0 +1,317 @@
+"""Speed and step-size accuracy benchmark of the soft-arm environments.
+
+For every arm preset (or the ``--presets`` subset) this script measures:
+
+1. **Env steps per second** -- ``env.step(action)`` with seeded random actions for ``--steps``
+   control steps after a seeded ``reset``. When an episode truncates the env is reset; those
+   resets are timed separately and are *not* part of the step rate.
+2. **Physics-only bound** -- on the same PyBullet client and body, right after the env loop,
+   ``client.stepSimulation()`` is called ``steps * substeps_per_control`` times with nothing else
+   (no spring torques, no pneumatics, no observations). Its wall time is expressed as the
+   equivalent "env steps per second" and the ratio ``env / physics`` says which fraction of the
+   raw PyBullet rate the full environment reaches (1 would mean zero Python overhead).
+3. **Reset time** -- mean and max wall time of ``env.reset()`` over ``--resets`` calls (this
+   includes the env's settling time, ``settle_s`` of simulated rest).
+4. **Simulated time per wall second** -- ``steps * control_period_s`` divided by the wall time
+   of the env steps (also given with the in-loop resets included).
+5. **Step-size accuracy** -- a fixed, seeded sequence of random chamber pressures (uniform in
+   ``[p_pre, p_max]``, each held for one control period, ``--accuracy-steps`` periods after the
+   same settling as the env) is simulated with ``ArmSimulator(spec)`` and with a reference whose
+   physics step is 4x smaller (``dataclasses.replace(spec, physics_dt_s=physics_dt_s / 4)``, the
+   actuation update period unchanged). The tip positions are compared after every control period;
+   the maximum and final deviations are reported in mm, next to the tip's largest excursion from
+   its settled position for scale.
+
+Also reported: ``physics_dt_s``, physics substeps per control step, and the number of joints of
+the PyBullet body.
+
+Results are printed as a table; the full results go to ``--json PATH`` or, without it, are printed
+as JSON on stdout after the table. Timings are single-threaded wall-clock times
+(``time.perf_counter``) and depend on the machine and its load.
+
+Example::
+
+    PYTHONPATH=. python bench/env_speed.py
+    PYTHONPATH=. python bench/env_speed.py --presets wang2023 ho2018 --steps 2000 --json speed.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import datetime
+import json
+import os
+import platform
+import sys
+import time
+from typing import Iterator
+
+import gymnasium as gym
+import numpy as np
+import pybullet
+
+import soft_gym  # noqa: F401  (registers the environment ids)
+from soft_gym.envs.soft_arm_env import TASKS
+from soft_gym.envs.registration import TASK_IDS
+from soft_gym.robots import PRESETS, get_preset
+from soft_gym.sim import ArmSimulator
+
+REFERENCE_REFINEMENT = 4
+
+
+@contextlib.contextmanager
+def quiet_stdout() -> Iterator[None]:
+    """Silence C-level writes to stdout (PyBullet prints ``argv[0]=`` when it connects)."""
+    sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+    except OSError:  # no real file descriptor (e.g. captured stdout): nothing to silence
+        yield
+        return
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), 1)
+            try:
+                yield
+            finally:
+                sys.stdout.flush()
+                os.dup2(saved, 1)
+    finally:
+        os.close(saved)
+
+
+def time_env(preset: str, task: str, steps: int, resets: int, seed: int) -> dict:
+    """Measurements 1-4 for one preset (one env, one PyBullet client)."""
+    start = time.perf_counter()
+    with quiet_stdout():
+        env = gym.make(TASK_IDS[task], preset=preset)
+    make_s = time.perf_counter() - start
+    try:
+        sim = env.unwrapped.sim
+        spec = sim.spec
+        control_period_s = float(spec.control_period_s)
+        physics_dt_s = float(sim.physics_dt_s)
+        substeps = int(round(control_period_s / physics_dt_s))
+
+        # 1. + 4. the env loop
+        env.action_space.seed(seed)
+        env.reset(seed=seed)
+        actions = [env.action_space.sample() for _ in range(steps)]
+        step_s = 0.0
+        loop_reset_s = 0.0
+        loop_resets = 0
+        for action in actions:
+            t0 = time.perf_counter()
+            _, _, terminated, truncated, _ = env.step(action)
+            t1 = time.perf_counter()
+            step_s += t1 - t0
+            if terminated or truncated:
+                env.reset()
+                loop_reset_s += time.perf_counter() - t1
+                loop_resets += 1
+
+        # 2. physics-only bound: the same client and body, bare stepSimulation calls
+        client = sim.client
+        n_substeps = steps * substeps
+        step_simulation = client.stepSimulation
+        t0 = time.perf_counter()
+        for _ in range(n_substeps):
+            step_simulation()
+        physics_s = time.perf_counter() - t0
+
+        # 3. reset time
+        reset_times = []
+        for i in range(resets):
+            t0 = time.perf_counter()
+            env.reset(seed=seed + 1 + i)
+            reset_times.append(time.perf_counter() - t0)
+
+        env_sps = steps / step_s
+        physics_sps = steps / physics_s
+        return {
+            "preset": preset,
+            "task": task,
+            "n_joints": int(sim.arm.n_joints),
+            "n_chambers": int(spec.n_chambers),
+            "control_period_s": control_period_s,
+            "physics_dt_s": physics_dt_s,
+            "actuation_update_s": float(spec.actuation_update_s),
+            "substeps_per_control": substeps,
+            "settle_s": float(env.unwrapped.settle_s),
+            "make_s": make_s,
+            "steps": steps,
+            "env_step_wall_s": step_s,
+            "env_steps_per_s": env_sps,
+            "env_step_ms": 1000.0 * step_s / steps,
+            "loop_resets": loop_resets,
+            "loop_reset_wall_s": loop_reset_s,
+            "physics_substeps": n_substeps,
+            "physics_wall_s": physics_s,
+            "physics_substeps_per_s": n_substeps / physics_s,
+            "physics_equiv_env_steps_per_s": physics_sps,
+            "env_over_physics": env_sps / physics_sps,
+            "reset_count": resets,
+            "reset_ms_mean": 1000.0 * float(np.mean(reset_times)) if reset_times else None,
+            "reset_ms_max": 1000.0 * float(np.max(reset_times)) if reset_times else None,
+            "sim_s_per_wall_s": steps * control_period_s / step_s,
+            "sim_s_per_wall_s_with_resets": steps * control_period_s / (step_s + loop_reset_s),
+        }
+    finally:
+        env.close()
+
+
+def tip_trajectory(spec, physics_dt_s: float, commands: np.ndarray, settle_s: float) -> np.ndarray:
+    """Tip positions (m) after settling and after each held command, shape (len(commands)+1, 3)."""
+    with quiet_stdout():
+        sim = ArmSimulator(spec, physics_dt_s=physics_dt_s)
+    try:
+        sim.reset(settle_s=settle_s)
+        tips = [sim.tip_pose()[0]]
+        for pressure in commands:
+            sim.set_pressures(pressure)
+            sim.step_physics(spec.control_period_s)
+            tips.append(sim.tip_pose()[0])
+        return np.array(tips)
+    finally:
+        sim.close()
+
+
+def accuracy(preset: str, control_steps: int, settle_s: float, seed: int) -> dict:
+    """Measurement 5: tip deviation of the default physics step from a 4x finer one."""
+    spec = get_preset(preset)
+    rng = np.random.default_rng(seed)
+    low, high = spec.p_pre_pa, spec.p_max_pa
+    commands = low + rng.random((control_steps, spec.n_chambers)) * (high - low)
+    fine_dt = spec.physics_dt_s / REFERENCE_REFINEMENT
+    fine_spec = dataclasses.replace(spec, physics_dt_s=fine_dt)
+    t0 = time.perf_counter()
+    coarse = tip_trajectory(spec, spec.physics_dt_s, commands, settle_s)
+    fine = tip_trajectory(fine_spec, fine_dt, commands, settle_s)
+    wall_s = time.perf_counter() - t0
+    deviation_mm = 1000.0 * np.linalg.norm(coarse - fine, axis=1)
+    excursion_mm = 1000.0 * np.linalg.norm(fine - fine[0], axis=1)
+    return {
+        "accuracy_control_steps": control_steps,
+        "reference_physics_dt_s": fine_dt,
+        "tip_dev_max_mm": float(deviation_mm.max()),
+        "tip_dev_final_mm": float(deviation_mm[-1]),
+        "tip_dev_mean_mm": float(deviation_mm.mean()),
+        "tip_excursion_max_mm": float(excursion_mm.max()),
+        "accuracy_wall_s": wall_s,
+    }
+
+
+COLUMNS = (
+    # header, key, format
+    ("preset", "preset", "{}"),
+    ("joints", "n_joints", "{:d}"),
+    ("dt ms", "physics_dt_s", "{:.3g}", 1000.0),
+    ("sub/step", "substeps_per_control", "{:d}"),
+    ("env st/s", "env_steps_per_s", "{:.0f}"),
+    ("phys st/s", "physics_equiv_env_steps_per_s", "{:.0f}"),
+    ("env/phys", "env_over_physics", "{:.2f}"),
+    ("reset ms", "reset_ms_mean", "{:.1f}"),
+    ("sim s/wall s", "sim_s_per_wall_s", "{:.1f}"),
+    ("dev max mm", "tip_dev_max_mm", "{:.3f}"),
+    ("dev final mm", "tip_dev_final_mm", "{:.3f}"),
+    ("excursion mm", "tip_excursion_max_mm", "{:.1f}"),
+)
+
+
+def format_table(rows: list[dict]) -> str:
+    cells = []
+    for row in rows:
+        line = []
+        for header, key, fmt, *scale in COLUMNS:
+            value = row.get(key)
+            if value is None:
+                line.append("-")
+                continue
+            if scale:
+                value = value * scale[0]
+            line.append(fmt.format(value))
+        cells.append(line)
+    headers = [c[0] for c in COLUMNS]
+    widths = [max(len(h), *(len(line[i]) for line in cells)) for i, h in enumerate(headers)]
+    aligned = [str.ljust] + [str.rjust] * (len(headers) - 1)
+    out = ["  ".join(a(h, w) for a, h, w in zip(aligned, headers, widths)),
+           "  ".join("-" * w for w in widths)]
+    out += ["  ".join(a(c, w) for a, c, w in zip(aligned, line, widths)) for line in cells]
+    return "\n".join(out)
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        description="Benchmark soft_gym environments: env step rate, physics-only bound, reset "
+                    "time, simulated time per wall second and tip accuracy against a 4x finer "
+                    "physics step. Prints a table, then JSON (or writes it to --json).",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--presets", nargs="+", choices=list(PRESETS), default=list(PRESETS),
+                        metavar="NAME", help=f"arm presets to measure, from {list(PRESETS)}")
+    parser.add_argument("--task", choices=TASKS, default="reach",
+                        help="environment task (reach: SoftArmReach-v0, track: SoftArmTrack-v0)")
+    parser.add_argument("--steps", type=int, default=1000,
+                        help="timed env steps per preset (also sets the physics-only substeps)")
+    parser.add_argument("--resets", type=int, default=5, help="timed resets per preset")
+    parser.add_argument("--accuracy-steps", type=int, default=60,
+                        help="control steps of random pressure commands in the accuracy test "
+                             "(0 skips it)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the env, its random actions and the pressure commands")
+    parser.add_argument("--json", metavar="PATH", default=None,
+                        help="write the results as JSON to PATH ('-' or omitted: print the JSON "
+                             "to stdout after the table)")
+    args = parser.parse_args(argv)
+    if args.steps < 1:
+        parser.error(f"--steps must be >= 1, got {args.steps}")
+    if args.resets < 0:
+        parser.error(f"--resets must be >= 0, got {args.resets}")
+    if args.accuracy_steps < 0:
+        parser.error(f"--accuracy-steps must be >= 0, got {args.accuracy_steps}")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    rows = []
+    total = time.perf_counter()
+    for preset in args.presets:
+        print(f"measuring {preset} ...", file=sys.stderr, flush=True)
+        row = time_env(preset, args.task, args.steps, args.resets, args.seed)
+        if args.accuracy_steps:
+            row.update(accuracy(preset, args.accuracy_steps, row["settle_s"], args.seed))
+        rows.append(row)
+    total_s = time.perf_counter() - total
+
+    results = {
+        "benchmark": "soft_gym env speed",
+        "created_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "settings": {"presets": args.presets, "task": args.task, "steps": args.steps,
+                     "resets": args.resets, "accuracy_steps": args.accuracy_steps,
+                     "seed": args.seed, "reference_refinement": REFERENCE_REFINEMENT},
+        "machine": {"python": platform.python_version(), "platform": platform.platform(),
+                    "processor": platform.processor() or platform.machine(),
+                    "cpu_count": os.cpu_count(), "pybullet_api_version": pybullet.getAPIVersion(),
+                    "numpy": np.__version__, "gymnasium": gym.__version__},
+        "total_wall_s": total_s,
+        "results": rows,
+    }
+
+    print(format_table(rows))
+    print(f"({args.steps} env steps per preset, task {args.task}, seed {args.seed}; "
+          f"accuracy: {args.accuracy_steps} control steps vs physics_dt/{REFERENCE_REFINEMENT}; "
+          f"total {total_s:.1f} s)")
+    text = json.dumps(results, indent=2)
+    if args.json in (None, "-"):
+        print(text)
+    else:
+        with open(args.json, "w", encoding="utf-8") as handle:
+            handle.write(text + "\n")
+        print(f"JSON written to {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
