@@ -5,11 +5,15 @@ For every arm preset (or the ``--presets`` subset) this script measures:
 1. **Env steps per second** -- ``env.step(action)`` with seeded random actions for ``--steps``
    control steps after a seeded ``reset``. When an episode truncates the env is reset; those
    resets are timed separately and are *not* part of the step rate.
-2. **Physics-only bound** -- on the same PyBullet client and body, right after the env loop,
+2. **Physics-only bound** -- on the same PyBullet client and body, after the env loop and one
+   more ``reset`` (the arm rests, settled, with its last spring torques still applied),
    ``client.stepSimulation()`` is called ``steps * substeps_per_control`` times with nothing else
    (no spring torques, no pneumatics, no observations). Its wall time is expressed as the
    equivalent "env steps per second" and the ratio ``env / physics`` says which fraction of the
    raw PyBullet rate the full environment reaches (1 would mean zero Python overhead).
+   As a cross-check from the env loop itself, the time spent inside ``stepSimulation`` during the
+   ``env.step`` calls is accumulated too ("phys share" = that time / env step time). The timing
+   wrapper this needs adds about 0.3 us per physics substep to the env step time (well under 1%).
 3. **Reset time** -- mean and max wall time of ``env.reset()`` over ``--resets`` calls (this
    includes the env's settling time, ``settle_s`` of simulated rest).
 4. **Simulated time per wall second** -- ``steps * control_period_s`` divided by the wall time
@@ -95,27 +99,44 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int) -> dict
         physics_dt_s = float(sim.physics_dt_s)
         substeps = int(round(control_period_s / physics_dt_s))
 
-        # 1. + 4. the env loop
+        # 1. + 4. the env loop, with the time spent inside stepSimulation accumulated
+        client = sim.client
+        step_simulation = client.stepSimulation
+        in_step = [0.0]
+        clock = time.perf_counter
+
+        def timed_step_simulation():
+            t = clock()
+            step_simulation()
+            in_step[0] += clock() - t
+
         env.action_space.seed(seed)
         env.reset(seed=seed)
         actions = [env.action_space.sample() for _ in range(steps)]
         step_s = 0.0
         loop_reset_s = 0.0
         loop_resets = 0
-        for action in actions:
-            t0 = time.perf_counter()
-            _, _, terminated, truncated, _ = env.step(action)
-            t1 = time.perf_counter()
-            step_s += t1 - t0
-            if terminated or truncated:
-                env.reset()
-                loop_reset_s += time.perf_counter() - t1
-                loop_resets += 1
+        client.stepSimulation = timed_step_simulation  # shadows BulletClient.__getattr__
+        try:
+            for action in actions:
+                t0 = clock()
+                _, _, terminated, truncated, _ = env.step(action)
+                t1 = clock()
+                step_s += t1 - t0
+                if terminated or truncated:
+                    in_reset = in_step[0]
+                    env.reset()
+                    loop_reset_s += clock() - t1
+                    loop_resets += 1
+                    in_step[0] = in_reset  # count only the physics of env.step calls
+        finally:
+            del client.stepSimulation
+        in_loop_physics_s = in_step[0]
 
-        # 2. physics-only bound: the same client and body, bare stepSimulation calls
-        client = sim.client
+        # 2. physics-only bound: the same client and body, bare stepSimulation calls, from the
+        # settled rest state of a reset (the last spring torques stay applied, so it rests there)
+        env.reset(seed=seed)
         n_substeps = steps * substeps
-        step_simulation = client.stepSimulation
         t0 = time.perf_counter()
         for _ in range(n_substeps):
             step_simulation()
@@ -152,6 +173,8 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int) -> dict
             "physics_substeps_per_s": n_substeps / physics_s,
             "physics_equiv_env_steps_per_s": physics_sps,
             "env_over_physics": env_sps / physics_sps,
+            "in_loop_physics_wall_s": in_loop_physics_s,
+            "in_loop_physics_fraction": in_loop_physics_s / step_s,
             "reset_count": resets,
             "reset_ms_mean": 1000.0 * float(np.mean(reset_times)) if reset_times else None,
             "reset_ms_max": 1000.0 * float(np.max(reset_times)) if reset_times else None,
@@ -212,6 +235,7 @@ COLUMNS = (
     ("env st/s", "env_steps_per_s", "{:.0f}"),
     ("phys st/s", "physics_equiv_env_steps_per_s", "{:.0f}"),
     ("env/phys", "env_over_physics", "{:.2f}"),
+    ("phys share", "in_loop_physics_fraction", "{:.2f}"),
     ("reset ms", "reset_ms_mean", "{:.1f}"),
     ("sim s/wall s", "sim_s_per_wall_s", "{:.1f}"),
     ("dev max mm", "tip_dev_max_mm", "{:.3f}"),

@@ -263,8 +263,9 @@ class ArmSimulator:
     def _update_actuation(self) -> None:
         """Refresh pressures, loads and the spring motors (every ``actuation_update_s``)."""
         dt = self._substeps_per_actuation * self.physics_dt_s
+        now_s = self._substep * self.physics_dt_s
         for load in self.loads:
-            load.update(self, self.time_s)
+            load.update(self, now_s)
         pressure = self.supply.advance(dt)
         axial, moment = chamber_loads(self.spec, pressure)
         per_kind = np.stack([moment[:, 0], moment[:, 1], np.zeros_like(axial), axial], axis=1)

@@ -138,9 +138,12 @@ class SwayingMass(_Timed):
         for link in range(-1, sim.arm.n_joints):
             client.setCollisionFilterPair(self._body, sim.arm.body_id, -1, link, 0)
         last = sim.arm.tip_link
+        # constraint pivots are given in the link's centre-of-mass frame
+        com = np.asarray(client.getDynamicsInfo(sim.arm.body_id, last)[3])
+        pivot = np.array([0.0, 0.0, sim.arm.station_rest_length[-1]]) - com
         self._constraint = client.createConstraint(
             sim.arm.body_id, last, self._body, -1, pybullet.JOINT_POINT2POINT, [0, 0, 0],
-            [0, 0, sim.arm.station_rest_length[-1]], [0, 0, self.length_m])
+            pivot.tolist(), (-down * self.length_m).tolist())
         client.changeConstraint(self._constraint, maxForce=1e3)
 
     def update(self, sim, time_s: float) -> None:
@@ -235,7 +238,7 @@ class ObstacleRod(_Timed):
     wang2023 fixes an aluminium rod in the workspace that limits bending on one side.
     """
 
-    point_m: tuple[float, float, float] = (-0.025, 0.0, 0.07)
+    point_m: tuple[float, float, float] = (-0.02, 0.0, 0.07)
     axis: tuple[float, float, float] = (0.0, 1.0, 0.0)
     radius_m: float = 0.004
     length_m: float = 0.2

@@ -1,0 +1,84 @@
+"""Loads and disturbances act through PyBullet and follow their schedules."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from soft_gym.robots import get_preset
+from soft_gym.scenarios import FillingLoad, Flick, ObstacleRod, Push, SwayingMass, make_scenario
+from soft_gym.sim import ArmSimulator
+
+
+def _bent_sim(*loads) -> ArmSimulator:
+    sim = ArmSimulator(get_preset("wang2023"))
+    for load in loads:
+        sim.add_load(load)
+    sim.reset(settle_s=0.5)
+    sim.set_pressures(np.array([100e3, 0.0, 0.0]))
+    return sim
+
+
+def test_filling_load_mass_rises_at_its_rate_to_its_maximum():
+    """ho2018 fluid tip: 14 g container gaining 10 g at 0.6 g/s from t = 5 s."""
+    load = FillingLoad()
+    sim = _bent_sim(load)
+    tip = sim.arm.tip_link
+    base = load._base_mass
+    sim.step_physics(4.0)
+    assert sim.link_mass(tip) - base == pytest.approx(0.014, abs=1e-6)
+    sim.step_physics(5.0)  # t = 9 s: 4 s of filling at 0.6 g/s
+    assert sim.link_mass(tip) - base == pytest.approx(0.014 + 0.0024, abs=1e-4)
+    sim.step_physics(20.0)
+    assert sim.link_mass(tip) - base == pytest.approx(0.024, abs=1e-6)
+
+
+def test_swaying_mass_hangs_at_its_length_below_the_tip():
+    load = SwayingMass(mass_kg=0.01, length_m=0.02)
+    sim = _bent_sim(load)
+    sim.step_physics(3.0)
+    ball = np.array(sim.client.getBasePositionAndOrientation(load._body)[0])
+    tip, _ = sim.tip_pose()
+    assert np.linalg.norm(ball - tip) == pytest.approx(0.02, abs=1e-3)
+    assert ball[2] > tip[2]  # hanging mount: gravity is +z in the base frame
+
+
+def test_push_moves_the_tip_along_the_force_and_releases():
+    free = _bent_sim()
+    pushed = _bent_sim(Push(force_n=(0.0, 0.1, 0.0), start_s=0.0, end_s=3.0, ramp_s=0.5))
+    free.step_physics(2.5)
+    pushed.step_physics(2.5)
+    assert pushed.tip_pose()[0][1] - free.tip_pose()[0][1] > 0.005
+    free.step_physics(8.0)
+    pushed.step_physics(8.0)
+    assert abs(pushed.tip_pose()[0][1] - free.tip_pose()[0][1]) < 1e-3
+
+
+def test_flick_displaces_briefly_then_the_arm_recovers():
+    free = _bent_sim()
+    flicked = _bent_sim(Flick(impulse_ns=(0.0, 0.003, 0.0), start_s=2.0))
+    free.step_physics(2.1)
+    flicked.step_physics(2.1)
+    assert np.linalg.norm(flicked.tip_pose()[0] - free.tip_pose()[0]) > 0.002
+    free.step_physics(6.0)
+    flicked.step_physics(6.0)
+    assert np.linalg.norm(flicked.tip_pose()[0] - free.tip_pose()[0]) < 1e-3
+
+
+def test_obstacle_rod_limits_bending_on_its_side():
+    free = _bent_sim()
+    blocked = _bent_sim(ObstacleRod(point_m=(-0.02, 0.0, 0.07), axis=(0, 1, 0), radius_m=0.004))
+    free.step_physics(3.0)
+    blocked.step_physics(3.0)
+    # chamber 0 bends the arm towards -x; the rod at x = -20 mm stops it
+    assert free.tip_pose()[0][0] < -0.028
+    assert blocked.tip_pose()[0][0] > free.tip_pose()[0][0] + 0.005
+
+
+def test_scenarios_selectable_by_name_dict_and_list():
+    loads = make_scenario(["tip_mass", {"name": "push", "link": 0}, None])
+    assert [type(load).__name__ for load in loads] == ["TipMass", "Push"]
+    with pytest.raises(ValueError, match="scenario"):
+        make_scenario(42)
+    with pytest.raises(ValueError, match="end_s"):
+        make_scenario({"name": "push", "start_s": 2.0, "end_s": 1.0})
