@@ -8,18 +8,22 @@ For every arm preset (or the ``--presets`` subset) this script measures:
 2. **Physics-only bound** -- on the same PyBullet client and body, after the env loop and one
    more ``reset`` (the arm rests, settled, with its last spring torques still applied),
    ``client.stepSimulation()`` is called ``steps * substeps_per_control`` times with nothing else
-   (no spring torques, no pneumatics, no observations). Its wall time is expressed as the
+   (no spring-torque updates, no pneumatics, no observations). Its wall time is expressed as the
    equivalent "env steps per second" and the ratio ``env / physics`` says which fraction of the
    raw PyBullet rate the full environment reaches (1 would mean zero Python overhead).
    As a cross-check from the env loop itself, the time spent inside ``stepSimulation`` during the
    ``env.step`` calls is accumulated too ("phys share" = that time / env step time). The timing
    wrapper this needs adds about 0.3 us per physics substep to the env step time (well under 1%).
+   The two need not agree: the bare loop steps a resting arm, and a bare ``stepSimulation`` has
+   been seen to take longer per call than one inside ``env.step``, so ``env / physics`` can
+   overstate what the physics alone would allow; "phys share" is the direct in-loop figure.
 3. **Reset time** -- mean and max wall time of ``env.reset()`` over ``--resets`` calls (this
    includes the env's settling time, ``settle_s`` of simulated rest).
 4. **Simulated time per wall second** -- ``steps * control_period_s`` divided by the wall time
    of the env steps (also given with the in-loop resets included).
 5. **Step-size accuracy** -- a fixed, seeded sequence of random chamber pressures (uniform in
-   ``[p_pre, p_max]``, each held for one control period, ``--accuracy-steps`` periods after the
+   ``[p_pre, p_max]``, each held for ``--hold-steps`` control periods (default 10, 0.5 s; 1 gives
+   a command jump every period, a far harsher whip), ``--accuracy-steps`` periods after the
    same settling as the env) is simulated with ``ArmSimulator(spec)`` and with a reference whose
    physics step is 4x smaller (``dataclasses.replace(spec, physics_dt_s=physics_dt_s / 4)``, the
    actuation update period unchanged). The tip positions are compared after every control period;
@@ -28,6 +32,13 @@ For every arm preset (or the ``--presets`` subset) this script measures:
 
 Also reported: ``physics_dt_s``, physics substeps per control step, and the number of joints of
 the PyBullet body.
+
+Table columns: ``joints`` (PyBullet joints), ``dt ms`` (physics step), ``sub/step`` (physics
+substeps per control step), ``env st/s`` (1), ``phys st/s`` and ``env/phys`` (2), ``phys share``
+(2, in-loop), ``reset ms`` (3, mean), ``sim s/wall s`` (4, resets excluded), ``dev max mm``,
+``dev final mm`` and ``excursion mm`` (5). The JSON holds these and more (make time, in-loop
+reset count and time, reset max, real-time factor with resets, mean deviation, settings and
+versions).
 
 Results are printed as a table; the full results go to ``--json PATH`` or, without it, are printed
 as JSON on stdout after the table. Timings are single-threaded wall-clock times
@@ -201,12 +212,15 @@ def tip_trajectory(spec, physics_dt_s: float, commands: np.ndarray, settle_s: fl
         sim.close()
 
 
-def accuracy(preset: str, control_steps: int, settle_s: float, seed: int) -> dict:
+def accuracy(preset: str, control_steps: int, settle_s: float, seed: int,
+             hold_steps: int = 10) -> dict:
     """Measurement 5: tip deviation of the default physics step from a 4x finer one."""
     spec = get_preset(preset)
     rng = np.random.default_rng(seed)
     low, high = spec.p_pre_pa, spec.p_max_pa
-    commands = low + rng.random((control_steps, spec.n_chambers)) * (high - low)
+    n_commands = -(-control_steps // hold_steps)
+    held = low + rng.random((n_commands, spec.n_chambers)) * (high - low)
+    commands = np.repeat(held, hold_steps, axis=0)[:control_steps]
     fine_dt = spec.physics_dt_s / REFERENCE_REFINEMENT
     fine_spec = dataclasses.replace(spec, physics_dt_s=fine_dt)
     t0 = time.perf_counter()
@@ -217,6 +231,7 @@ def accuracy(preset: str, control_steps: int, settle_s: float, seed: int) -> dic
     excursion_mm = 1000.0 * np.linalg.norm(fine - fine[0], axis=1)
     return {
         "accuracy_control_steps": control_steps,
+        "accuracy_hold_steps": hold_steps,
         "reference_physics_dt_s": fine_dt,
         "tip_dev_max_mm": float(deviation_mm.max()),
         "tip_dev_final_mm": float(deviation_mm[-1]),
@@ -279,6 +294,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--steps", type=int, default=1000,
                         help="timed env steps per preset (also sets the physics-only substeps)")
     parser.add_argument("--resets", type=int, default=5, help="timed resets per preset")
+    parser.add_argument("--hold-steps", type=int, default=10,
+                        help="control periods each random command is held in the accuracy test "
+                             "(default 10 = 0.5 s)")
     parser.add_argument("--accuracy-steps", type=int, default=60,
                         help="control steps of random pressure commands in the accuracy test "
                              "(0 skips it)")
@@ -292,6 +310,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error(f"--steps must be >= 1, got {args.steps}")
     if args.resets < 0:
         parser.error(f"--resets must be >= 0, got {args.resets}")
+    if args.hold_steps < 1:
+        parser.error(f"--hold-steps must be >= 1, got {args.hold_steps}")
     if args.accuracy_steps < 0:
         parser.error(f"--accuracy-steps must be >= 0, got {args.accuracy_steps}")
     return args
@@ -305,7 +325,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"measuring {preset} ...", file=sys.stderr, flush=True)
         row = time_env(preset, args.task, args.steps, args.resets, args.seed)
         if args.accuracy_steps:
-            row.update(accuracy(preset, args.accuracy_steps, row["settle_s"], args.seed))
+            row.update(accuracy(preset, args.accuracy_steps, row["settle_s"], args.seed,
+                                args.hold_steps))
         rows.append(row)
     total_s = time.perf_counter() - total
 
@@ -324,9 +345,10 @@ def main(argv: list[str] | None = None) -> int:
     }
 
     print(format_table(rows))
+    accuracy_note = (f"{args.accuracy_steps} control steps vs physics_dt/{REFERENCE_REFINEMENT}"
+                     if args.accuracy_steps else "skipped")
     print(f"({args.steps} env steps per preset, task {args.task}, seed {args.seed}; "
-          f"accuracy: {args.accuracy_steps} control steps vs physics_dt/{REFERENCE_REFINEMENT}; "
-          f"total {total_s:.1f} s)")
+          f"accuracy: {accuracy_note}; total {total_s:.1f} s)")
     text = json.dumps(results, indent=2)
     if args.json in (None, "-"):
         print(text)

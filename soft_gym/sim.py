@@ -11,12 +11,19 @@ from typing import Protocol
 import numpy as np
 import pybullet
 from pybullet_utils import bullet_client
-from scipy.spatial.transform import Rotation
 
+from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_positive
 from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, TORSION, ArmBody, build_arm
 from soft_gym.robots.pneumatics import PneumaticSupply, chamber_loads
 from soft_gym.robots.spec import ArmSpec
+
+
+_IMPLICIT_FRACTION = 0.25
+"""``theta`` of the semi-implicit spring update (see ``ArmSimulator._update_implicit_gains``)."""
+
+_STIFFNESS_MARGIN = 1.25
+"""Factor on the tangent stiffness used in the implicit term, so it stays ahead of stiffening."""
 
 
 class Load(Protocol):
@@ -61,15 +68,23 @@ class ArmSimulator:
         self._kind = self.arm.joint_kind
         self._stiffening = bool(np.any(self.arm.stiffening > 0))
         self._chamber_weights = self._segment_bend_weights()
-        self._spring_joints = list(range(self.arm.n_joints))
-        spring = slice(None)
-        self._stiffness0 = 1.0 / self.arm.compliance[spring]
-        self._damping = 2.0 * self.arm.damping_ratio[spring] * np.sqrt(
-            self._stiffness0 * self.arm.local_inertia[spring])
-        self._spring_beta = self.arm.stiffening[spring]
-        self._spring_scale = self.arm.strain_scale[spring]
-        self._rest = np.zeros(len(self._spring_joints))
-
+        self._stiffness0 = 1.0 / self.arm.compliance
+        self._damping = self.arm.damping_time_s * self._stiffness0
+        self._station_links = self.arm.station_link.tolist()
+        self._frames_substep = self._positions_substep = -1  # read-out caches, per substep
+        self._state = np.zeros(4 * self.arm.n_joints)
+        self._previous_velocity_valid = False
+        self._torque_gain = np.zeros((self.arm.n_joints, 4 * self.arm.n_joints))
+        self._torque_offset = np.zeros(self.arm.n_joints)
+        self._solve = np.eye(self.arm.n_joints)
+        self._implicit_stiffness = np.zeros(self.arm.n_joints)
+        self._gain_configuration = np.zeros(self.arm.n_joints)
+        # joint motion after which the mass matrix is refreshed early: 0.05 rad or 5 % strain
+        self._configuration_tolerance = np.where(
+            self._kind == AXIAL, 0.05 * self.arm.station_rest_length[self.arm.joint_station], 0.05)
+        self._pressure_to_rest = self._pressure_to_rest_matrix()
+        self._substeps_per_gain_update = self._substeps_per_actuation * max(
+            1, int(round(spec.control_period_s / spec.actuation_update_s)))
         self.gravity = spec.gravity_base.copy()
         self.client.setGravity(*self.gravity)
         self.loads: list[Load] = []
@@ -90,21 +105,34 @@ class ArmSimulator:
         if not np.isfinite(seconds) or seconds < 0:
             raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
         n = int(round(seconds / self.physics_dt_s))
-        client = self.client
-        body, joints, count = self.arm.body_id, self._spring_joints, len(self._spring_joints)
+        body, joints = self.arm.body_id, self._joints
+        get_states, set_motors = self.client.getJointStates, self.client.setJointMotorControlArray
+        simulate = self.client.stepSimulation
+        torque_mode = pybullet.TORQUE_CONTROL
+        count = len(joints)
+        state = self._state  # [spring force K(q) q, v, v_previous, torque_previous]
+        k0, beta, scale = self._stiffness0, self.arm.stiffening, self.arm.strain_scale
         for _ in range(n):
-            if self._substep % self._substeps_per_actuation == 0:
-                self._update_actuation()
-            states = client.getJointStates(body, joints)
+            states = get_states(body, joints)
             q = np.fromiter((s[0] for s in states), dtype=float, count=count)
-            v = np.fromiter((s[1] for s in states), dtype=float, count=count)
-            torque = self._spring_torque(q, v)
-            client.setJointMotorControlArray(body, joints, pybullet.TORQUE_CONTROL,
-                                             forces=torque.tolist())
+            state[count:2 * count] = [s[1] for s in states]
+            if self._substep % self._substeps_per_actuation == 0:
+                self._update_actuation(q)
+            # secant spring force with strain stiffening, k0 (1 + beta strain^2) q, every substep
+            strain = q * scale
+            state[:count] = k0 * q * (1.0 + beta * strain * strain)
+            torque = self._torque_offset + self._torque_gain @ state
+            set_motors(body, joints, torque_mode, forces=torque.tolist())
             if self._forces:
                 self._apply_forces()
-            client.stepSimulation()
+            simulate()
+            state[2 * count:3 * count] = state[count:2 * count]
+            state[3 * count:] = torque
             self._substep += 1
+            if not self._previous_velocity_valid:
+                # a substep has been measured: bring in the other-forces term from now on
+                self._previous_velocity_valid = True
+                self._update_implicit_gains(q, self._implicit_stiffness)
         self.time_s = self._substep * self.physics_dt_s
 
     def set_gravity(self, vector_m_s2: np.ndarray) -> None:
@@ -115,11 +143,12 @@ class ArmSimulator:
     def apply_tip_force(self, force_n: np.ndarray) -> None:
         """Apply a force (N, base frame) at the tip, held until changed (zeros removes it)."""
         force = as_finite_array("force_n", force_n, shape=(3,))
-        self.set_external_force("tip", self.arm.tip_link, force, at_link_end=True)
+        self.set_external_force("tip", self.arm.tip_link, force,
+                                local_point_m=(0.0, 0.0, self.arm.station_rest_length[-1]))
 
     def backbone(self) -> np.ndarray:
         """Backbone points (m, base frame): the base and every link's distal end, (n_links+1, 3)."""
-        positions, rotations = self._link_frames()
+        positions, _, rotations = self._link_frames()
         ends = positions + rotations[:, :, 2] * self.arm.station_rest_length[:, None]
         return np.vstack([np.zeros(3), ends])
 
@@ -129,13 +158,13 @@ class ArmSimulator:
         The orientation is the last link's, continued by half of its proximal bending joint so
         that it approximates the tangent of the arc at the tip rather than at the link's middle.
         """
-        positions, rotations = self._link_frames(last_only=True)
+        positions, quaternions, rotations = self._link_frames()
         q = self.joint_positions()
         bx, by = self.arm.station_bend_joints[-1]
-        half = Rotation.from_euler("XY", [0.5 * q[bx], 0.5 * q[by]])
-        tip_rotation = Rotation.from_matrix(rotations[-1]) * half
+        half = quaternion_multiply(axis_rotation(0, 0.5 * q[bx]), axis_rotation(1, 0.5 * q[by]))
+        tip_quaternion = np.array(quaternion_multiply(tuple(quaternions[-1]), half))
         tip = positions[-1] + rotations[-1][:, 2] * self.arm.station_rest_length[-1]
-        return tip, tip_rotation.as_quat()
+        return tip, tip_quaternion / np.linalg.norm(tip_quaternion)
 
     def chamber_lengths(self) -> np.ndarray:
         """Chamber lengths (m), shape (n_chambers,), from each segment's arc length and bending.
@@ -174,8 +203,12 @@ class ArmSimulator:
 
     # ------------------------------------------------------------------ state
     def joint_positions(self) -> np.ndarray:
-        states = self.client.getJointStates(self.arm.body_id, self._joints)
-        return np.fromiter((s[0] for s in states), dtype=float, count=len(states))
+        """Joint positions (rad or m), in the multibody's joint order."""
+        if self._positions_substep != self._substep:
+            states = self.client.getJointStates(self.arm.body_id, self._joints)
+            self._positions = np.fromiter((s[0] for s in states), dtype=float, count=len(states))
+            self._positions_substep = self._substep
+        return self._positions.copy()
 
     def joint_velocities(self) -> np.ndarray:
         states = self.client.getJointStates(self.arm.body_id, self._joints)
@@ -186,6 +219,9 @@ class ArmSimulator:
         for joint in self._joints:
             self.client.resetJointState(self.arm.body_id, joint, 0.0, 0.0)
         self.supply.reset(pressure_pa)
+        self._state[:] = 0.0
+        self._previous_velocity_valid = False
+        self._frames_substep = self._positions_substep = -1
         self.time_s = 0.0
         self._substep = 0
         for load in self.loads:
@@ -195,6 +231,7 @@ class ArmSimulator:
             self.step_physics(settle_s)
             self.time_s = 0.0
             self._substep = 0
+            self._frames_substep = self._positions_substep = -1
 
     def add_load(self, load: Load) -> None:
         """Attach a scenario element; it is updated at the actuation rate."""
@@ -208,16 +245,17 @@ class ArmSimulator:
         self._forces.clear()
 
     def set_external_force(self, key: str, link: int, force_n: np.ndarray,
-                           at_link_end: bool = False) -> None:
-        """Hold a force (N, base frame) on ``link`` (at its centre of mass or distal end).
-
-        Applied every physics substep until replaced; a zero force removes it.
+                           local_point_m: tuple[float, float, float] | None = None) -> None:
+        """Hold a force (N, base frame) on ``link`` at ``local_point_m`` (m, link frame; default
+        the middle of the link), applied every physics substep until replaced or set to zero.
         """
         force = np.asarray(force_n, dtype=float)
         if not np.any(force):
             self._forces.pop(key, None)
             return
-        self._forces[key] = (int(link), force, np.array([1.0 if at_link_end else 0.5]))
+        if local_point_m is None:
+            local_point_m = (0.0, 0.0, 0.5 * self._link_length(link))
+        self._forces[key] = (int(link), force, np.asarray(local_point_m, dtype=float))
         self._refresh_force_points()
 
     def link_mass(self, link: int) -> float:
@@ -230,6 +268,18 @@ class ArmSimulator:
             pass
 
     # ------------------------------------------------------------------ internals
+    def _pressure_to_rest_matrix(self) -> np.ndarray:
+        """Matrix (n_joints, n_chambers) from chamber pressures (Pa) to each joint's rest
+        deflection under the small-strain compliance (the pressure -> load map is linear)."""
+        columns = []
+        for chamber in range(self.spec.n_chambers):
+            unit = np.zeros(self.spec.n_chambers)
+            unit[chamber] = 1.0
+            axial, moment = chamber_loads(self.spec, unit)
+            per_kind = np.stack([moment[:, 0], moment[:, 1], np.zeros_like(axial), axial], axis=1)
+            columns.append((self.arm.compliance_parts * per_kind[:, self._kind].T).sum(axis=1))
+        return np.stack(columns, axis=1)
+
     def _segment_bend_weights(self) -> np.ndarray:
         """Weights (n_segments, n_joints) turning joint angles into each segment's total bending.
 
@@ -252,49 +302,88 @@ class ArmSimulator:
         qy = np.where(self._kind == BEND_Y, q, 0.0)
         return arc, self._chamber_weights @ qx, self._chamber_weights @ qy
 
-    def _link_frames(self, last_only: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        links = self.arm.station_link[-1:] if last_only else self.arm.station_link
-        states = self.client.getLinkStates(self.arm.body_id, links.tolist(),
-                                           computeForwardKinematics=1)
-        positions = np.array([s[4] for s in states])
-        rotations = Rotation.from_quat([s[5] for s in states]).as_matrix()
-        return positions, rotations
+    def _link_frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Frame origin (m), quaternion and rotation matrix of every link, cached per substep."""
+        if self._frames_substep != self._substep:
+            states = self.client.getLinkStates(self.arm.body_id, self._station_links,
+                                               computeForwardKinematics=1)
+            positions = np.array([s[4] for s in states])
+            quaternions = np.array([s[5] for s in states])
+            self._frames = (positions, quaternions, quaternion_to_matrix(quaternions))
+            self._frames_substep = self._substep
+        return self._frames
 
-    def _update_actuation(self) -> None:
-        """Refresh pressures, loads and the spring motors (every ``actuation_update_s``)."""
-        dt = self._substeps_per_actuation * self.physics_dt_s
+    def _update_actuation(self, q: np.ndarray) -> None:
+        """Refresh pressures, loads and spring stiffness (every ``actuation_update_s``).
+
+        ``K`` is the secant stiffness ``k0 (1 + beta strain^2)`` at the current strain; the
+        pressure load enters as ``k0 q_rest`` with ``q_rest`` linear in the chamber pressures.
+        The implicit gains (:meth:`_update_implicit_gains`) are refreshed once per control period.
+        """
         now_s = self._substep * self.physics_dt_s
         for load in self.loads:
             load.update(self, now_s)
-        pressure = self.supply.advance(dt)
-        axial, moment = chamber_loads(self.spec, pressure)
-        per_kind = np.stack([moment[:, 0], moment[:, 1], np.zeros_like(axial), axial], axis=1)
-        # rest deflection of each joint under the pressure loads with the small-strain compliance
-        rest = (self.arm.compliance_parts * per_kind[:, self._kind].T).sum(axis=1)
-        self._rest = rest[self._spring_joints]
+        pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
+        load_torque = self._stiffness0 * (self._pressure_to_rest @ pressure)
+        tangent = self._stiffness0
+        if self._stiffening:
+            strain_squared = (q * self.arm.strain_scale) ** 2
+            tangent = self._stiffness0 * (1.0 + 3.0 * self.arm.stiffening * strain_squared)
+        if (self._substep % self._substeps_per_gain_update == 0
+                or np.any(tangent > self._implicit_stiffness)
+                or np.any(np.abs(q - self._gain_configuration) > self._configuration_tolerance)):
+            # stiffening outgrew the implicit gains, or the arm moved enough to change M
+            self._update_implicit_gains(q, _STIFFNESS_MARGIN * tangent)
+        self._torque_offset = self._solve @ load_torque
         if self._forces:
             self._refresh_force_points()
 
-    def _spring_torque(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Joint spring-damper torque (N m or N) with strain stiffening (secant form).
+    def _update_implicit_gains(self, q: np.ndarray, tangent_stiffness: np.ndarray) -> None:
+        """Semi-implicit spring update (Newmark-like, a stable-PD form).
 
-        ``tau = k0 f(q) (q_rest / f(q) - q) - c v`` with ``f = 1 + beta (strain)^2``: the pressure
-        load is unchanged and the restoring stiffness grows with strain.
+        The joint torque uses the end-of-substep velocity ``v+``:
+
+            tau = K (q_rest - q - theta h v+) - D v+,   M (v+ - v) = h (tau + tau_other),
+
+        solved for ``tau`` with the joint-space mass matrix ``M`` and the other generalised forces
+        ``tau_other`` (gravity, Coriolis, contacts, constraints, external forces) measured from the
+        previous substep's acceleration. With ``theta = 1/4`` the stiff link-local modes stay
+        bounded at any step (their effective ``omega h`` is at most 2) while the slow modes see
+        almost no numerical damping; at rest ``tau = K (q_rest - q)`` exactly, so static shapes do
+        not depend on the step. ``D`` is the stiffness-proportional material damping. ``K`` in the
+        implicit term is the tangent stiffness (with a margin), refreshed once per control period
+        or sooner when stiffening outgrows it.
         """
-        if self._stiffening:
-            strain = q * self._spring_scale
-            return self._rest * self._stiffness0 - (
-                self._stiffness0 * (1.0 + self._spring_beta * strain * strain)) * q - self._damping * v
-        return self._stiffness0 * (self._rest - q) - self._damping * v
+        h = self.physics_dt_s
+        stiffness = tangent_stiffness
+        self._implicit_stiffness = tangent_stiffness
+        self._gain_configuration = q.copy()
+        mass = np.array(self.client.calculateMassMatrix(self.arm.body_id, q.tolist()))
+        velocity_gain = self._damping + _IMPLICIT_FRACTION * h * stiffness
+        response = h * velocity_gain[:, None] * np.linalg.inv(mass)
+        solve = np.linalg.inv(np.eye(len(q)) + response)
+        other_gain = solve @ response
+        other_from_velocity = other_gain @ mass / h
+        n = len(q)
+        # torque = S (k0 q_rest - K(q) q) - S D' v - G (M (v - v_prev) / h - tau_prev)
+        gain = self._torque_gain
+        gain[:, :n] = -solve
+        gain[:, n:2 * n] = -solve * velocity_gain[None, :]
+        if self._previous_velocity_valid:
+            gain[:, n:2 * n] -= other_from_velocity
+            gain[:, 2 * n:3 * n] = other_from_velocity
+            gain[:, 3 * n:] = other_gain
+        else:  # just after a reset there is no previous substep to measure the other forces from
+            gain[:, 2 * n:] = 0.0
+        self._solve = solve
 
     def _refresh_force_points(self) -> None:
         """Recompute where held forces act (world points move with the arm)."""
         self._force_points = {}
-        for key, (link, _, where) in self._forces.items():
+        for key, (link, _, local_point) in self._forces.items():
             state = self.client.getLinkState(self.arm.body_id, link, computeForwardKinematics=1)
-            rotation = np.array(self.client.getMatrixFromQuaternion(state[5])).reshape(3, 3)
-            length = self._link_length(link)
-            self._force_points[key] = np.asarray(state[4]) + rotation[:, 2] * length * where[0]
+            rotation = quaternion_to_matrix(np.asarray(state[5]))
+            self._force_points[key] = np.asarray(state[4]) + rotation @ local_point
 
     def _link_length(self, link: int) -> float:
         matches = np.nonzero(self.arm.station_link == link)[0]

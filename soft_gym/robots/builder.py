@@ -10,10 +10,10 @@ cylinder and visual. The station joints are the discrete elastic beam: bending j
 ``ds / (E I)`` (half of that at a segment's base and end, so the link vertices lie exactly on the
 constant-curvature arc of a pure moment), axial compliance ``ds / (E A)``, torsion ``ds / (G J)``.
 
-Springs are applied through PyBullet's ``PD_CONTROL`` motors: the joint torque
-``tau = k (q* - q) - c qdot`` is evaluated inside the physics server each substep. The pressure
-moment enters as the rest angle ``q* = sum(M_seg * compliance_part)``, which is exact for a linear
-spring, and strain stiffening as a secant stiffness refreshed at the actuation rate.
+The builder only records each joint's compliance, its share of each segment's pressure load,
+stiffening, damping and limits; :class:`soft_gym.sim.ArmSimulator` turns them into joint torques
+every substep with a semi-implicit (stable-PD) update, with the pressure moment entering as the
+rest angle ``q_rest = sum(M_seg * compliance_part)``.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ class ArmBody:
     local_inertia: np.ndarray       # (n_joints,) inertia seen locally (kg m^2 or kg)
     stiffening: np.ndarray          # (n_joints,) beta of the secant stiffening
     strain_scale: np.ndarray        # (n_joints,) q * strain_scale = strain measure for stiffening
-    damping_ratio: np.ndarray       # (n_joints,)
+    damping_time_s: np.ndarray      # (n_joints,) stiffness-proportional damping c / k (s)
     lower_limit: np.ndarray
     upper_limit: np.ndarray
     station_link: np.ndarray        # (n_stations,) multibody link index carrying each link's mass
@@ -114,9 +114,6 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
                 com = [0, 0, ds / 2] if is_body else [0, 0, 0]
                 inertia = _cylinder_inertia(mass, radius, ds) if is_body else [
                     mass * radius**2 / 4] * 3
-                if is_body:
-                    inertia[0] *= segment.rotary_inertia_scale
-                    inertia[1] *= segment.rotary_inertia_scale
                 extra = segment.extra_tip_mass_kg if (is_body and j == segment.n_links - 1) else 0.0
                 if extra > 0:
                     # tip cap: a point mass at the link's distal end, lumped with the link
@@ -149,8 +146,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
                             part[k - 1] += prev.link_length_m / (2 * prev.bending_rigidity_nm2)
                     else:
                         part[k] += ds / ei
-                    local = link_mass * (ds**2 / 4 + segment.rotary_inertia_scale
-                                         * (ds**2 / 12 + radius**2 / 4))
+                    local = link_mass * (ds**2 / 3 + radius**2 / 4)
                     scale = radius / ds  # q / ds = curvature; times R = surface strain
                     limit = segment.max_bend_per_m_rad * ds
                     lo, hi, b = -limit, limit, segment.bending_stiffening
@@ -170,7 +166,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
                 local_inertia.append(local)
                 beta.append(b)
                 strain_scale.append(scale)
-                zeta.append(segment.damping_ratio)
+                zeta.append(segment.damping_time_s)
                 lower.append(lo)
                 upper.append(hi)
             station_link.append(sub_joints[AXIAL])
@@ -207,7 +203,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         body_id=body, joint_kind=np.array(kind), joint_station=np.array(station_of_joint),
         compliance_parts=compliance_parts, compliance=compliance_parts.sum(axis=1),
         local_inertia=np.array(local_inertia), stiffening=np.array(beta),
-        strain_scale=np.array(strain_scale), damping_ratio=np.array(zeta),
+        strain_scale=np.array(strain_scale), damping_time_s=np.array(zeta),
         lower_limit=np.array(lower), upper_limit=np.array(upper),
         station_link=np.array(station_link), station_segment=np.array(station_segment),
         station_rest_length=np.array(station_length), station_bend_joints=np.array(bend_joints),

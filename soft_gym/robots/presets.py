@@ -2,16 +2,26 @@
 
 Dimensions come from the papers (DESIGN.md section 3 table); values the papers do not state are
 chosen here, written down in each preset's ``notes`` and calibrated against what the paper reports
-(``bench/calibrate_presets.py`` prints the figures).
+(``python -m soft_gym.demo`` prints the figures).
 
-Integration trade-off (measured with ``bench/env_speed.py``): the springs are explicit PD motors,
-so the physics step is bounded by the stiffest joint mode, which grows as ``1 / ds^2`` with the
-link length. Four links per segment keep the backbone within 2 % of the constant-curvature arc
-(vertices lie on the arc by construction, see :mod:`soft_gym.robots.builder`) and the transverse
-tip deflection within 4 % of ``F L^3 / (3 E I)``. The stiffest mode is the alternating axial
-stretch of neighbouring links (``omega ~ 2 sqrt(k_a / m_link)``); symplectic Euler needs
-``dt omega < 2`` less what the damping takes, so wang2023 and zhao2021 run at 1 ms and the lighter,
-softer-walled zou2022 and ho2018 links at 0.5 ms (at 1 ms they diverge under random pressures).
+Integration trade-off (``bench/integration_tradeoff.py``, ``bench/env_speed.py``). The joint
+springs are integrated semi-implicitly in joint space (``ArmSimulator._update_implicit_gains``),
+so no step size is unstable; the step is chosen for accuracy. Measured on wang2023 (physics only,
+commands held 0.5 s, deviation from the same run at a 4x smaller step; static errors with gravity
+and stiffening off):
+
+    links  dt ms  control steps/s  dyn. dev. mm  arc err % L  F L^3/3EI err %
+      3    2.5         1500           0.30          0.24           8.1
+      4    1.25         850           0.15          0.13           5.8
+      4    2.5         1350-1600      0.30          0.13           5.8
+      4    5.0         2300           0.59          0.13           5.8
+      6    2.5          930           0.30          0.06           4.2
+      8    2.5          730           0.30          0.03           3.7
+
+Four links per segment at 2.5 ms meet the 0.5 mm accuracy bound with margin, keep the beam
+errors well inside the 2 % (arc) and 15 % (deflection) tolerances, and leave time for the env.
+zou2022 extends to 3.3 times its length and whips far; it runs at 1.25 ms (0.4 mm). An explicit
+spring chain would need about 0.5 ms at four links (measured: it diverges at 1 ms for ho2018).
 """
 
 from __future__ import annotations
@@ -21,11 +31,12 @@ from soft_gym.robots.spec import ArmSpec, SegmentSpec
 _WANG_SEGMENT = SegmentSpec(
     length_m=0.090, outer_radius_m=0.010, chamber_offset_m=5.1e-3, chamber_area_m2=1.6e-5,
     youngs_modulus_pa=90e3, density_kg_m3=1070.0, n_links=4, p_max_pa=125e3,
-    bending_stiffening=1.5, axial_stiffening=2.0, damping_ratio=0.5, extra_tip_mass_kg=0.006)
+    bending_stiffening=1.5, axial_stiffening=2.0, damping_ratio=0.3, extra_tip_mass_kg=0.006)
 
 WANG2023 = ArmSpec(
     name="wang2023", segments=(_WANG_SEGMENT,), mount="hanging",
-    pneumatic_time_constant_s=0.12, control_period_s=0.05, physics_dt_s=1e-3,
+    pneumatic_time_constant_s=0.12, control_period_s=0.05, physics_dt_s=2.5e-3,
+    actuation_update_s=0.01,
     description=("Wang et al. 2023: single 90 mm segment, OD 20 mm, chambers at d = 5.1 mm, "
                  "Ecoflex-30, camera + LED tip cap, 20 Hz control."),
     notes={"youngs_modulus_pa": "Ecoflex 00-30 small-strain modulus ~70-100 kPa; 90 kPa chosen",
@@ -37,12 +48,13 @@ WANG2023 = ArmSpec(
 _ZHAO_SEGMENT = SegmentSpec(
     length_m=0.150, outer_radius_m=0.0175, chamber_offset_m=9.0e-3, chamber_area_m2=5.0e-5,
     youngs_modulus_pa=103e3, poisson_ratio=0.48, density_kg_m3=1070.0, n_links=4,
-    p_max_pa=80e3, bending_stiffening=1.0, axial_stiffening=2.0, damping_ratio=0.5,
+    p_max_pa=80e3, bending_stiffening=1.0, axial_stiffening=2.0, damping_ratio=0.3,
     extra_tip_mass_kg=0.010)
 
 ZHAO2021 = ArmSpec(
     name="zhao2021", segments=(_ZHAO_SEGMENT, _ZHAO_SEGMENT), mount="hanging",
-    pneumatic_time_constant_s=0.2, control_period_s=0.05, physics_dt_s=1e-3,
+    pneumatic_time_constant_s=0.2, control_period_s=0.05, physics_dt_s=2.5e-3,
+    actuation_update_s=0.01,
     description=("Zhao et al. 2021: two 150 mm segments, OD 35 mm, silicone E = 15 psi, "
                  "nu = 0.48, 1.07 g/cm^3, 0-0.8 bar, 3 strain gauges per segment."),
     notes={"chamber_offset_m": "not stated; 9 mm", "chamber_area_m2": "not stated; 50 mm^2",
@@ -50,13 +62,14 @@ ZHAO2021 = ArmSpec(
 
 _ZOU_SEGMENT = SegmentSpec(
     length_m=0.077, outer_radius_m=0.016, chamber_offset_m=0.010, chamber_area_m2=7.0e-5,
-    youngs_modulus_pa=120e3, axial_modulus_pa=15e3, density_kg_m3=400.0, n_links=4,
-    p_max_pa=300e3, bending_stiffening=0.5, axial_stiffening=0.05, max_extension_ratio=3.4,
-    max_bend_per_m_rad=30.0, damping_ratio=0.5, extra_tip_mass_kg=0.010)
+    youngs_modulus_pa=250e3, axial_modulus_pa=15e3, density_kg_m3=400.0, n_links=4,
+    p_max_pa=300e3, bending_stiffening=0.5, axial_stiffening=0.42, max_extension_ratio=4.0,
+    max_bend_per_m_rad=60.0, damping_ratio=0.3, extra_tip_mass_kg=0.010)
 
 ZOU2022 = ArmSpec(
     name="zou2022", segments=(_ZOU_SEGMENT,), mount="hanging",
-    pneumatic_time_constant_s=0.25, control_period_s=0.05, physics_dt_s=5e-4,
+    pneumatic_time_constant_s=0.25, control_period_s=0.05, physics_dt_s=1.25e-3,
+    actuation_update_s=0.01,
     description=("Zou et al. 2022: one extensible segment of three pressurised artificial muscles "
                  "(77-252 mm), 0-3 bar, cable encoders on the chamber lengths, stereo camera."),
     notes={"axial_modulus_pa": "PMA bundle: low effective axial modulus so 3 bar in all muscles "
@@ -65,18 +78,19 @@ ZOU2022 = ArmSpec(
 
 _HO_SEGMENT = SegmentSpec(
     length_m=0.0775, outer_radius_m=0.0135, chamber_offset_m=7.0e-3, chamber_area_m2=1.0e-4,
-    youngs_modulus_pa=80e3, axial_modulus_pa=150e3, density_kg_m3=1070.0, n_links=4,
+    youngs_modulus_pa=80e3, axial_modulus_pa=400e3, density_kg_m3=1070.0, n_links=4,
     p_max_pa=110e3, p_pre_pa=40e3,
-    bending_stiffening=0.5, axial_stiffening=2.0, damping_ratio=0.5, extra_tip_mass_kg=0.0)
+    bending_stiffening=0.5, axial_stiffening=2.0, damping_ratio=0.3, extra_tip_mass_kg=0.0)
 
 HO2018 = ArmSpec(
     name="ho2018", segments=(_HO_SEGMENT, _HO_SEGMENT), mount="hanging",
-    pneumatic_time_constant_s=0.3, control_period_s=0.05, physics_dt_s=5e-4,
+    pneumatic_time_constant_s=0.3, control_period_s=0.05, physics_dt_s=2.5e-3,
+    actuation_update_s=0.01,
     description=("Ho et al. 2018: two segments, 155 mm total, OD 27 mm, Dragon Skin 10, body mass "
                  "41.7 g, ~100 deg bending per segment, 0.04 MPa pre-pressure, EM tracker."),
     notes={"chamber_area_m2": "100 mm^2 crescent chambers; with 1070 kg/m^3 the body weighs ~42 g",
            "youngs_modulus_pa": "Dragon Skin 10 ~150 kPa solid; 80 kPa effective for the thin walls",
-           "axial_modulus_pa": "150 kPa effective (stiffer than E: the chamber walls carry the axial load)",
+           "axial_modulus_pa": "400 kPa effective (the chamber walls carry the axial load): the 0.04 MPa pre-pressure lengthens the arm ~10 %",
            "p_max_pa": "chosen so one chamber at p_max bends a segment ~100 deg"})
 
 PRESETS: dict[str, ArmSpec] = {spec.name: spec for spec in (WANG2023, ZHAO2021, ZOU2022, HO2018)}

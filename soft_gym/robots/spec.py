@@ -45,13 +45,12 @@ class SegmentSpec:
         axial_modulus_pa: axial modulus if it differs from ``E`` (e.g. a braided PMA bundle).
         max_extension_ratio: longest allowed link length over rest length (joint limit).
         max_bend_per_m_rad: largest curvature allowed by the joint limits (rad/m).
-        damping_ratio: damping ratio of each joint against its own link's inertia.
+        damping_ratio: damping ratio of the segment's first bending mode. The damping is
+            stiffness-proportional, as for a viscoelastic solid: every joint gets
+            ``c = 2 zeta k / omega_1`` (see :attr:`damping_time_s`), so higher modes are damped
+            more, as in silicone.
         torsion: whether links get a torsion joint (stiffness ``G J / ds``).
         extra_tip_mass_kg: mass fixed at this segment's distal end (connector, tip cap, camera).
-        rotary_inertia_scale: factor on each link's transverse inertia about its centre of mass
-            (explicit-dynamics mass scaling: slows the stiffest, link-local bending modes and so
-            allows a longer physics step, while the arm's low modes, dominated by the links'
-            translational inertia, change little; 1 is the physical value).
     """
 
     length_m: float
@@ -72,12 +71,11 @@ class SegmentSpec:
     damping_ratio: float = 0.7
     torsion: bool = False
     extra_tip_mass_kg: float = 0.0
-    rotary_inertia_scale: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("length_m", "outer_radius_m", "chamber_offset_m", "chamber_area_m2",
                      "youngs_modulus_pa", "density_kg_m3", "p_max_pa", "max_bend_per_m_rad",
-                     "damping_ratio", "rotary_inertia_scale"):
+                     "damping_ratio"):
             require_positive(name, getattr(self, name))
         for name in ("p_pre_pa", "bending_stiffening", "axial_stiffening", "extra_tip_mass_kg"):
             require_non_negative(name, getattr(self, name))
@@ -140,6 +138,18 @@ class SegmentSpec:
         return self.density_kg_m3 * self.area_m2 * self.length_m
 
     @property
+    def first_bending_mode_rad_s(self) -> float:
+        """First cantilever bending mode ``3.516 sqrt(E I / (mu L^4))`` (rad/s), with the tip mass
+        spread over the length in ``mu`` (a rough but monotone estimate)."""
+        mu = (self.mass_kg + self.extra_tip_mass_kg) / self.length_m
+        return 3.516 * math.sqrt(self.bending_rigidity_nm2 / (mu * self.length_m**4))
+
+    @property
+    def damping_time_s(self) -> float:
+        """Stiffness-proportional damping coefficient ``2 zeta / omega_1`` (s)."""
+        return 2.0 * self.damping_ratio / self.first_bending_mode_rad_s
+
+    @property
     def chamber_angles_rad(self) -> np.ndarray:
         """Chamber angles ``sigma_i = 2 pi i / 3`` (rad)."""
         return 2.0 * np.pi * np.arange(3) / 3.0
@@ -166,8 +176,8 @@ class ArmSpec:
     mount: str = "hanging"
     pneumatic_time_constant_s: float = 0.15
     control_period_s: float = 0.05
-    physics_dt_s: float = 1e-3
-    actuation_update_s: float = 5e-3
+    physics_dt_s: float = 2.5e-3
+    actuation_update_s: float = 0.01
     description: str = ""
     notes: dict = field(default_factory=dict, compare=False)
 

@@ -45,7 +45,13 @@ class _Timed:
 
 @dataclass
 class _TipMassBase(_Timed):
-    """Adds a time-varying mass to the tip link (changes PyBullet's link mass)."""
+    """Adds a time-varying point mass at the tip.
+
+    The mass is added to the tip link in PyBullet (inertia, gravity, dynamics). PyBullet keeps the
+    link's centre of mass where it was, so the weight would act there rather than at the tip; a
+    held force couple (``-m g`` at the centre of mass, ``+m g`` at the tip) moves its line of
+    action to the tip without changing the net force.
+    """
 
     _base_mass: float = field(default=0.0, init=False, repr=False)
     _applied: float = field(default=-1.0, init=False, repr=False)
@@ -57,15 +63,25 @@ class _TipMassBase(_Timed):
     def extra_mass_kg(self, time_s: float) -> float:
         raise NotImplementedError
 
+    def _keys(self) -> tuple[str, str]:
+        return f"tipmass{id(self)}_tip", f"tipmass{id(self)}_com"
+
     def update(self, sim, time_s: float) -> None:
         extra = self.extra_mass_kg(time_s) if self.active(time_s) else 0.0
+        link = sim.arm.tip_link
         if abs(extra - self._applied) > 1e-9:
-            sim.client.changeDynamics(sim.arm.body_id, sim.arm.tip_link,
-                                      mass=self._base_mass + extra)
+            sim.client.changeDynamics(sim.arm.body_id, link, mass=self._base_mass + extra)
             self._applied = extra
+        weight = extra * sim.gravity
+        com = sim.client.getDynamicsInfo(sim.arm.body_id, link)[3]
+        at_tip, at_com = self._keys()
+        sim.set_external_force(at_tip, link, weight, (0.0, 0.0, sim.arm.station_rest_length[-1]))
+        sim.set_external_force(at_com, link, -weight, com)
 
     def detach(self, sim) -> None:
         sim.client.changeDynamics(sim.arm.body_id, sim.arm.tip_link, mass=self._base_mass)
+        for key in self._keys():
+            sim.set_external_force(key, sim.arm.tip_link, np.zeros(3))
 
 
 @dataclass
