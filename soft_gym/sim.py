@@ -190,6 +190,56 @@ class ArmSimulator:
         length = self.arm.station_rest_length + q[self.arm.station_axial_joint]
         return np.stack([bend[:, 1], -bend[:, 0]], axis=1) / length[:, None]
 
+    def curvature_profile(self) -> tuple[np.ndarray, np.ndarray]:
+        """Backbone curvature at every vertex, for sensors that integrate strain along the arm.
+
+        Returns:
+            ``(arc_m, curvature)``: arc position of each backbone vertex from the base (m, current
+            lengths), shape (n_links + 1,), and the curvature vector ``(kx, ky)`` there (1/m),
+            shape (n_links + 1, 2). Each joint's bend ``theta`` is spread over the rest length
+            it stands for (half a link at a segment's ends, a link inside), so a pure moment
+            gives ``kappa = M / (E I)`` at every vertex. The tip vertex repeats the last joint's
+            curvature (the half joint that continues the arc, see :meth:`tip_pose`). Between
+            vertices, linear interpolation is the natural reading.
+        """
+        q = self.joint_positions()
+        arm = self.arm
+        bend = q[arm.station_bend_joints]                       # (n_links, 2): theta_x, theta_y
+        rigidity = np.array([s.bending_rigidity_nm2 for s in self.spec.segments])
+        element = arm.compliance_parts[arm.station_bend_joints[:, 0]] @ rigidity  # (n_links,)
+        curvature = np.stack([bend[:, 1], -bend[:, 0]], axis=1) / element[:, None]
+        link_lengths = arm.station_rest_length + q[arm.station_axial_joint]
+        arc = np.r_[0.0, np.cumsum(link_lengths)]
+        return arc, np.vstack([curvature, curvature[-1:]])
+
+    def link_axial_strains(self) -> np.ndarray:
+        """Axial strain of every link (extension over rest length), shape (n_links,)."""
+        q = self.joint_positions()
+        return q[self.arm.station_axial_joint] / self.arm.station_rest_length
+
+    def link_twist_rates(self) -> np.ndarray:
+        """Twist rate of every link (rad/m): its torsion joint angle over the link's rest length."""
+        return self.link_twists() / self.arm.station_rest_length
+
+    def link_contact_forces(self) -> np.ndarray:
+        """Force pressing on every link from outside (N, base frame), shape (n_links, 3).
+
+        The sum of PyBullet contact normal forces (obstacles, other bodies) and of the held
+        external forces (pushes, tip forces) acting on each link.
+        """
+        forces = np.zeros((len(self.arm.station_link), 3))
+        index_of_link = {int(link): i for i, link in enumerate(self.arm.station_link)}
+        for contact in self.client.getContactPoints(bodyA=self.arm.body_id):
+            i = index_of_link.get(contact[3])
+            if i is not None:
+                # contact[7] is the normal on B pointing to A; contact[9] the normal force (N)
+                forces[i] += np.asarray(contact[7]) * contact[9]
+        for link, force, _ in self._forces.values():
+            i = index_of_link.get(link)
+            if i is not None:
+                forces[i] += force
+        return forces
+
     def link_twists(self) -> np.ndarray:
         """Twist angle of each link's torsion joint (rad), zeros without torsion joints."""
         q = self.joint_positions()

@@ -166,7 +166,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
                 local_inertia.append(local)
                 beta.append(b)
                 strain_scale.append(scale)
-                zeta.append(segment.damping_time_s)
+                zeta.append(spec.damping_time_s(segment))
                 lower.append(lo)
                 upper.append(hi)
             station_link.append(sub_joints[AXIAL])

@@ -45,10 +45,11 @@ class SegmentSpec:
         axial_modulus_pa: axial modulus if it differs from ``E`` (e.g. a braided PMA bundle).
         max_extension_ratio: longest allowed link length over rest length (joint limit).
         max_bend_per_m_rad: largest curvature allowed by the joint limits (rad/m).
-        damping_ratio: damping ratio of the segment's first bending mode. The damping is
-            stiffness-proportional, as for a viscoelastic solid: every joint gets
-            ``c = 2 zeta k / omega_1`` (see :attr:`damping_time_s`), so higher modes are damped
-            more, as in silicone.
+        damping_ratio: damping ratio of the arm's first bending mode. The damping is
+            stiffness-proportional, as for a viscoelastic solid: every joint of the segment gets
+            ``c = 2 zeta k / omega_1`` with ``omega_1`` the whole arm's first mode
+            (:attr:`ArmSpec.first_bending_mode_rad_s`), so higher modes are damped more, as in
+            silicone.
         torsion: whether links get a torsion joint (stiffness ``G J / ds``).
         extra_tip_mass_kg: mass fixed at this segment's distal end (connector, tip cap, camera).
     """
@@ -138,18 +139,6 @@ class SegmentSpec:
         return self.density_kg_m3 * self.area_m2 * self.length_m
 
     @property
-    def first_bending_mode_rad_s(self) -> float:
-        """First cantilever bending mode ``3.516 sqrt(E I / (mu L^4))`` (rad/s), with the tip mass
-        spread over the length in ``mu`` (a rough but monotone estimate)."""
-        mu = (self.mass_kg + self.extra_tip_mass_kg) / self.length_m
-        return 3.516 * math.sqrt(self.bending_rigidity_nm2 / (mu * self.length_m**4))
-
-    @property
-    def damping_time_s(self) -> float:
-        """Stiffness-proportional damping coefficient ``2 zeta / omega_1`` (s)."""
-        return 2.0 * self.damping_ratio / self.first_bending_mode_rad_s
-
-    @property
     def chamber_angles_rad(self) -> np.ndarray:
         """Chamber angles ``sigma_i = 2 pi i / 3`` (rad)."""
         return 2.0 * np.pi * np.arange(3) / 3.0
@@ -234,6 +223,20 @@ class ArmSpec:
     @property
     def substeps_per_actuation(self) -> int:
         return int(round(self.actuation_update_s / self.physics_dt_s))
+
+    @property
+    def first_bending_mode_rad_s(self) -> float:
+        """First bending mode of the whole arm as one cantilever (rad/s):
+        ``3.516 sqrt(E I / (mu L^4))`` with ``E I`` the series (length-weighted harmonic) mean and
+        ``mu`` the total mass, tip masses included, over the total length."""
+        length = self.length_m
+        rigidity = length / sum(s.length_m / s.bending_rigidity_nm2 for s in self.segments)
+        mu = sum(s.mass_kg + s.extra_tip_mass_kg for s in self.segments) / length
+        return 3.516 * math.sqrt(rigidity / (mu * length**4))
+
+    def damping_time_s(self, segment: SegmentSpec) -> float:
+        """Stiffness-proportional damping coefficient ``2 zeta / omega_1`` of ``segment`` (s)."""
+        return 2.0 * segment.damping_ratio / self.first_bending_mode_rad_s
 
     @property
     def gravity_base(self) -> np.ndarray:

@@ -1,0 +1,56 @@
+"""What every sensor shares: its own sample rate (sample and hold), seeded noise, and a space.
+
+A sensor is read once per control step with :meth:`Sensor.read`; it takes a fresh sample when
+one is due at its ``rate_hz`` and otherwise repeats the last one, as a slower real sensor would.
+All randomness comes from the generator given to :meth:`Sensor.reset` (the env's ``np_random``),
+so a seed fixes every reading.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from soft_gym._validation import require_positive
+
+
+class Sensor:
+    """Base class: subclasses implement :meth:`sample` and :meth:`space`.
+
+    Args:
+        name: the observation part / info key this sensor fills (e.g. ``"fbg"``).
+        rate_hz: samples per second; ``None`` samples at every read.
+    """
+
+    def __init__(self, name: str, rate_hz: float | None = None) -> None:
+        if rate_hz is not None:
+            require_positive("rate_hz", rate_hz)
+        self.name = name
+        self.rate_hz = rate_hz
+        self.rng = np.random.default_rng(0)
+        self._last: Any = None
+        self._next_sample_s = 0.0
+
+    def reset(self, sim, rng: np.random.Generator) -> None:
+        """Start an episode: take the noise generator and forget the held sample."""
+        self.rng = rng
+        self._last = None
+        self._next_sample_s = 0.0
+
+    def read(self, sim, time_s: float) -> Any:
+        """The current reading: a fresh sample if one is due at ``time_s`` (s), else the last."""
+        if self._last is None or self.rate_hz is None or time_s + 1e-9 >= self._next_sample_s:
+            self._last = self.sample(sim)
+            if self.rate_hz is not None:
+                self._next_sample_s = time_s + 1.0 / self.rate_hz
+        return self._last
+
+    def sample(self, sim) -> Any:
+        """Measure now from the simulator ``sim`` (an ``ArmSimulator``), noise included."""
+        raise NotImplementedError
+
+    def space(self, sim) -> spaces.Space:
+        """Observation space of one reading."""
+        raise NotImplementedError
