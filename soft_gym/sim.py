@@ -161,7 +161,9 @@ class ArmSimulator:
         positions, quaternions, rotations = self._link_frames()
         q = self.joint_positions()
         bx, by = self.arm.station_bend_joints[-1]
-        half = quaternion_multiply(axis_rotation(0, 0.5 * q[bx]), axis_rotation(1, 0.5 * q[by]))
+        half_x, half_y = axis_rotation(0, 0.5 * q[bx]), axis_rotation(1, 0.5 * q[by])
+        half = (quaternion_multiply(half_y, half_x) if self.arm.station_y_first[-1]
+                else quaternion_multiply(half_x, half_y))
         tip_quaternion = np.array(quaternion_multiply(tuple(quaternions[-1]), half))
         tip = positions[-1] + rotations[-1][:, 2] * self.arm.station_rest_length[-1]
         return tip, tip_quaternion / np.linalg.norm(tip_quaternion)

@@ -5,6 +5,8 @@ reached from its parent through a *station* of joints at its proximal end:
 
     revolute about local x -> revolute about local y -> [revolute about z (torsion)] -> prismatic z
 
+(every other station bends about y first, then x: see the comment in :func:`build_arm`).
+
 The first three carry (almost) no mass; the prismatic sub-link carries the link's mass, collision
 cylinder and visual. The station joints are the discrete elastic beam: bending joint compliance
 ``ds / (E I)`` (half of that at a segment's base and end, so the link vertices lie exactly on the
@@ -54,6 +56,7 @@ class ArmBody:
     station_segment: np.ndarray     # (n_stations,) segment owning each link
     station_rest_length: np.ndarray  # (n_stations,) ds of each link (m)
     station_bend_joints: np.ndarray  # (n_stations, 2) joint indices of (bend x, bend y)
+    station_y_first: np.ndarray     # (n_stations,) True where the station bends about y first
     station_axial_joint: np.ndarray  # (n_stations,)
     station_torsion_joint: np.ndarray  # (n_stations,) -1 where no torsion joint
     link_masses_kg: np.ndarray      # (n_joints,) mass of every multibody link as built
@@ -86,7 +89,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
     kind, station_of_joint, parts, local_inertia, beta, strain_scale, zeta = [], [], [], [], [], [], []
     lower, upper = [], []
     station_link, station_segment, station_length = [], [], []
-    bend_joints, axial_joints, torsion_joints = [], [], []
+    bend_joints, axial_joints, torsion_joints, y_first = [], [], [], []
 
     n_seg = spec.n_segments
     station = 0
@@ -102,7 +105,11 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         cyl_vis = client.createVisualShape(pybullet.GEOM_CYLINDER, radius=radius, length=ds,
                                            visualFramePosition=[0, 0, ds / 2], rgbaColor=rgba)
         for j in range(segment.n_links):
-            kinds = [BEND_X, BEND_Y] + ([TORSION] if segment.torsion else []) + [AXIAL]
+            # Alternate the order of the two bending joints from link to link: Rx(a) Ry(b) twists
+            # the link by about +ab/2 about its axis and Ry(b) Rx(a) by -ab/2, so alternating
+            # cancels the parametrisation's twist instead of letting it accumulate along the arm.
+            bend_pair = [BEND_X, BEND_Y] if station % 2 == 0 else [BEND_Y, BEND_X]
+            kinds = bend_pair + ([TORSION] if segment.torsion else []) + [AXIAL]
             sub_joints = {}
             for sub, joint_kind in enumerate(kinds):
                 is_body = joint_kind == AXIAL
@@ -173,6 +180,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
             station_segment.append(k)
             station_length.append(ds)
             bend_joints.append([sub_joints[BEND_X], sub_joints[BEND_Y]])
+            y_first.append(bend_pair[0] == BEND_Y)
             axial_joints.append(sub_joints[AXIAL])
             torsion_joints.append(sub_joints.get(TORSION, -1))
             station += 1
@@ -207,5 +215,6 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         lower_limit=np.array(lower), upper_limit=np.array(upper),
         station_link=np.array(station_link), station_segment=np.array(station_segment),
         station_rest_length=np.array(station_length), station_bend_joints=np.array(bend_joints),
+        station_y_first=np.array(y_first),
         station_axial_joint=np.array(axial_joints), station_torsion_joint=np.array(torsion_joints),
         link_masses_kg=np.array(link_masses))
