@@ -91,6 +91,7 @@ class ArmSimulator:
         self.time_s = 0.0
         self._substep = 0
         self._forces: dict[str, tuple[int, np.ndarray, np.ndarray]] = {}
+        self._off_body_forces: set[str] = set()
         self._tip_force = np.zeros(3)
         self.reset()
 
@@ -144,7 +145,8 @@ class ArmSimulator:
         """Apply a force (N, base frame) at the tip, held until changed (zeros removes it)."""
         force = as_finite_array("force_n", force_n, shape=(3,))
         self.set_external_force("tip", self.arm.tip_link, force,
-                                local_point_m=(0.0, 0.0, self.arm.station_rest_length[-1]))
+                                local_point_m=(0.0, 0.0, self.arm.station_rest_length[-1]),
+                                on_body=False)
 
     def backbone(self) -> np.ndarray:
         """Backbone points (m, base frame): the base and every link's distal end, (n_links+1, 3)."""
@@ -227,16 +229,20 @@ class ArmSimulator:
         """Force pressing on every link from outside (N, base frame), shape (n_links, 3).
 
         The sum of PyBullet contact normal forces (obstacles, other bodies) and of the held
-        external forces (pushes, tip forces) acting on each link.
+        external forces that press on the body's surface (pushes); forces on the tip cap
+        (:meth:`apply_tip_force`, tip masses, pushes with ``on_body=False``) are left out, since
+        they do not touch a fiber or gauge on the body.
         """
         forces = np.zeros((len(self.arm.station_link), 3))
+        body_forces = {key for key in self._forces if key not in self._off_body_forces}
         index_of_link = {int(link): i for i, link in enumerate(self.arm.station_link)}
         for contact in self.client.getContactPoints(bodyA=self.arm.body_id):
             i = index_of_link.get(contact[3])
             if i is not None:
                 # contact[7] is the normal on B pointing to A; contact[9] the normal force (N)
                 forces[i] += np.asarray(contact[7]) * contact[9]
-        for link, force, _ in self._forces.values():
+        for key in body_forces:
+            link, force, _ = self._forces[key]
             i = index_of_link.get(link)
             if i is not None:
                 forces[i] += force
@@ -285,6 +291,14 @@ class ArmSimulator:
             self._substep = 0
             self._frames_substep = self._positions_substep = -1
 
+    def set_joint_positions(self, positions: np.ndarray) -> None:
+        """Set every joint's position (rad or m) at rest, e.g. to impose a shape in a test."""
+        positions = as_finite_array("positions", positions, shape=(self.arm.n_joints,))
+        for joint, value in zip(self._joints, positions):
+            self.client.resetJointState(self.arm.body_id, joint, float(value), 0.0)
+        self._frames_substep = self._positions_substep = -1
+        self._previous_velocity_valid = False
+
     def add_load(self, load: Load) -> None:
         """Attach a scenario element; it is updated at the actuation rate."""
         load.attach(self)
@@ -295,16 +309,25 @@ class ArmSimulator:
             load.detach(self)
         self.loads.clear()
         self._forces.clear()
+        self._off_body_forces.clear()
 
     def set_external_force(self, key: str, link: int, force_n: np.ndarray,
-                           local_point_m: tuple[float, float, float] | None = None) -> None:
+                           local_point_m: tuple[float, float, float] | None = None,
+                           on_body: bool = True) -> None:
         """Hold a force (N, base frame) on ``link`` at ``local_point_m`` (m, link frame; default
         the middle of the link), applied every physics substep until replaced or set to zero.
+        ``on_body=False`` marks a force on the tip cap rather than on the body's surface (see
+        :meth:`link_contact_forces`).
         """
         force = np.asarray(force_n, dtype=float)
         if not np.any(force):
             self._forces.pop(key, None)
+            self._off_body_forces.discard(key)
             return
+        if on_body:
+            self._off_body_forces.discard(key)
+        else:
+            self._off_body_forces.add(key)
         if local_point_m is None:
             local_point_m = (0.0, 0.0, 0.5 * self._link_length(link))
         self._forces[key] = (int(link), force, np.asarray(local_point_m, dtype=float))

@@ -152,7 +152,7 @@ def test_fbg_matches_analytic_arc(make_sim, chamber):
     sim = make_sim(spec)
     pressures = one_chamber(spec, chamber, 60e3)
     settle(sim, pressures)
-    fiber = FBGFiber(noise_std_nm=0.0, rate_hz=None)
+    fiber = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
     measured = read(fiber, sim)
     expected = analytic_fbg_nm(spec, pressures, fiber.layout)
     peak = np.max(np.abs(expected))
@@ -164,7 +164,7 @@ def test_pure_function_matches_sensor(make_sim):
     spec = linear(get_preset("wang2023"), torsion=True)
     sim = make_sim(spec)
     settle(sim, [30e3, 70e3, 0.0], 0.3)  # mid-swing: curvature varies along the arm
-    fiber = FBGFiber(noise_std_nm=0.0, contact_strain_per_n=0.0, rate_hz=None)
+    fiber = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, contact_strain_per_n=0.0, rate_hz=None)
     geometry = fiber.geometry(spec)
     _, curvature = sim.curvature_profile()
     direct = fbg_strain(rest_vertex_arcs(spec), curvature, sim.link_axial_strains(),
@@ -181,9 +181,9 @@ def test_outside_of_bend_is_stretched(make_sim):
     settle(sim, one_chamber(spec, 0, 60e3))
     assert sim.chamber_lengths()[0] > sim.chamber_lengths()[1]
     outside = FBGFiber(FBGLayout(n_gratings=1, pitch_m=100.0, psi0_rad=SIGMA[0]),
-                       noise_std_nm=0.0)
+                       strain_transfer=1.0, noise_std_nm=0.0)
     inside = FBGFiber(FBGLayout(n_gratings=1, pitch_m=100.0, psi0_rad=SIGMA[0] + np.pi),
-                      noise_std_nm=0.0)
+                      strain_transfer=1.0, noise_std_nm=0.0)
     assert read(outside, sim)[0] > 1.0
     assert read(inside, sim)[0] < -1.0
 
@@ -191,7 +191,7 @@ def test_outside_of_bend_is_stretched(make_sim):
 def test_fbg_amplitude_linear_in_curvature_and_phase_follows_direction(make_sim):
     """wang2023 Fig. 3: amplitude grows with the bend, the phase follows its direction."""
     spec = linear(get_preset("wang2023"))
-    fiber = FBGFiber(noise_std_nm=0.0, rate_hz=None)
+    fiber = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
     psi = fiber.geometry(spec).center_psi_rad
     sim = make_sim(spec)
     kappas, amplitudes, phases = [], [], {}
@@ -229,7 +229,7 @@ def test_twist_adds_the_formula_twist_term(make_sim, right_handed):
     angle = 0.05  # rad per link
     for joint in twisted.arm.station_torsion_joint:
         twisted.client.resetJointState(twisted.arm.body_id, int(joint), angle)
-    fiber = FBGFiber(layout, noise_std_nm=0.0, rate_hz=None)
+    fiber = FBGFiber(layout, strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
     base, turned = read(fiber, plain).astype(float), read(fiber, twisted).astype(float)
     segment = spec.segments[0]
     r = segment.outer_radius_m
@@ -247,7 +247,7 @@ def test_local_twist_changes_only_gratings_on_that_link(make_sim):
         settle(sim, one_chamber(spec, 0, 50e3))
     twisted.client.resetJointState(twisted.arm.body_id, int(twisted.arm.station_torsion_joint[2]),
                                    0.05)
-    fiber = FBGFiber(noise_std_nm=0.0, rate_hz=None)
+    fiber = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
     change = np.abs(read(fiber, twisted) - read(fiber, plain))
     geometry = fiber.geometry(spec)
     edges = rest_vertex_arcs(spec)
@@ -320,8 +320,8 @@ def test_push_on_fiber_disturbs_fbg_more_than_tip_force(make_sim):
         tip_force *= target / _tip_deflection_x(tipped)
     assert _tip_deflection_x(tipped) == pytest.approx(target, rel=0.02)
 
-    fiber = FBGFiber(noise_std_nm=0.0, rate_hz=None)
-    shape_only = FBGFiber(noise_std_nm=0.0, rate_hz=None, contact_strain_per_n=0.0)
+    fiber = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
+    shape_only = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None, contact_strain_per_n=0.0)
     push_disturbance = read(fiber, pushed) - read(shape_only, pushed)
     tip_disturbance = read(fiber, tipped) - read(shape_only, tipped)
     assert np.max(np.abs(push_disturbance)) > 3.0 * np.max(np.abs(tip_disturbance))
@@ -345,8 +345,8 @@ def test_fbg_noise_std_is_one_picometre(make_sim):
     spec = get_preset("wang2023")
     sim = make_sim(spec)
     settle(sim, one_chamber(spec, 0, 40e3), 1.0)
-    fiber = FBGFiber(rate_hz=None)
-    truth = FBGFiber(noise_std_nm=0.0, rate_hz=None)
+    fiber = FBGFiber(strain_transfer=1.0, rate_hz=None)
+    truth = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
     fiber.reset(sim, np.random.default_rng(3))
     clean = read(truth, sim).astype(float)
     errors = np.array([fiber.read(sim, 0.0) - clean for _ in range(600)])
@@ -409,15 +409,15 @@ def test_temperature_schedule_and_drift(make_sim):
     spec = get_preset("wang2023")
     sim = make_sim(spec)
     settle(sim, np.zeros(3), 0.2)
-    plain = read(FBGFiber(noise_std_nm=0.0), sim).astype(float)
-    heated = read(FBGFiber(noise_std_nm=0.0, temperature_schedule=lambda t: 2.0), sim)
+    plain = read(FBGFiber(strain_transfer=1.0, noise_std_nm=0.0), sim).astype(float)
+    heated = read(FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, temperature_schedule=lambda t: 2.0), sim)
     np.testing.assert_allclose(heated - plain, 2.0 * 0.010, atol=1e-5)
-    drifting = FBGFiber(noise_std_nm=0.0, rate_hz=None, temperature_drift_c_per_sqrt_s=1.0)
+    drifting = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None, temperature_drift_c_per_sqrt_s=1.0)
     drifting.reset(sim, np.random.default_rng(0))
     start = drifting.read(sim, sim.time_s).astype(float)
     np.testing.assert_allclose(start, plain, atol=1e-5)  # no time has passed
     sim.step_physics(1.0)
-    moved = drifting.read(sim, sim.time_s).astype(float) - read(FBGFiber(noise_std_nm=0.0), sim)
+    moved = drifting.read(sim, sim.time_s).astype(float) - read(FBGFiber(strain_transfer=1.0, noise_std_nm=0.0), sim)
     assert np.ptp(moved) < 1e-4 and abs(moved[0]) > 1e-4  # a common-mode shift
 
 
@@ -454,7 +454,7 @@ def test_encoders_read_quantised_chamber_lengths(make_sim):
     (lambda: FBGLayout(n_gratings=30).resolve(get_preset("wang2023")), "n_gratings"),
     (lambda: FBGLayout(segments=(1,)).resolve(get_preset("wang2023")), "segments"),
     (lambda: FBGFiber(FBGLayout(n_gratings=30), spec=get_preset("wang2023")), "n_gratings"),
-    (lambda: FBGFiber(noise_std_nm=-1e-3), "noise_std_nm"),
+    (lambda: FBGFiber(strain_transfer=1.0, noise_std_nm=-1e-3), "noise_std_nm"),
     (lambda: FBGFiber(rate_hz=-10.0), "rate_hz"),
     (lambda: FBGFiber(rate_hz=0.0), "rate_hz"),
     (lambda: FBGFiber(contact_strain_per_n=-1.0), "contact_strain_per_n"),
@@ -479,3 +479,13 @@ def test_gauge_beyond_segment_raises(make_sim):
     gauges = StrainGauges(arc_fraction=0.99, gauge_length_m=0.01)
     with pytest.raises(ValueError, match="gauge_length_m"):
         gauges.space(sim)
+
+
+def test_default_strain_transfer_gives_the_papers_wavelength_range(make_sim):
+    """wang2023 Appendix: 0-0.158 nm over the spiral exploration; full one-chamber bending here
+    should stay in that sub-nanometre range, far above the 1 pm noise."""
+    spec = get_preset("wang2023")
+    sim = make_sim(spec)
+    settle(sim, one_chamber(spec, 0, spec.p_max_pa[0]))
+    peak = np.abs(read(FBGFiber(noise_std_nm=0.0), sim)).max()
+    assert 0.05 < peak < 0.5

@@ -75,8 +75,9 @@ class _TipMassBase(_Timed):
         weight = extra * sim.gravity
         com = sim.client.getDynamicsInfo(sim.arm.body_id, link)[3]
         at_tip, at_com = self._keys()
-        sim.set_external_force(at_tip, link, weight, (0.0, 0.0, sim.arm.station_rest_length[-1]))
-        sim.set_external_force(at_com, link, -weight, com)
+        sim.set_external_force(at_tip, link, weight, (0.0, 0.0, sim.arm.station_rest_length[-1]),
+                               on_body=False)
+        sim.set_external_force(at_com, link, -weight, com, on_body=False)
 
     def detach(self, sim) -> None:
         sim.client.changeDynamics(sim.arm.body_id, sim.arm.tip_link, mass=self._base_mass)
@@ -190,7 +191,9 @@ class Push(_Timed):
     """A force (N, base frame) on one link, ramped up over ``ramp_s`` and held until ``end_s``.
 
     ``link`` indexes the arm's links from the base (0) to the tip (-1); the force acts at the
-    link's middle. The wang2023 experiments push the tip cap and the fiber-covered body.
+    link's middle on the body's surface, or with ``on_tip_cap=True`` at the tip link's distal end
+    on the rigid cap (which presses no fiber or gauge). wang2023 (Table III) pushes the tip cap
+    and the fiber-covered body.
     """
 
     force_n: tuple[float, float, float] = (0.2, 0.0, 0.0)
@@ -198,6 +201,7 @@ class Push(_Timed):
     ramp_s: float = 1.0
     start_s: float = 2.0
     end_s: float | None = 6.0
+    on_tip_cap: bool = False
 
     def __post_init__(self) -> None:
         self.force_n = tuple(as_finite_array("force_n", self.force_n, shape=(3,)).tolist())
@@ -222,7 +226,12 @@ class Push(_Timed):
 
     def update(self, sim, time_s: float) -> None:
         key = f"push{id(self)}"
-        sim.set_external_force(key, self._link_index(sim), np.array(self.force_n) * self.scale(time_s))
+        force = np.array(self.force_n) * self.scale(time_s)
+        if self.on_tip_cap:
+            sim.set_external_force(key, sim.arm.tip_link, force,
+                                   (0.0, 0.0, sim.arm.station_rest_length[-1]), on_body=False)
+        else:
+            sim.set_external_force(key, self._link_index(sim), force)
 
     def detach(self, sim) -> None:
         sim.set_external_force(f"push{id(self)}", self._link_index(sim), np.zeros(3))

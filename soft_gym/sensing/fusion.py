@@ -1,0 +1,65 @@
+"""Camera / F-emp pose fusion, Wang et al. 2023 (wang2023) eq. (18) in its corrected form.
+
+    z = z_c                                          if e_S <= E_L
+    z = K_S (e_S - E_L) z_w + [1 - K_S (e_S - E_L)] z_c   if E_L < e_S < E_U
+    z = z_w                                          if e_S >= E_U or tracking is lost
+
+with ``K_S = 1 / (E_U - E_L)`` so the blend is continuous (papers/README.md: the printed middle
+case has a sign slip). Positions blend linearly; orientations by spherical linear interpolation
+with the same weight.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from soft_gym._validation import require_non_negative
+
+
+def slerp(q0: np.ndarray, q1: np.ndarray, fraction: float) -> np.ndarray:
+    """Spherical linear interpolation of unit quaternions (x, y, z, w), shortest arc."""
+    q0 = np.asarray(q0, dtype=float) / np.linalg.norm(q0)
+    q1 = np.asarray(q1, dtype=float) / np.linalg.norm(q1)
+    dot = float(q0 @ q1)
+    if dot < 0.0:
+        q1, dot = -q1, -dot
+    if dot > 0.9995:  # nearly parallel: linear interpolation is exact to rounding
+        out = q0 + fraction * (q1 - q0)
+        return out / np.linalg.norm(out)
+    angle = np.arccos(dot)
+    return (np.sin((1 - fraction) * angle) * q0 + np.sin(fraction * angle) * q1) / np.sin(angle)
+
+
+@dataclass(frozen=True)
+class PoseFusion:
+    """Eq. (18) with bounds ``E_L < E_U`` on the reprojection error (px).
+
+    Defaults: ``E_L = 1.0`` px, ``E_U = 2.0`` px (the paper's selective ELM update threshold of
+    1.4 px lies between them).
+    """
+
+    lower_px: float = 1.0
+    upper_px: float = 2.0
+
+    def __post_init__(self) -> None:
+        require_non_negative("lower_px", self.lower_px)
+        if not np.isfinite(self.upper_px) or self.upper_px <= self.lower_px:
+            raise ValueError(f"upper_px must be finite and > lower_px={self.lower_px}, "
+                             f"got {self.upper_px!r}")
+
+    def weight(self, reprojection_error_px: float, lost: bool = False) -> float:
+        """Weight of the F-emp estimate ``z_w`` (0 = camera only, 1 = F-emp only)."""
+        if lost or not np.isfinite(reprojection_error_px):
+            return 1.0
+        k_s = 1.0 / (self.upper_px - self.lower_px)
+        return float(np.clip(k_s * (reprojection_error_px - self.lower_px), 0.0, 1.0))
+
+    def fuse(self, camera_position_m: np.ndarray, camera_quaternion: np.ndarray,
+             femp_position_m: np.ndarray, femp_quaternion: np.ndarray,
+             reprojection_error_px: float, lost: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Fused tip position (m) and quaternion (x, y, z, w)."""
+        w = self.weight(reprojection_error_px, lost)
+        position = w * np.asarray(femp_position_m) + (1 - w) * np.asarray(camera_position_m)
+        return position, slerp(camera_quaternion, femp_quaternion, w)
