@@ -156,3 +156,41 @@ def test_random_action_soak_stays_finite_and_within_joint_limits(preset):
             assert np.all(q <= arm.upper_limit + tolerance), (step, q)
     assert np.all(np.isfinite(env.unwrapped.sim.backbone()))
     env.close()
+
+
+def test_sensor_parts_in_flat_and_dict_observations_and_info():
+    env = gym.make("SoftArmReach-v0", obs=("pose", "fbg", "em", "encoder"), sensors=("strain",))
+    gym_check_env(env.unwrapped, skip_render_check=True)
+    obs, info = env.reset(seed=1)
+    n_gratings = env.unwrapped.sensors["fbg"].layout.n_gratings
+    assert obs.shape == (7 + n_gratings + 7 + 3,)
+    assert set(info["sensors"]) == {"fbg", "em", "encoder", "strain"}
+    np.testing.assert_allclose(obs[7:7 + n_gratings], info["sensors"]["fbg"], rtol=1e-6)
+    env.close()
+    env = gym.make("SoftArmReach-v0", obs=("target", "fbg"), obs_format="dict")
+    obs, _ = env.reset(seed=1)
+    assert set(obs) == {"target", "fbg"} and env.observation_space.contains(obs)
+    env.close()
+
+
+def test_sensors_cost_nothing_unless_asked_and_readings_repeat_under_a_seed():
+    assert gym.make("SoftArmReach-v0").unwrapped.sensors == {}
+    runs = []
+    for _ in range(2):
+        env = gym.make("SoftArmReach-v0", obs=("fbg", "em"))
+        env.reset(seed=7)
+        env.action_space.seed(7)
+        runs.append([env.step(env.action_space.sample())[0] for _ in range(5)])
+        env.close()
+    np.testing.assert_array_equal(np.array(runs[0]), np.array(runs[1]))
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"obs_format": "nested"}, "obs_format"),
+    ({"sensors": ("sonar",)}, "sensors"),
+    ({"sensor_config": {"sonar": {}}}, "sensor_config"),
+    ({"obs": ("fbg",), "sensor_config": {"fbg": {"noise_std_nm": -1.0}}}, "noise_std_nm"),
+])
+def test_bad_sensor_configuration_raises(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        gym.make("SoftArmReach-v0", **kwargs)

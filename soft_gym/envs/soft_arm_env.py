@@ -10,13 +10,22 @@
 Actions outside [-1, 1], non-finite or of the wrong shape raise ``ValueError``.
 
 ## Observation space
-A flat ``Box(float32)`` concatenating the parts named in ``obs`` (in that order):
+``obs_format="flat"`` (default): a ``Box(float32)`` concatenating the parts named in ``obs`` in
+that order; ``obs_format="dict"``: a ``Dict`` of the parts (needed for image parts).
 
 | part       | size            | content                                                   | unit |
 |------------|-----------------|-----------------------------------------------------------|------|
 | `pose`     | 7               | tip position (x, y, z) and quaternion (x, y, z, w)        | m, - |
 | `target`   | 6               | current target and next target positions                  | m    |
 | `pressure` | 3 * n_segments  | chamber pressures over p_max                              | -    |
+| `fbg`      | n_gratings      | FBG Bragg wavelength shifts (wang2023)                    | nm   |
+| `strain`   | 3 * n_segments  | strain-gauge readings (zhao2021)                          | -    |
+| `encoder`  | 3 * n_segments  | chamber lengths from cable encoders (zou2022)             | m    |
+| `em`       | 7               | EM-tracked tip position + quaternion (ho2018)             | m, - |
+| `image`    | H x W x 3 uint8 | eye-in-hand camera frame (wang2023), dict format only     | -    |
+
+Sensors are simulated only when an observation part or ``sensors=`` asks for them; each keeps its
+own rate (sample and hold) and noise (:mod:`soft_gym.sensors`).
 
 ## Reward
 ``-||tip - target|| (m) - action_rate_weight * ||a_t - a_{t-1}||^2``.
@@ -26,8 +35,9 @@ Reach: truncated after ``episode_steps`` (default 100, 5 s). Track: truncated wh
 last target has been presented.
 
 ## Info
-``tip_position_m``, ``tip_quaternion``, ``target_m``, ``error_mm``, ``backbone_m``,
-``chamber_lengths_m``, ``pressures_pa``, ``time_s``.
+Ground truth: ``tip_position_m``, ``tip_quaternion``, ``target_m``, ``error_mm``, ``backbone_m``,
+``chamber_lengths_m``, ``pressures_pa``, ``time_s``; and ``sensors``: every active sensor's raw
+reading by name.
 """
 
 from __future__ import annotations
@@ -41,10 +51,13 @@ from gymnasium import spaces
 from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.scenarios import make_scenario
+from soft_gym.sensors import SENSORS, make_sensor
 from soft_gym.sim import ArmSimulator
 from soft_gym.tasks import ReachTask, TrackTask
 
-OBSERVATION_PARTS = ("pose", "target", "pressure")
+STATE_PARTS = ("pose", "target", "pressure")
+OBSERVATION_PARTS = STATE_PARTS + tuple(name for name in SENSORS if name != "stereo")
+OBS_FORMATS = ("flat", "dict")
 ACTION_MODES = ("absolute", "delta")
 TASKS = ("reach", "track")
 
@@ -61,7 +74,10 @@ class SoftArmEnv(gym.Env):
         speed_m_s: target speed (m/s); track only (default: a circle cycle in 20 s).
         waypoints_m: user path points (m), with ``path="waypoints"``.
         scenario: loads and disturbances (see :mod:`soft_gym.scenarios`).
-        obs: observation parts, a subset of ``("pose", "target", "pressure")`` in any order.
+        obs: observation parts (see the table above), in the order wanted.
+        obs_format: ``"flat"`` (a float32 Box) or ``"dict"`` (a Dict of parts).
+        sensors: further sensors to simulate for ``info["sensors"]`` only (e.g. ``("stereo",)``).
+        sensor_config: keyword arguments per sensor name, e.g. ``{"fbg": {"noise_std_nm": 2e-3}}``.
         action_mode: ``"absolute"`` or ``"delta"``.
         delta_fraction: pressure change per unit action in delta mode, as a fraction of p_max.
         action_rate_weight: weight of the action-rate penalty.
@@ -76,7 +92,9 @@ class SoftArmEnv(gym.Env):
     def __init__(self, preset: str | ArmSpec = "wang2023", task: str = "reach",
                  path: str = "circle", cycles: int = 1, speed_m_s: float | None = None,
                  waypoints_m: Any = None, scenario: Any = None,
-                 obs: tuple[str, ...] = OBSERVATION_PARTS, action_mode: str = "absolute",
+                 obs: tuple[str, ...] = STATE_PARTS, obs_format: str = "flat",
+                 sensors: tuple[str, ...] = (), sensor_config: dict | None = None,
+                 action_mode: str = "absolute",
                  delta_fraction: float = 0.1, action_rate_weight: float = 0.001,
                  episode_steps: int = 100, settle_s: float = 0.5,
                  render_mode: str | None = None, render_size: tuple[int, int] = (320, 240)) -> None:
@@ -91,6 +109,17 @@ class SoftArmEnv(gym.Env):
             raise ValueError(
                 f"obs must be a non-empty tuple of distinct parts from {list(OBSERVATION_PARTS)}, "
                 f"got {obs!r}")
+        if obs_format not in OBS_FORMATS:
+            raise ValueError(f"obs_format must be one of {list(OBS_FORMATS)}, got {obs_format!r}")
+        sensors = (sensors,) if isinstance(sensors, str) else tuple(sensors)
+        unknown = [name for name in sensors if name not in SENSORS]
+        if unknown:
+            raise ValueError(f"sensors must be names from {sorted(SENSORS)}, got {sensors!r}")
+        sensor_config = dict(sensor_config or {})
+        unknown = [name for name in sensor_config if name not in SENSORS]
+        if unknown:
+            raise ValueError(f"sensor_config keys must be sensor names from {sorted(SENSORS)}, "
+                             f"got {sorted(sensor_config)!r}")
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         if not 0 < delta_fraction <= 1:
@@ -105,6 +134,10 @@ class SoftArmEnv(gym.Env):
         for load in self.loads:
             self.sim.add_load(load)
         self.obs_parts = obs
+        self.obs_format = obs_format
+        self.sensors = {name: make_sensor(name, **sensor_config.get(name, {}))
+                        for name in dict.fromkeys(
+                            [part for part in obs if part in SENSORS] + list(sensors))}
         self.action_mode = action_mode
         self.delta_fraction = float(delta_fraction)
         self.action_rate_weight = float(action_rate_weight)
@@ -114,32 +147,45 @@ class SoftArmEnv(gym.Env):
 
         n = self.spec_arm.n_chambers
         self.action_space = spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
-        reach = 5.0 * self.spec_arm.length_m * max(s.max_extension_ratio for s in self.spec_arm.segments)
-        sizes = {"pose": 7, "target": 6, "pressure": n}
-        low = np.concatenate([self._part_bounds(p, reach, sizes[p])[0] for p in obs])
-        high = np.concatenate([self._part_bounds(p, reach, sizes[p])[1] for p in obs])
-        self.observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32),
-                                            dtype=np.float32)
+        part_spaces = {part: self._part_space(part) for part in obs}
+        if obs_format == "dict":
+            self.observation_space = spaces.Dict(part_spaces)
+        else:
+            not_flat = [part for part, space in part_spaces.items()
+                        if not (isinstance(space, spaces.Box) and space.dtype == np.float32
+                                and len(space.shape) == 1)]
+            if not_flat:
+                raise ValueError(f"obs parts {not_flat} are not flat float vectors: use "
+                                 f"obs_format='dict' for them (obs={obs!r})")
+            self.observation_space = spaces.Box(
+                np.concatenate([part_spaces[p].low for p in obs]),
+                np.concatenate([part_spaces[p].high for p in obs]), dtype=np.float32)
         self._p_low = self.spec_arm.p_pre_pa
         self._p_high = self.spec_arm.p_max_pa
         self._step = 0
         self._last_action = np.zeros(n)
         self._command = self._p_low.copy()
 
-    @staticmethod
-    def _part_bounds(part: str, reach: float, size: int) -> tuple[np.ndarray, np.ndarray]:
+    def _part_space(self, part: str) -> spaces.Space:
+        if part in self.sensors:
+            return self.sensors[part].space(self.sim)
+        reach = 5.0 * self.spec_arm.length_m * max(
+            s.max_extension_ratio for s in self.spec_arm.segments)
         if part == "pose":
-            return (np.r_[np.full(3, -reach), np.full(4, -1.0)],
-                    np.r_[np.full(3, reach), np.full(4, 1.0)])
-        if part == "target":
-            return np.full(size, -reach), np.full(size, reach)
-        return np.zeros(size), np.full(size, 1.0)
+            low, high = np.r_[np.full(3, -reach), np.full(4, -1.0)], np.r_[np.full(3, reach), np.ones(4)]
+        elif part == "target":
+            low, high = np.full(6, -reach), np.full(6, reach)
+        else:
+            low, high = np.zeros(self.spec_arm.n_chambers), np.ones(self.spec_arm.n_chambers)
+        return spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         self.sim.reset(settle_s=self.settle_s)
         self.task.reset(self.np_random)
+        for sensor in self.sensors.values():
+            sensor.reset(self.sim, self.np_random)
         self._step = 0
         self._last_action = np.zeros(self.spec_arm.n_chambers)
         self._command = self._p_low.copy()
@@ -196,18 +242,24 @@ class SoftArmEnv(gym.Env):
             raise ValueError(f"action must lie in [-1, 1], got {array.tolist()}")
         return np.clip(array, -1.0, 1.0)  # only float32 rounding beyond +-1 reaches here
 
-    def _observation(self) -> np.ndarray:
-        parts = []
-        for part in self.obs_parts:
-            if part == "pose":
-                position, quaternion = self.sim.tip_pose()
-                parts.append(np.r_[position, quaternion])
-            elif part == "target":
-                current, upcoming = self.task.target(self._step)
-                parts.append(np.r_[current, upcoming])
-            else:
-                parts.append(self.sim.pressures_pa / self._p_high)
-        return np.concatenate(parts).astype(np.float32)
+    def _observation(self):
+        parts = {part: self._part(part) for part in self.obs_parts}
+        if self.obs_format == "dict":
+            return parts
+        return np.concatenate([parts[p] for p in self.obs_parts]).astype(np.float32)
+
+    def _part(self, part: str) -> np.ndarray:
+        if part in self.sensors:
+            return np.array(self.sensors[part].read(self.sim, self.sim.time_s))
+        if part == "pose":
+            position, quaternion = self.sim.tip_pose()
+            value = np.r_[position, quaternion]
+        elif part == "target":
+            current, upcoming = self.task.target(self._step)
+            value = np.r_[current, upcoming]
+        else:
+            value = self.sim.pressures_pa / self._p_high
+        return value.astype(np.float32)
 
     def _info(self, tip_target: tuple[np.ndarray, np.ndarray] | None = None) -> dict:
         position, quaternion = self.sim.tip_pose()
@@ -219,4 +271,12 @@ class SoftArmEnv(gym.Env):
             "backbone_m": self.sim.backbone(), "chamber_lengths_m": self.sim.chamber_lengths(),
             "pressures_pa": self.sim.pressures_pa, "time_s": self.sim.time_s,
             "step": self._step,
+            "sensors": {name: self._copy(sensor.read(self.sim, self.sim.time_s))
+                        for name, sensor in self.sensors.items()},
         }
+
+    @staticmethod
+    def _copy(reading):
+        if isinstance(reading, dict):
+            return {key: np.array(value) for key, value in reading.items()}
+        return np.array(reading)
