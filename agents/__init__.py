@@ -1,0 +1,1 @@
+"""Baseline estimators, controllers and online learners; they use soft_gym, never the reverse."""
