@@ -166,6 +166,21 @@ class SoftArmEnv(gym.Env):
         self._last_action = np.zeros(n)
         self._command = self._p_low.copy()
 
+    def observation_part(self, observation, part: str) -> np.ndarray:
+        """The ``part`` of an observation from this env, flat or dict (what baselines read)."""
+        if part not in self.obs_parts:
+            raise ValueError(f"part must be one of this env's obs parts {list(self.obs_parts)}, "
+                             f"got {part!r}")
+        if isinstance(observation, dict):
+            return np.asarray(observation[part])
+        start = 0
+        for name in self.obs_parts:
+            size = int(np.prod(self._part_space(name).shape))
+            if name == part:
+                return np.asarray(observation)[start:start + size]
+            start += size
+        raise AssertionError("unreachable")
+
     def _part_space(self, part: str) -> spaces.Space:
         if part in self.sensors:
             return self.sensors[part].space(self.sim)

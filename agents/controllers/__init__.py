@@ -1,0 +1,1 @@
+"""Baseline controllers: cc_model and hybrid_gpr (wang2023)."""

@@ -1,0 +1,153 @@
+"""Constant-curvature model-based tip controller of Wang et al. 2023 (wang2023, Section III-A).
+
+Each control step, with feedback tip position ``p`` and next target ``p*``:
+
+* desired displacement ``dp* = p* - p``;
+* chamber-length change ``du = J^+ dp* + (1 - J^+ J) beta (u0 - u)`` (eq. (25)), ``J`` the CC
+  Jacobian of the tip position with respect to the chamber lengths (eqs. (19)-(24); the
+  convention-free form of :mod:`soft_gym.kinematics`, which has no singularity at the straight
+  pose) and the null-space term pulling towards the rest lengths ``u0``;
+* model lengths ``u <- u + K_p du`` (eq. (26));
+* actuation ``p_i = p_pre + alpha_i (u_i - u0_i)`` (eq. (27)): a deliberately *linear*
+  length-to-pressure map. The gains ``alpha_i`` are estimated at start-up from small actuation
+  probes, as a lab would (:meth:`CCModelController.calibrate`): each chamber in turn is
+  pressurised a little, the tip displacement is read from the feedback pose, mapped to chamber
+  lengths through ``J^+`` at the rest pose, and ``alpha_i = dp / du_i``.
+
+Pressures cannot go below the pre-pressure or above ``p_max``: the model lengths are kept
+consistent with the saturated pressures (anti-windup), so the integrator of eq. (26) does not
+wind up.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from agents.policies import BaselinePolicy, pressures_to_action
+from soft_gym._validation import require_non_negative, require_positive
+from soft_gym.kinematics import cc_jacobian
+
+
+class CCModelController(BaselinePolicy):
+    """CC model-based controller (wang2023 eqs. (19)-(27)).
+
+    Args:
+        env: the environment it controls (reads its arm spec and observation layout).
+        kp: proportional gain ``K_p`` of eq. (26) (paper: 0.04-0.10).
+        null_space_gain: ``beta`` of eq. (25).
+        probe_fraction: probe pressure as a fraction of ``p_max - p_pre``.
+        probe_steps: control steps each probe is held before the pose is read.
+        damping: damping of the pseudo-inverse ``J^T (J J^T + damping^2 I)^-1`` (m).
+    """
+
+    name = "cc_model"
+
+    def __init__(self, env, kp: float = 0.06, null_space_gain: float = 0.1,
+                 probe_fraction: float = 0.3, probe_steps: int = 30,
+                 damping: float = 1e-4) -> None:
+        if env is None:
+            raise ValueError("env must be the environment to control, got None")
+        self.kp = require_positive("kp", kp)
+        self.null_space_gain = require_non_negative("null_space_gain", null_space_gain)
+        if not 0 < probe_fraction <= 1:
+            raise ValueError(f"probe_fraction must be in (0, 1], got {probe_fraction!r}")
+        if not isinstance(probe_steps, int) or probe_steps < 1:
+            raise ValueError(f"probe_steps must be an integer >= 1, got {probe_steps!r}")
+        self.probe_fraction = float(probe_fraction)
+        self.probe_steps = probe_steps
+        self.damping = require_positive("damping", damping)
+        self.env = env.unwrapped
+        spec = self.env.spec_arm
+        for part in ("pose", "target"):
+            if part not in self.env.obs_parts:
+                raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
+                                 f"{self.env.obs_parts!r}")
+        self.d = spec.chamber_offset_m
+        self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa
+        self.rest_lengths = np.repeat([s.length_m for s in spec.segments], 3).astype(float)
+        self.alpha: np.ndarray | None = None
+        self.lengths = self.rest_lengths.copy()
+
+    # ------------------------------------------------------------------ calibration
+    def calibrate(self) -> np.ndarray:
+        """Estimate ``alpha`` (Pa/m) with one small probe per chamber (eq. (27)); resets the env."""
+        env = self.env
+        rest_action = pressures_to_action(self.p_low, self.p_low, self.p_high)
+        jacobian_inverse = self._pseudo_inverse(cc_jacobian(self.rest_lengths, self.d))
+        alpha = np.empty(len(self.rest_lengths))
+        for chamber in range(len(alpha)):
+            env.reset()
+            observation = None
+            for _ in range(self.probe_steps):
+                observation, *_ = env.step(rest_action)
+            start = self._pose(observation)
+            pressures = self.p_low.copy()
+            pressures[chamber] += self.probe_fraction * (self.p_high[chamber] - self.p_low[chamber])
+            action = pressures_to_action(pressures, self.p_low, self.p_high)
+            for _ in range(self.probe_steps):
+                observation, *_ = env.step(action)
+            length_change = jacobian_inverse @ (self._pose(observation) - start)
+            if length_change[chamber] <= 1e-7:
+                raise ValueError(
+                    f"probe of chamber {chamber} gave no lengthening ({length_change[chamber]:.2e} m):"
+                    " the feedback pose does not respond to actuation")
+            alpha[chamber] = (pressures[chamber] - self.p_low[chamber]) / length_change[chamber]
+        env.reset()
+        self.alpha = alpha
+        return alpha
+
+    # ------------------------------------------------------------------ control
+    def reset(self) -> None:
+        self.lengths = self.rest_lengths.copy()
+
+    def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        if self.alpha is None:
+            raise ValueError("call calibrate() before predict(): alpha of eq. (27) is unknown")
+        position = self._pose(observation)
+        target = self._next_target(observation)
+        step = self.length_step(position, target)
+        self.lengths = self.lengths + self.kp * step
+        pressures = self.p_low + self.alpha * (self.lengths - self.rest_lengths)
+        saturated = np.clip(pressures, self.p_low, self.p_high)
+        # anti-windup: the model lengths follow what the saturated pressures can produce
+        self.lengths = self.rest_lengths + (saturated - self.p_low) / self.alpha
+        return pressures_to_action(saturated, self.p_low, self.p_high), state
+
+    def length_step(self, position: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """``du`` of eq. (25) for the desired displacement ``target - position`` (m)."""
+        jacobian = cc_jacobian(self.lengths, self.d)
+        inverse = self._pseudo_inverse(jacobian)
+        null_space = np.eye(len(self.lengths)) - inverse @ jacobian
+        return inverse @ (target - position) + null_space @ (
+            self.null_space_gain * (self.rest_lengths - self.lengths))
+
+    # ------------------------------------------------------------------ persistence
+    def save(self, path: str | Path) -> None:
+        Path(path).write_text(json.dumps({
+            "name": self.name, "kp": self.kp, "null_space_gain": self.null_space_gain,
+            "probe_fraction": self.probe_fraction, "probe_steps": self.probe_steps,
+            "damping": self.damping, "alpha": None if self.alpha is None else self.alpha.tolist(),
+        }, indent=2))
+
+    @classmethod
+    def load(cls, path: str | Path, env=None) -> "CCModelController":
+        data = json.loads(Path(path).read_text())
+        alpha = data.pop("alpha")
+        data.pop("name")
+        controller = cls(env, **data)
+        controller.alpha = None if alpha is None else np.array(alpha)
+        return controller
+
+    # ------------------------------------------------------------------ helpers
+    def _pseudo_inverse(self, jacobian: np.ndarray) -> np.ndarray:
+        return jacobian.T @ np.linalg.inv(jacobian @ jacobian.T
+                                          + self.damping**2 * np.eye(len(jacobian)))
+
+    def _pose(self, observation) -> np.ndarray:
+        return np.asarray(self.env.observation_part(observation, "pose"), dtype=float)[:3]
+
+    def _next_target(self, observation) -> np.ndarray:
+        return np.asarray(self.env.observation_part(observation, "target"), dtype=float)[3:6]

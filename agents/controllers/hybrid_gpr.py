@@ -1,0 +1,141 @@
+"""Hybrid controller of Wang et al. 2023 (wang2023, Section III-B): CC model + online GPR.
+
+The CC model-based controller (:mod:`agents.controllers.cc_model`) is compensated by a Gaussian
+process trained online on a sliding window (:class:`agents.learners.SlidingWindowGP`):
+
+* after each step the pair ``x = [u(k-1), dz(k)]``, ``y = dp_e(k)`` is added, with ``u`` the
+  actuation (pressures over p_max), ``dz`` the tip motion that step produced and
+  ``dp_e = dp* - dp_r`` the difference between the displacement the CC model was asked for and
+  the actual one (eq. (28)); queried with the *desired* motion, the GP predicts how much more
+  must be asked for (a direct inverse model of the CC model's shortfall);
+* once ``n_init`` samples are in (the paper's ``N_c``), the desired displacement is compensated
+  before the CC model sees it, ``dp~* = dp* + dp_e_hat |dp*|`` (eq. (29));
+* the window keeps the newest ``window`` samples (``N_r_max``); hyperparameters stay fixed online.
+
+Eq. (29) multiplies the predicted error by ``|dp*|``, so the regression target here is the
+*relative* error ``dp_e / |dz|`` (dimensionless), which makes eq. (29) consistent in units.
+Inputs are scaled to comparable ranges: pressures over p_max, displacements in millimetres.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from agents.controllers.cc_model import CCModelController
+from agents.learners.sliding_gp import SlidingWindowGP
+from agents.policies import pressures_to_action
+from soft_gym._validation import require_positive
+
+_MM = 1000.0
+
+
+class HybridGPRController(CCModelController):
+    """CC model + sliding-window GPR error compensator (wang2023 eqs. (25)-(29)).
+
+    Args:
+        env, kp, null_space_gain, probe_fraction, probe_steps, damping: as for ``cc_model``.
+        window: GP window ``N_r_max`` (samples).
+        n_init: samples before compensation starts (``N_c``).
+        length_scale: GP length scale in the scaled input units.
+        signal_variance, noise_variance: GP kernel parameters (relative error units).
+        min_displacement_m: steps whose tip moved less than this add no sample (the relative
+            error is ill-defined there).
+        max_effective_gain: cap on ``K_p (1 + e)``, the gain of eq. (26) once eq. (29) has scaled
+            the command by ``1 + e``: the learned compensation may raise the loop gain only this
+            far, which keeps the closed loop stable.
+    """
+
+    name = "hybrid_gpr"
+
+    def __init__(self, env, kp: float = 0.06, null_space_gain: float = 0.1,
+                 probe_fraction: float = 0.3, probe_steps: int = 30, damping: float = 1e-4,
+                 window: int = 300, n_init: int = 20, length_scale: float = 1.0,
+                 signal_variance: float = 1.0, noise_variance: float = 1e-2,
+                 min_displacement_m: float = 1e-5, max_effective_gain: float = 0.3) -> None:
+        super().__init__(env, kp=kp, null_space_gain=null_space_gain,
+                         probe_fraction=probe_fraction, probe_steps=probe_steps, damping=damping)
+        if not isinstance(n_init, int) or not 1 <= n_init <= window:
+            raise ValueError(f"n_init must be an integer in [1, window={window}], got {n_init!r}")
+        self.n_init = n_init
+        self.min_displacement_m = require_positive("min_displacement_m", min_displacement_m)
+        self.max_effective_gain = require_positive("max_effective_gain", max_effective_gain)
+        if max_effective_gain <= kp:
+            raise ValueError(f"max_effective_gain must exceed kp={kp}, got {max_effective_gain!r}")
+        # eq. (29) scales the command by (1 + e): cap it so K_p (1 + e) <= max_effective_gain
+        self.max_relative_error = max_effective_gain / kp - 1.0
+        self.gp = SlidingWindowGP(window=window, length_scales=length_scale,
+                                  signal_variance=signal_variance, noise_variance=noise_variance)
+        self.samples = 0
+        self._pending: tuple[np.ndarray, np.ndarray] | None = None
+
+    @property
+    def compensating(self) -> bool:
+        return self.samples >= self.n_init
+
+    def reset(self) -> None:
+        super().reset()
+        self._pending = None  # the GP's window persists: it is the robot's learned model
+
+    def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        if self.alpha is None:
+            raise ValueError("call calibrate() before predict(): alpha of eq. (27) is unknown")
+        position = self._pose(observation)
+        desired = self._next_target(observation) - position
+        actuation = (self.p_low + self.alpha * (self.lengths - self.rest_lengths)) / self.p_high
+        features = np.r_[actuation, desired * _MM]
+        command = desired
+        if self.compensating:
+            relative = np.clip(self.gp.predict(features), -self.max_relative_error,
+                               self.max_relative_error)
+            command = desired + relative * np.linalg.norm(desired)  # eq. (29)
+        self._pending = (features, desired, command)
+        step = self.length_step(position, position + command)
+        self.lengths = self.lengths + self.kp * step
+        pressures = np.clip(self.p_low + self.alpha * (self.lengths - self.rest_lengths),
+                            self.p_low, self.p_high)
+        self.lengths = self.rest_lengths + (pressures - self.p_low) / self.alpha
+        return pressures_to_action(pressures, self.p_low, self.p_high), state
+
+    def update(self, observation, action, reward, next_observation, info) -> None:
+        """Add the step's sample (eq. (28)): ``x = [u(k-1), dz(k)]`` with ``dz`` the tip motion
+        that happened, ``y = (dp_cmd - dz) / |dz|`` with ``dp_cmd`` the displacement the CC model
+        was asked for; queried with the desired motion, the GP then says how much more to ask
+        for so that the arm moves as desired (eq. (29))."""
+        if self._pending is None:
+            return
+        features, desired, command = self._pending
+        self._pending = None
+        size = np.linalg.norm(desired)
+        if size < self.min_displacement_m:
+            return
+        actual = self._pose(next_observation) - self._pose(observation)
+        self.gp.add(features, (command - actual) / size)
+        self.samples += 1
+
+    def save(self, path: str | Path) -> None:
+        """Write the controller to the directory ``path`` (settings, alpha and the GP window)."""
+        directory = Path(path)
+        directory.mkdir(parents=True, exist_ok=True)
+        super().save(directory / "cc_model.json")
+        self.gp.save(directory / "gp.npz")
+        (directory / "hybrid.json").write_text(json.dumps({
+            "n_init": self.n_init, "min_displacement_m": self.min_displacement_m,
+            "max_effective_gain": self.max_effective_gain, "samples": self.samples}, indent=2))
+
+    @classmethod
+    def load(cls, path: str | Path, env=None) -> "HybridGPRController":
+        directory = Path(path)
+        base = json.loads((directory / "cc_model.json").read_text())
+        extra = json.loads((directory / "hybrid.json").read_text())
+        alpha = base.pop("alpha")
+        base.pop("name")
+        samples = extra.pop("samples")
+        gp = SlidingWindowGP.load(directory / "gp.npz")
+        controller = cls(env, window=gp.window, **base, **extra)
+        controller.gp = gp
+        controller.samples = samples
+        controller.alpha = None if alpha is None else np.array(alpha)
+        return controller
