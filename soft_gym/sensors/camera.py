@@ -1,0 +1,309 @@
+"""Eye-in-hand camera at the tip (wang2023, Sections II-B and IV-A, Figs. 5-7).
+
+Wang et al. 2023 fix an endoscopic camera (depth of field 8-150 mm) and an LED on the tip cap and
+run monocular ORB-SLAM2 on its frames at 20 Hz (one per 0.05 s control step) while the arm moves
+over a LEGO-constructed scene. Here the frame is rendered by PyBullet's TinyRenderer (CPU, works
+in DIRECT mode) from the tip pose composed with a fixed camera offset, looking along the tip's
++z axis, at the feature-rich scene of :func:`soft_gym.sensors.scene.build_scene`; the visual
+faults of :mod:`soft_gym.scenarios.faults` (occluder, low light, LED glare, motion blur, noise)
+are applied to every frame.
+
+Conventions (OpenCV): camera axes x right, y down, z forward; the pose is world-from-camera
+``(R, t)`` (a camera point ``p_c`` is at ``R p_c + t`` in the world = arm base frame). The camera
+axes are the tip's axes (x_cam = x_tip, y_cam = y_tip, z_cam = z_tip), the centre is
+``offset_m`` from the tip in the tip frame. :meth:`CameraIntrinsics.K` is the pinhole matrix
+that matches TinyRenderer's sampling exactly (pixel (u, v) samples the image plane at
+``u = cx + fx x/z``, ``v = cy + fy y/z`` with ``cx = W / 2``, ``cy = H / 2 - 1``; measured by
+sweeping a straight edge through the image, 0.01 px).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pybullet
+from gymnasium import spaces
+
+from soft_gym._quaternion import quaternion_to_matrix
+from soft_gym._validation import as_finite_array, require_positive
+from soft_gym.scenarios.faults import FrameContext, VisualFault, make_faults
+from soft_gym.sensors.base import Sensor
+from soft_gym.sensors.scene import build_scene
+
+
+@dataclass(frozen=True)
+class CameraIntrinsics:
+    """A pinhole camera with square pixels as PyBullet renders it.
+
+    Args:
+        width: image width (px).
+        height: image height (px).
+        hfov_deg: horizontal field of view (deg); endoscope cameras are wide, 90-120 deg.
+        near_m: near clipping distance (m), before anything the camera must see (wang2023's
+            camera is sharp from 8 mm).
+        far_m: far clipping distance (m).
+    """
+
+    width: int = 160
+    height: int = 120
+    hfov_deg: float = 95.0
+    near_m: float = 0.004
+    far_m: float = 2.0
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not (
+                    8 <= value <= 4096):
+                raise ValueError(f"{name} must be an integer in [8, 4096], got {value!r}")
+        if not (np.isfinite(self.hfov_deg) and 1.0 <= self.hfov_deg <= 170.0):
+            raise ValueError(f"hfov_deg must be within [1, 170], got {self.hfov_deg!r}")
+        require_positive("near_m", self.near_m)
+        require_positive("far_m", self.far_m)
+        if self.far_m <= self.near_m:
+            raise ValueError(f"far_m must be > near_m={self.near_m}, got {self.far_m!r}")
+
+    @property
+    def fx(self) -> float:
+        """Focal length in pixels along x."""
+        return 0.5 * self.width / math.tan(0.5 * math.radians(self.hfov_deg))
+
+    @property
+    def fy(self) -> float:
+        """Focal length in pixels along y (square pixels)."""
+        return self.fx
+
+    @property
+    def vfov_deg(self) -> float:
+        """Vertical field of view (deg)."""
+        return math.degrees(2.0 * math.atan(0.5 * self.height / self.fy))
+
+    def K(self) -> np.ndarray:
+        """OpenCV camera matrix (3, 3) consistent with TinyRenderer's images.
+
+        ``cx = W / 2``, ``cy = H / 2 - 1``: TinyRenderer samples pixel column ``j`` at the
+        left edge of the OpenGL pixel and stores rows bottom-up, so row ``i`` samples one
+        pixel below the usual centre convention.
+        """
+        return np.array([[self.fx, 0.0, 0.5 * self.width],
+                         [0.0, self.fy, 0.5 * self.height - 1.0],
+                         [0.0, 0.0, 1.0]])
+
+    def projection_matrix(self) -> list[float]:
+        """OpenGL projection matrix for ``getCameraImage`` (16 floats, column-major)."""
+        n, f = self.near_m, self.far_m
+        matrix = np.array([[2.0 * self.fx / self.width, 0.0, 0.0, 0.0],
+                           [0.0, 2.0 * self.fy / self.height, 0.0, 0.0],
+                           [0.0, 0.0, -(f + n) / (f - n), -2.0 * f * n / (f - n)],
+                           [0.0, 0.0, -1.0, 0.0]])
+        return matrix.T.reshape(-1).tolist()
+
+    def depth_from_buffer(self, buffer: np.ndarray) -> np.ndarray:
+        """Metric depth along the optical axis (m) from PyBullet's [0, 1] depth buffer."""
+        n, f = self.near_m, self.far_m
+        buffer = np.asarray(buffer, dtype=np.float64)
+        return f * n / (f - (f - n) * buffer)
+
+
+def view_matrix(rotation: np.ndarray, position: np.ndarray) -> list[float]:
+    """OpenGL view matrix (16 floats, column-major) of a camera with world-from-camera pose
+    ``(rotation, position)`` in OpenCV axes (x right, y down, z forward)."""
+    gl_rotation = rotation * np.array([1.0, -1.0, -1.0])  # OpenGL: y up, looking along -z
+    matrix = np.eye(4)
+    matrix[:3, :3] = gl_rotation.T
+    matrix[:3, 3] = -gl_rotation.T @ position
+    return matrix.T.reshape(-1).tolist()
+
+
+def render(client, intrinsics: CameraIntrinsics, rotation: np.ndarray, position: np.ndarray,
+           light_direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Render RGB (uint8 (H, W, 3)) and metric depth (m, (H, W)) with TinyRenderer."""
+    width, height = intrinsics.width, intrinsics.height
+    image = client.getCameraImage(
+        width, height, view_matrix(rotation, position), intrinsics.projection_matrix(),
+        lightDirection=list(light_direction), shadow=0, renderer=pybullet.ER_TINY_RENDERER,
+        flags=pybullet.ER_NO_SEGMENTATION_MASK)
+    rgb = np.asarray(image[2], dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+    depth = intrinsics.depth_from_buffer(np.asarray(image[3]).reshape(height, width))
+    return np.ascontiguousarray(rgb), depth
+
+
+def _as_intrinsics(intrinsics: Any, default: CameraIntrinsics) -> CameraIntrinsics:
+    if intrinsics is None:
+        return default
+    if isinstance(intrinsics, CameraIntrinsics):
+        return intrinsics
+    if isinstance(intrinsics, dict):
+        try:
+            return CameraIntrinsics(**intrinsics)
+        except TypeError as error:
+            raise ValueError(f"intrinsics got invalid parameters {intrinsics}: {error}") from error
+    raise ValueError(f"intrinsics must be None, a CameraIntrinsics or a dict, got {intrinsics!r}")
+
+
+class EyeInHandCamera(Sensor):
+    """The tip camera of wang2023: a uint8 RGB frame (H, W, 3) per reading, faults applied.
+
+    Args:
+        intrinsics: a :class:`CameraIntrinsics`, or a dict of its fields (default 160 x 120,
+            95 deg horizontal field of view, near 4 mm, far 2 m).
+        offset_m: camera centre in the tip frame (m); default 3 mm along the tip's +z (the cap).
+        faults: visual faults, anything :func:`soft_gym.scenarios.faults.make_faults` accepts
+            (default none: clean frames). See :meth:`set_faults`.
+        rate_hz: frames per second; ``None`` renders at every read (wang2023 runs ORB-SLAM2 at
+            the 20 Hz control rate).
+        scene: build the feature-rich scene (:func:`~soft_gym.sensors.scene.build_scene`) in the
+            simulator's client at the first reset; ``False`` leaves the world as it is.
+        scene_seed: seed of the scene layout. The scene is the robot's surroundings: it is built
+            once per simulator and does not change with the episode's seed.
+        scene_options: extra keyword arguments for ``build_scene``.
+        light_direction: direction towards the scene light in the world frame (the lamp of
+            wang2023 Fig. 7 ①); the default lights the ground from the base side.
+
+    Attributes:
+        last_pose: world-from-camera ``(R, t)`` of the last frame (OpenCV axes).
+        last_depth: metric depth (m) of the last frame, occluder included (for calibration).
+        faults: the active list of :class:`~soft_gym.scenarios.faults.VisualFault`.
+    """
+
+    def __init__(self, intrinsics: CameraIntrinsics | dict | None = None,
+                 offset_m: tuple[float, float, float] = (0.0, 0.0, 0.003), faults: Any = None,
+                 rate_hz: float | None = None, scene: bool = True, scene_seed: int = 0,
+                 scene_options: dict | None = None,
+                 light_direction: tuple[float, float, float] = (0.3, -0.2, -1.0)) -> None:
+        super().__init__("image", rate_hz)
+        self.intrinsics = _as_intrinsics(intrinsics, CameraIntrinsics())
+        self.offset_m = as_finite_array("offset_m", offset_m, shape=(3,))
+        light = as_finite_array("light_direction", light_direction, shape=(3,))
+        if np.linalg.norm(light) == 0:
+            raise ValueError("light_direction must be a non-zero vector, got (0, 0, 0)")
+        self.light_direction = light / np.linalg.norm(light)
+        if not isinstance(scene, (bool, np.bool_)):
+            raise ValueError(f"scene must be True or False, got {scene!r}")
+        self.scene = bool(scene)
+        if isinstance(scene_seed, bool) or not isinstance(scene_seed, (int, np.integer)):
+            raise ValueError(f"scene_seed must be an integer, got {scene_seed!r}")
+        self.scene_seed = int(scene_seed)
+        if scene_options is not None and not isinstance(scene_options, dict):
+            raise ValueError(f"scene_options must be None or a dict, got {scene_options!r}")
+        self.scene_options = dict(scene_options or {})
+        self.faults: list[VisualFault] = []
+        self._client: Any = None
+        self.scene_body_ids: list[int] = []
+        self.set_faults(faults)
+        self.last_pose: tuple[np.ndarray, np.ndarray] | None = None
+        self.last_depth: np.ndarray | None = None
+        self._previous: tuple[np.ndarray, np.ndarray, float] | None = None
+
+    # ------------------------------------------------------------------ set-up
+    def set_faults(self, faults: Any) -> None:
+        """Replace the faults (any ``make_faults`` description); their bodies move along."""
+        new = make_faults(faults)
+        for fault in self.faults:
+            if fault.geometric and self._client is not None:
+                fault.detach(self._client)
+        self.faults = sorted(new, key=lambda fault: fault.stage)
+        if self._client is not None:
+            for fault in self.faults:
+                if fault.geometric:
+                    fault.attach(self._client, self.intrinsics)
+                fault.reset(self.rng)
+
+    def _setup(self, sim) -> None:
+        """Build the scene and the faults' bodies once per simulator client."""
+        if self._client is sim.client:
+            return
+        self._client = sim.client
+        if self.scene:
+            options = {"seed": self.scene_seed, **self.scene_options}
+            self.scene_body_ids = build_scene(sim.client, sim.spec.length_m, **options)
+        for fault in self.faults:
+            if fault.geometric:
+                fault.attach(sim.client, self.intrinsics)
+
+    def reset(self, sim, rng: np.random.Generator) -> None:
+        """Start an episode: build the scene if needed and draw the faults' episode parameters."""
+        super().reset(sim, rng)
+        self._setup(sim)
+        for fault in self.faults:
+            fault.reset(rng)
+        self._previous = None
+        self.last_pose = None
+        self.last_depth = None
+
+    # ------------------------------------------------------------------ geometry
+    def camera_pose(self, sim) -> tuple[np.ndarray, np.ndarray]:
+        """World-from-camera rotation (3, 3) and camera centre (m) now, OpenCV axes."""
+        tip, quaternion = sim.tip_pose()
+        rotation = quaternion_to_matrix(quaternion)
+        return rotation, tip + rotation @ self.offset_m
+
+    def pose_matrix(self, sim) -> np.ndarray:
+        """World-from-camera homogeneous transform (4, 4) now."""
+        rotation, position = self.camera_pose(sim)
+        matrix = np.eye(4)
+        matrix[:3, :3], matrix[:3, 3] = rotation, position
+        return matrix
+
+    def K(self) -> np.ndarray:
+        """OpenCV camera matrix (3, 3) of this camera (see :meth:`CameraIntrinsics.K`)."""
+        return self.intrinsics.K()
+
+    # ------------------------------------------------------------------ rendering
+    def render_clean(self, sim) -> tuple[np.ndarray, np.ndarray]:
+        """A fault-free RGB frame (uint8) and its metric depth (m) from the current pose.
+
+        The occluder bodies are parked out of view first (they return at the next frame).
+        """
+        self._setup(sim)
+        for fault in self.faults:
+            fault.park(sim.client)
+        rotation, position = self.camera_pose(sim)
+        return render(sim.client, self.intrinsics, rotation, position, self.light_direction)
+
+    def render_depth(self, sim) -> np.ndarray:
+        """Metric depth along the optical axis (m, (H, W)) without faults, for calibration
+        (wang2023 calibrates the monocular scale with the EM tracker; here the depth buffer
+        gives metric scale directly)."""
+        return self.render_clean(sim)[1]
+
+    def _context(self, sim, rotation: np.ndarray, position: np.ndarray) -> FrameContext:
+        previous = self._previous
+        return FrameContext(
+            time_s=sim.time_s, rotation=rotation, position=position,
+            intrinsics=self.intrinsics, rng=self.rng,
+            previous_rotation=None if previous is None else previous[0],
+            previous_position=None if previous is None else previous[1],
+            previous_time_s=None if previous is None else previous[2])
+
+    def sample(self, sim) -> np.ndarray:
+        """Render a frame at the current tip pose and apply the faults active at ``sim.time_s``."""
+        self._setup(sim)
+        rotation, position = self.camera_pose(sim)
+        context = self._context(sim, rotation, position)
+        for fault in self.faults:
+            if fault.geometric:
+                fault.place(sim.client, context)
+        rgb, depth = render(sim.client, self.intrinsics, rotation, position, self.light_direction)
+        context.depth = depth
+        image_faults = [fault for fault in self.faults
+                        if not fault.geometric and fault.strength_at(context.time_s) > 0.0]
+        if image_faults:
+            image = rgb.astype(np.float32)
+            for fault in image_faults:
+                image = fault.apply(image, context)
+            rgb = np.clip(np.rint(image), 0, 255).astype(np.uint8)
+        self._previous = (rotation, position, context.time_s)
+        self.last_pose = (rotation, position)
+        self.last_depth = depth
+        return rgb
+
+    def space(self, sim) -> spaces.Box:
+        """``Box(0, 255, (H, W, 3), uint8)``."""
+        return spaces.Box(0, 255, (self.intrinsics.height, self.intrinsics.width, 3), np.uint8)
+
+
+__all__ = ["CameraIntrinsics", "EyeInHandCamera", "view_matrix", "render"]
