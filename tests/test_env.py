@@ -142,7 +142,8 @@ def test_render_returns_rgb_array():
 @pytest.mark.parametrize("preset", sorted(PRESETS))
 def test_random_action_soak_stays_finite_and_within_joint_limits(preset):
     """10,000 random-action steps: no NaN and no joint beyond its physical range."""
-    env = gym.make("SoftArmReach-v0", preset=preset, episode_steps=10_000)
+    env = gym.make("SoftArmReach-v0", preset=preset, episode_steps=10_000,
+                   feedback="ground_truth")
     env.reset(seed=0)
     env.action_space.seed(0)
     arm = env.unwrapped.sim.arm
@@ -159,7 +160,8 @@ def test_random_action_soak_stays_finite_and_within_joint_limits(preset):
 
 
 def test_sensor_parts_in_flat_and_dict_observations_and_info():
-    env = gym.make("SoftArmReach-v0", obs=("pose", "fbg", "em", "encoder"), sensors=("strain",))
+    env = gym.make("SoftArmReach-v0", obs=("pose", "fbg", "em", "encoder"), sensors=("strain",),
+                   feedback="ground_truth")
     gym_check_env(env.unwrapped, skip_render_check=True)
     obs, info = env.reset(seed=1)
     n_gratings = env.unwrapped.sensors["fbg"].layout.n_gratings
@@ -167,17 +169,18 @@ def test_sensor_parts_in_flat_and_dict_observations_and_info():
     assert set(info["sensors"]) == {"fbg", "em", "encoder", "strain"}
     np.testing.assert_allclose(obs[7:7 + n_gratings], info["sensors"]["fbg"], rtol=1e-6)
     env.close()
-    env = gym.make("SoftArmReach-v0", obs=("target", "fbg"), obs_format="dict")
+    env = gym.make("SoftArmReach-v0", obs=("target", "fbg"), obs_format="dict",
+                   feedback="ground_truth")
     obs, _ = env.reset(seed=1)
     assert set(obs) == {"target", "fbg"} and env.observation_space.contains(obs)
     env.close()
 
 
 def test_sensors_cost_nothing_unless_asked_and_readings_repeat_under_a_seed():
-    assert gym.make("SoftArmReach-v0").unwrapped.sensors == {}
+    assert gym.make("SoftArmReach-v0", feedback="ground_truth").unwrapped.sensors == {}
     runs = []
     for _ in range(2):
-        env = gym.make("SoftArmReach-v0", obs=("fbg", "em"))
+        env = gym.make("SoftArmReach-v0", obs=("fbg", "em"), feedback="ground_truth")
         env.reset(seed=7)
         env.action_space.seed(7)
         runs.append([env.step(env.action_space.sample())[0] for _ in range(5)])
@@ -194,3 +197,46 @@ def test_sensors_cost_nothing_unless_asked_and_readings_repeat_under_a_seed():
 def test_bad_sensor_configuration_raises(kwargs, name):
     with pytest.raises(ValueError, match=name):
         gym.make("SoftArmReach-v0", **kwargs)
+
+
+@pytest.mark.parametrize("feedback, tolerance_mm", [
+    ("ground_truth", 1e-3), ("em", 4.0), ("camera", 3.0), ("fbg", 3.0), ("fused", 3.0)])
+def test_feedback_sources_fill_the_pose_part(feedback, tolerance_mm):
+    env = gym.make("SoftArmTrack-v0", feedback=feedback)
+    obs, info = env.reset(seed=0)
+    errors = []
+    for _ in range(20):
+        # a bend inside the calibration exploration's range (F-emp is a local model)
+        obs, _, _, _, info = env.step(np.array([0.0, -0.8, -0.8], dtype=np.float32))
+        errors.append(np.linalg.norm(obs[:3] - info["tip_position_m"]) * 1000)
+    assert np.mean(errors) <= tolerance_mm, f"{feedback}: {np.mean(errors):.3f} mm"
+    if feedback in ("camera", "fbg", "fused"):
+        assert set(info["estimates"]) >= {"camera", "femp", "fused", "reprojection_error_px"}
+    env.close()
+
+
+def test_pipeline_persists_across_resets_and_recalibrates_on_request():
+    env = gym.make("SoftArmReach-v0")
+    env.reset(seed=0)
+    pipeline = env.unwrapped.pipeline
+    for _ in range(30):
+        env.step(env.action_space.sample())
+    learned = pipeline.femp.updates
+    assert learned > 0
+    env.reset()
+    assert pipeline.femp.updates >= learned  # a plain reset keeps what was learned
+    env.reset(seed=1)
+    assert pipeline.femp.updates <= 1  # a seeded reset returns to the calibrated state (the
+    # reset observation itself may update once)
+    env.reset(options={"recalibrate": True})
+    assert pipeline.is_calibrated and pipeline.calibration_samples > 100
+    env.close()
+
+
+def test_feedback_and_fault_configuration_errors():
+    with pytest.raises(ValueError, match="feedback"):
+        gym.make("SoftArmReach-v0", feedback="telepathy")
+    with pytest.raises(ValueError, match="faults"):
+        gym.make("SoftArmReach-v0", feedback="ground_truth", faults="low_light")
+    with pytest.raises(ValueError, match="faults"):
+        gym.make("SoftArmReach-v0", faults="earthquake")

@@ -15,7 +15,7 @@ that order; ``obs_format="dict"``: a ``Dict`` of the parts (needed for image par
 
 | part       | size            | content                                                   | unit |
 |------------|-----------------|-----------------------------------------------------------|------|
-| `pose`     | 7               | tip position (x, y, z) and quaternion (x, y, z, w)        | m, - |
+| `pose`     | 7               | feedback tip position (x, y, z) + quaternion (x, y, z, w) | m, - |
 | `target`   | 6               | current target and next target positions                  | m    |
 | `pressure` | 3 * n_segments  | chamber pressures over p_max                              | -    |
 | `fbg`      | n_gratings      | FBG Bragg wavelength shifts (wang2023)                    | nm   |
@@ -27,6 +27,16 @@ that order; ``obs_format="dict"``: a ``Dict`` of the parts (needed for image par
 Sensors are simulated only when an observation part or ``sensors=`` asks for them; each keeps its
 own rate (sample and hold) and noise (:mod:`soft_gym.sensors`).
 
+## Feedback pose
+``feedback=`` chooses what the ``pose`` part holds: ``"fused"`` (default; camera and F-emp fused by
+wang2023 eq. (18)), ``"camera"`` (the vision tracker), ``"fbg"`` (F-emp), ``"em"`` (EM tracker) or
+``"ground_truth"``. The first three run the sensing pipeline (:mod:`soft_gym.sensing.pipeline`):
+it is calibrated when the env is created (vision map at rest, F-emp from ``n_init`` spiral
+exploration steps labelled by the camera; the result is shared by envs of the same configuration
+in one process) and on ``reset(options={"recalibrate": True})``. It keeps learning across
+``reset()`` calls; ``reset(seed=...)`` returns it to its calibrated state, so that a seed fixes an
+episode exactly. ``faults=`` puts visual faults on the camera (:mod:`soft_gym.scenarios.faults`).
+
 ## Reward
 ``-||tip - target|| (m) - action_rate_weight * ||a_t - a_{t-1}||^2``.
 
@@ -36,8 +46,9 @@ last target has been presented.
 
 ## Info
 Ground truth: ``tip_position_m``, ``tip_quaternion``, ``target_m``, ``error_mm``, ``backbone_m``,
-``chamber_lengths_m``, ``pressures_pa``, ``time_s``; and ``sensors``: every active sensor's raw
-reading by name.
+``chamber_lengths_m``, ``pressures_pa``, ``time_s``; ``sensors``: every active sensor's raw
+reading by name; ``estimates`` (with the sensing pipeline): ``camera``, ``femp``, ``fused``
+positions (m), ``em`` when an EM tracker runs, ``reprojection_error_px`` (``e_S``), ``lost``.
 """
 
 from __future__ import annotations
@@ -58,6 +69,10 @@ from soft_gym.tasks import ReachTask, TrackTask
 STATE_PARTS = ("pose", "target", "pressure")
 OBSERVATION_PARTS = STATE_PARTS + tuple(name for name in SENSORS if name != "stereo")
 OBS_FORMATS = ("flat", "dict")
+FEEDBACKS = ("fused", "camera", "fbg", "em", "ground_truth")
+_PIPELINE_FEEDBACKS = ("fused", "camera", "fbg")
+_CALIBRATIONS: dict = {}
+"""Calibrated sensing state per configuration, shared by the envs of one process."""
 ACTION_MODES = ("absolute", "delta")
 TASKS = ("reach", "track")
 
@@ -78,6 +93,10 @@ class SoftArmEnv(gym.Env):
         obs_format: ``"flat"`` (a float32 Box) or ``"dict"`` (a Dict of parts).
         sensors: further sensors to simulate for ``info["sensors"]`` only (e.g. ``("stereo",)``).
         sensor_config: keyword arguments per sensor name, e.g. ``{"fbg": {"noise_std_nm": 2e-3}}``.
+        feedback: source of the ``pose`` part (see "Feedback pose" above).
+        faults: visual faults on the eye-in-hand camera.
+        sensing: keyword arguments of the sensing pipeline (``n_init``, ``femp``, ``fusion``,
+            ``vision``, ``exploration``).
         action_mode: ``"absolute"`` or ``"delta"``.
         delta_fraction: pressure change per unit action in delta mode, as a fraction of p_max.
         action_rate_weight: weight of the action-rate penalty.
@@ -94,6 +113,7 @@ class SoftArmEnv(gym.Env):
                  waypoints_m: Any = None, scenario: Any = None,
                  obs: tuple[str, ...] = STATE_PARTS, obs_format: str = "flat",
                  sensors: tuple[str, ...] = (), sensor_config: dict | None = None,
+                 feedback: str = "fused", faults: Any = None, sensing: dict | None = None,
                  action_mode: str = "absolute",
                  delta_fraction: float = 0.1, action_rate_weight: float = 0.001,
                  episode_steps: int = 100, settle_s: float = 0.5,
@@ -120,6 +140,8 @@ class SoftArmEnv(gym.Env):
         if unknown:
             raise ValueError(f"sensor_config keys must be sensor names from {sorted(SENSORS)}, "
                              f"got {sorted(sensor_config)!r}")
+        if feedback not in FEEDBACKS:
+            raise ValueError(f"feedback must be one of {list(FEEDBACKS)}, got {feedback!r}")
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         if not 0 < delta_fraction <= 1:
@@ -135,9 +157,32 @@ class SoftArmEnv(gym.Env):
             self.sim.add_load(load)
         self.obs_parts = obs
         self.obs_format = obs_format
-        self.sensors = {name: make_sensor(name, **sensor_config.get(name, {}))
-                        for name in dict.fromkeys(
-                            [part for part in obs if part in SENSORS] + list(sensors))}
+        self.feedback = feedback
+        wanted = [part for part in obs if part in SENSORS] + list(sensors)
+        if feedback in _PIPELINE_FEEDBACKS:
+            wanted += ["image", "fbg"]
+        elif feedback == "em":
+            wanted.append("em")
+        elif faults is not None and "image" not in wanted:
+            raise ValueError("faults act on the eye-in-hand camera: use feedback 'fused', "
+                             "'camera' or 'fbg', or ask for the 'image' part")
+        self.sensors = {}
+        for name in dict.fromkeys(wanted):
+            options = dict(sensor_config.get(name, {}))
+            if name == "image" and faults is not None:
+                options["faults"] = faults
+            if name == "fbg" and feedback in _PIPELINE_FEEDBACKS:
+                options.setdefault("rate_hz", None)  # F-emp reads the fiber every control step
+            self.sensors[name] = make_sensor(name, **options)
+        self.pipeline = None
+        self._estimates = None
+        if feedback in _PIPELINE_FEEDBACKS:
+            from soft_gym.sensing.pipeline import SensingPipeline
+
+            self.pipeline = SensingPipeline(self.sensors["image"], self.sensors["fbg"],
+                                            **dict(sensing or {}))
+            self._calibration_key = (self.spec_arm, repr(sensor_config.get("image")),
+                                     repr(sensor_config.get("fbg")), repr(sensing))
         self.action_mode = action_mode
         self.delta_fraction = float(delta_fraction)
         self.action_rate_weight = float(action_rate_weight)
@@ -165,6 +210,8 @@ class SoftArmEnv(gym.Env):
         self._step = 0
         self._last_action = np.zeros(n)
         self._command = self._p_low.copy()
+        if self.pipeline is not None:
+            self._calibrate(use_cache=True)
 
     def observation_part(self, observation, part: str) -> np.ndarray:
         """The ``part`` of an observation from this env, flat or dict (what baselines read)."""
@@ -180,6 +227,43 @@ class SoftArmEnv(gym.Env):
                 return np.asarray(observation)[start:start + size]
             start += size
         raise AssertionError("unreachable")
+
+    def feedback_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Tip position (m) and quaternion from the chosen feedback source."""
+        if self.feedback == "ground_truth":
+            return self.sim.tip_pose()
+        if self.feedback == "em":
+            reading = np.asarray(self.sensors["em"].read(self.sim, self.sim.time_s), dtype=float)
+            return reading[:3], reading[3:]
+        return getattr(self._estimates, self.feedback if self.feedback != "fbg" else "femp")
+
+    def _calibrate(self, use_cache: bool) -> None:
+        """Calibrate the sensing pipeline (clean camera), or take a cached calibration."""
+        import copy
+
+        cached = _CALIBRATIONS.get(self._calibration_key) if use_cache else None
+        if cached is None:
+            faults = self.pipeline.camera.faults
+            self.pipeline.camera.set_faults(None)
+            self.sim.reset(settle_s=self.settle_s)
+            self.pipeline.calibrate(self.sim, np.random.default_rng(0))
+            self.pipeline.camera.set_faults(faults)
+            cached = (self.pipeline.vision, self.pipeline.femp, self.pipeline.calibration_samples)
+            _CALIBRATIONS[self._calibration_key] = copy.deepcopy(cached)
+        self._calibrated_state = cached
+        self._restore_calibration()
+
+    def _restore_calibration(self) -> None:
+        """Put the sensing pipeline back to its state right after calibration."""
+        import copy
+
+        vision, femp, samples = copy.deepcopy(self._calibrated_state)
+        self.pipeline.vision, self.pipeline.femp = vision, femp
+        self.pipeline.calibration_samples = samples
+
+    def _observe_pipeline(self) -> None:
+        if self.pipeline is not None:
+            self._estimates = self.pipeline.observe(self.sim)
 
     def _part_space(self, part: str) -> spaces.Space:
         if part in self.sensors:
@@ -197,10 +281,18 @@ class SoftArmEnv(gym.Env):
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
+        if options and options.get("recalibrate"):
+            if self.pipeline is None:
+                raise ValueError("options['recalibrate'] needs the sensing pipeline: feedback "
+                                 f"'fused', 'camera' or 'fbg', this env has {self.feedback!r}")
+            self._calibrate(use_cache=False)
+        elif seed is not None and self.pipeline is not None:
+            self._restore_calibration()
         self.sim.reset(settle_s=self.settle_s)
         self.task.reset(self.np_random)
         for sensor in self.sensors.values():
             sensor.reset(self.sim, self.np_random)
+        self._observe_pipeline()
         self._step = 0
         self._last_action = np.zeros(self.spec_arm.n_chambers)
         self._command = self._p_low.copy()
@@ -216,6 +308,7 @@ class SoftArmEnv(gym.Env):
         self.sim.set_pressures(self._command)
         self.sim.step_physics(self.spec_arm.control_period_s)
         self._step += 1
+        self._observe_pipeline()
         tip, _ = self.sim.tip_pose()
         target, _ = self.task.target(self._step - 1)
         error_m = float(np.linalg.norm(tip - target))
@@ -267,7 +360,7 @@ class SoftArmEnv(gym.Env):
         if part in self.sensors:
             return np.array(self.sensors[part].read(self.sim, self.sim.time_s))
         if part == "pose":
-            position, quaternion = self.sim.tip_pose()
+            position, quaternion = self.feedback_pose()
             value = np.r_[position, quaternion]
         elif part == "target":
             current, upcoming = self.task.target(self._step)
@@ -288,7 +381,19 @@ class SoftArmEnv(gym.Env):
             "step": self._step,
             "sensors": {name: self._copy(sensor.read(self.sim, self.sim.time_s))
                         for name, sensor in self.sensors.items()},
+            **({"estimates": self._estimate_info()} if self.pipeline is not None else {}),
         }
+
+    def _estimate_info(self) -> dict:
+        estimates = self._estimates
+        info = {"camera": estimates.camera[0].copy(), "femp": estimates.femp[0].copy(),
+                "fused": estimates.fused[0].copy(),
+                "reprojection_error_px": estimates.reprojection_error_px,
+                "lost": estimates.lost}
+        if "em" in self.sensors:
+            info["em"] = np.asarray(self.sensors["em"].read(self.sim, self.sim.time_s)[:3],
+                                    dtype=float)
+        return info
 
     @staticmethod
     def _copy(reading):

@@ -113,6 +113,19 @@ class VisionPoseEstimator:
                                    patchSize=15, fastThreshold=10)
         self._matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
 
+    def __deepcopy__(self, memo: dict) -> "VisionPoseEstimator":
+        """A copy with its own map (OpenCV's ORB and matcher objects are rebuilt, not copied)."""
+        import copy
+
+        twin = VisionPoseEstimator(
+            self.camera_matrix.copy(), self.tip_from_camera.copy(), self.n_features,
+            self.min_inliers, self.ratio, self.ransac_threshold_px, self.keyframe_inlier_ratio,
+            self.max_keyframes, self.match_keyframes, self.keyframe_spacing_m, self.min_depth_m,
+            self.max_depth_m)
+        twin.keyframes = copy.deepcopy(self.keyframes, memo)
+        twin.last = copy.deepcopy(self.last, memo)
+        return twin
+
     # ------------------------------------------------------------------ map
     def calibrate(self, image: np.ndarray, depth_m: np.ndarray,
                   world_from_camera: np.ndarray) -> int:

@@ -1,0 +1,133 @@
+"""The robot's own pose sensing (wang2023 Fig. 1): camera pose, F-emp from the FBG, and fusion.
+
+Each control step:
+
+1. the eye-in-hand camera renders a frame (with any visual faults) and the vision tracker
+   (:mod:`soft_gym.sensing.vision_pose`) returns the camera-based tip pose, ``e_S`` and a lost flag;
+2. the FBG fiber is read and F-emp (:mod:`soft_gym.sensing.femp`) predicts the tip pose from it;
+3. F-emp is updated with the camera pose when ``e_S`` is small (selective update, never ground
+   truth);
+4. eq. (18) fuses the two (:mod:`soft_gym.sensing.fusion`).
+
+:meth:`SensingPipeline.calibrate` builds the vision map at the rest pose (known pose, depth
+buffer) and initialises F-emp from ``n_init`` steps of the predefined spiral exploration
+(:mod:`soft_gym.sensing.exploration`) labelled by the camera. The pipeline is the robot's sensing:
+it persists across episodes unless recalibrated.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from soft_gym.sensing.exploration import spiral_fractions
+from soft_gym.sensing.femp import FEmpEstimator
+from soft_gym.sensing.fusion import PoseFusion
+from soft_gym.sensing.vision_pose import VisionEstimate, VisionPoseEstimator
+from soft_gym.sensors.camera import EyeInHandCamera
+from soft_gym.sensors.fbg import FBGFiber
+
+
+@dataclass
+class PoseEstimates:
+    """One step's estimates: positions (m), quaternions (x, y, z, w), ``e_S`` (px)."""
+
+    camera: tuple[np.ndarray, np.ndarray]
+    femp: tuple[np.ndarray, np.ndarray]
+    fused: tuple[np.ndarray, np.ndarray]
+    reprojection_error_px: float
+    inliers: int
+    lost: bool
+    femp_updated: bool
+
+
+class SensingPipeline:
+    """Camera + FBG + F-emp + fusion, as on the wang2023 robot.
+
+    Args:
+        camera: the eye-in-hand camera (its faults are the episode's visual faults).
+        fbg: the FBG fiber.
+        n_init: exploration steps that initialise F-emp (paper: ``N0 = 450``).
+        femp: F-emp settings (keyword arguments of :class:`FEmpEstimator`).
+        fusion: eq. (18) bounds (a :class:`PoseFusion`).
+        vision: keyword arguments of :class:`VisionPoseEstimator`.
+        exploration: keyword arguments of :func:`spiral_fractions` for the calibration sequence.
+    """
+
+    def __init__(self, camera: EyeInHandCamera, fbg: FBGFiber, n_init: int = 450,
+                 femp: dict | None = None, fusion: PoseFusion | None = None,
+                 vision: dict | None = None, exploration: dict | None = None) -> None:
+        if not isinstance(n_init, int) or n_init < 10:
+            raise ValueError(f"n_init must be an integer >= 10, got {n_init!r}")
+        self.camera = camera
+        self.fbg = fbg
+        self.n_init = n_init
+        self.femp_options = dict(femp or {})
+        self.fusion = fusion or PoseFusion()
+        self.vision_options = dict(vision or {})
+        self.exploration = {"turn_s": 8.0, "breath_s": 45.0, "low": 0.05, "high": 0.6,
+                            **(exploration or {})}
+        self.vision: VisionPoseEstimator | None = None
+        self.femp: FEmpEstimator | None = None
+        self.calibration_samples = 0
+
+    @property
+    def is_calibrated(self) -> bool:
+        return self.femp is not None and self.femp.is_ready
+
+    def reset(self, sim, rng: np.random.Generator) -> None:
+        """Start an episode: sensors take the episode's generator; learned state persists."""
+        self.camera.reset(sim, rng)
+        self.fbg.reset(sim, rng)
+
+    def calibrate(self, sim, rng: np.random.Generator) -> int:
+        """Vision map at the current (rest) pose, then F-emp from the spiral exploration.
+
+        Leaves the arm wherever the exploration ends: the caller resets it. Returns the number
+        of camera-labelled samples F-emp was initialised with.
+        """
+        self.reset(sim, rng)
+        tip_from_camera = np.eye(4)
+        tip_from_camera[:3, 3] = self.camera.offset_m
+        self.vision = VisionPoseEstimator(self.camera.K(), tip_from_camera, **self.vision_options)
+        image, depth = self.camera.render_clean(sim)
+        self.vision.calibrate(image, depth, self.camera.pose_matrix(sim))
+        spec = sim.spec
+        shifts, positions, quaternions = [], [], []
+        threshold = self.femp_options.get("update_threshold_px", 1.4)
+        for k in range(self.n_init):
+            fraction = spiral_fractions(k * spec.control_period_s, spec.n_segments,
+                                        **self.exploration)
+            sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
+            sim.step_physics(spec.control_period_s)
+            estimate = self.vision.update(self.camera.read(sim, sim.time_s),
+                                          self.camera.last_depth)
+            reading = self.fbg.read(sim, sim.time_s)
+            if not estimate.lost and estimate.reprojection_error_px < threshold:
+                shifts.append(np.asarray(reading, dtype=float))
+                positions.append(estimate.position_m)
+                quaternions.append(estimate.quaternion)
+        if len(shifts) < 10:
+            raise ValueError(
+                f"calibration gave {len(shifts)} camera-labelled samples out of n_init="
+                f"{self.n_init}: the camera could not track the exploration")
+        self.femp = FEmpEstimator(**self.femp_options)
+        self.femp.initialize(np.array(shifts), np.array(positions), np.array(quaternions))
+        self.calibration_samples = len(shifts)
+        return len(shifts)
+
+    def observe(self, sim) -> PoseEstimates:
+        """Read the camera and the FBG now, update F-emp selectively, fuse (wang2023 eq. (18))."""
+        if not self.is_calibrated:
+            raise ValueError("the sensing pipeline is not calibrated: call calibrate() first")
+        frame = self.camera.read(sim, sim.time_s)
+        vision: VisionEstimate = self.vision.update(frame, self.camera.last_depth)
+        reading = np.asarray(self.fbg.read(sim, sim.time_s), dtype=float)
+        femp_pose = self.femp.predict(reading)
+        updated = self.femp.update(reading, vision.position_m, vision.quaternion,
+                                   vision.reprojection_error_px, vision.lost)
+        fused = self.fusion.fuse(vision.position_m, vision.quaternion, *femp_pose,
+                                 vision.reprojection_error_px, vision.lost)
+        return PoseEstimates((vision.position_m, vision.quaternion), femp_pose, fused,
+                             vision.reprojection_error_px, vision.inliers, vision.lost, updated)
