@@ -97,11 +97,12 @@ def quiet_stdout() -> Iterator[None]:
         os.close(saved)
 
 
-def time_env(preset: str, task: str, steps: int, resets: int, seed: int) -> dict:
+def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
+             feedback: str = "ground_truth") -> dict:
     """Measurements 1-4 for one preset (one env, one PyBullet client)."""
     start = time.perf_counter()
     with quiet_stdout():
-        env = gym.make(TASK_IDS[task], preset=preset)
+        env = gym.make(TASK_IDS[task], preset=preset, feedback=feedback)
     make_s = time.perf_counter() - start
     try:
         sim = env.unwrapped.sim
@@ -289,6 +290,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--presets", nargs="+", choices=list(PRESETS), default=list(PRESETS),
                         metavar="NAME", help=f"arm presets to measure, from {list(PRESETS)}")
+    parser.add_argument("--feedback", default="ground_truth",
+                        choices=["ground_truth", "em", "fused", "camera", "fbg"],
+                        help="feedback pose source; 'ground_truth' (default) runs no camera, "
+                             "'fused' the whole sensing pipeline (camera + vision + F-emp)")
     parser.add_argument("--task", choices=TASKS, default="reach",
                         help="environment task (reach: SoftArmReach-v0, track: SoftArmTrack-v0)")
     parser.add_argument("--steps", type=int, default=1000,
@@ -323,7 +328,7 @@ def main(argv: list[str] | None = None) -> int:
     total = time.perf_counter()
     for preset in args.presets:
         print(f"measuring {preset} ...", file=sys.stderr, flush=True)
-        row = time_env(preset, args.task, args.steps, args.resets, args.seed)
+        row = time_env(preset, args.task, args.steps, args.resets, args.seed, args.feedback)
         if args.accuracy_steps:
             row.update(accuracy(preset, args.accuracy_steps, row["settle_s"], args.seed,
                                 args.hold_steps))

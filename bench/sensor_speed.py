@@ -1,0 +1,107 @@
+"""Per-step cost of the sensors and the sensing pipeline (wang2023 preset), measured side by side.
+
+Prints mean and 95th-percentile microseconds per call for: the FBG readout (17 gratings), one
+eye-in-hand camera frame at 160 x 120, the vision pose update on that frame, camera + vision
+together, the OS-ELM update (N = 200) and prediction, and a whole env step with fused feedback
+next to one with ground-truth feedback (their ratio is the cost of the sensing).
+
+    python bench/sensor_speed.py [--steps 300] [--json out.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import soft_gym  # noqa: F401
+from soft_gym.robots import get_preset
+from soft_gym.sensing.elm import OSELM
+from soft_gym.sensing.exploration import spiral_fractions
+from soft_gym.sensing.vision_pose import VisionPoseEstimator
+from soft_gym.sensors.camera import EyeInHandCamera
+from soft_gym.sensors.fbg import FBGFiber
+from soft_gym.sim import ArmSimulator
+
+
+def stats(samples_s: list[float]) -> dict:
+    micro = np.array(samples_s) * 1e6
+    return {"mean_us": float(micro.mean()), "p95_us": float(np.percentile(micro, 95))}
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--steps", type=int, default=300, help="timed steps per measurement")
+    parser.add_argument("--json", default=None, help="also write the results to this file")
+    args = parser.parse_args(argv)
+    if args.steps < 10:
+        parser.error(f"--steps must be >= 10, got {args.steps}")
+    spec = get_preset("wang2023")
+    sim = ArmSimulator(spec)
+    sim.reset(settle_s=0.5)
+    rng = np.random.default_rng(0)
+    fiber, camera = FBGFiber(rate_hz=None), EyeInHandCamera()
+    fiber.reset(sim, rng)
+    camera.reset(sim, rng)
+    tip_from_camera = np.eye(4)
+    tip_from_camera[:3, 3] = camera.offset_m
+    vision = VisionPoseEstimator(camera.K(), tip_from_camera)
+    vision.calibrate(*camera.render_clean(sim), camera.pose_matrix(sim))
+    timings: dict[str, list[float]] = {"fbg": [], "camera": [], "vision": [], "camera+vision": []}
+    for k in range(args.steps):
+        fraction = spiral_fractions(k * spec.control_period_s, low=0.05, high=0.3)
+        sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
+        sim.step_physics(spec.control_period_s)
+        start = time.perf_counter()
+        fiber.read(sim, sim.time_s)
+        after_fbg = time.perf_counter()
+        frame = camera.read(sim, sim.time_s)
+        after_camera = time.perf_counter()
+        vision.update(frame, camera.last_depth)
+        after_vision = time.perf_counter()
+        timings["fbg"].append(after_fbg - start)
+        timings["camera"].append(after_camera - after_fbg)
+        timings["vision"].append(after_vision - after_camera)
+        timings["camera+vision"].append(after_vision - after_fbg)
+    model = OSELM(n_hidden=200).fit(rng.random((450, 17)), rng.random((450, 7)))
+    inputs, targets = rng.random((args.steps, 17)), rng.random((args.steps, 7))
+    timings["elm_update"], timings["elm_predict"] = [], []
+    for x, z in zip(inputs, targets):
+        start = time.perf_counter()
+        model.update(x, z)
+        middle = time.perf_counter()
+        model.predict(x)
+        timings["elm_update"].append(middle - start)
+        timings["elm_predict"].append(time.perf_counter() - middle)
+    for feedback in ("ground_truth", "fused"):
+        env = gym.make("SoftArmReach-v0", feedback=feedback, episode_steps=10**6)
+        env.reset(seed=0)
+        env.action_space.seed(0)
+        steps = []
+        for _ in range(args.steps):
+            action = env.action_space.sample()
+            start = time.perf_counter()
+            env.step(action)
+            steps.append(time.perf_counter() - start)
+        timings[f"env_step_{feedback}"] = steps
+        env.close()
+    results = {name: stats(values) for name, values in timings.items()}
+    results["fused_over_ground_truth"] = (results["env_step_fused"]["mean_us"]
+                                          / results["env_step_ground_truth"]["mean_us"])
+    print(f"{'measurement':<26} {'mean us':>10} {'p95 us':>10}")
+    for name, value in results.items():
+        if isinstance(value, dict):
+            print(f"{name:<26} {value['mean_us']:10.1f} {value['p95_us']:10.1f}")
+    print(f"fused env step / ground-truth env step: {results['fused_over_ground_truth']:.1f}x; "
+          f"fused env steps/s: {1e6 / results['env_step_fused']['mean_us']:.0f}")
+    if args.json:
+        with open(args.json, "w") as handle:
+            json.dump(results, handle, indent=2)
+
+
+if __name__ == "__main__":
+    main()
