@@ -29,6 +29,8 @@ from soft_gym.robots import get_preset
 from soft_gym.robots.pneumatics import chamber_loads
 from soft_gym.sim import ArmSimulator
 
+from arm_variants import linear, variant  # noqa: F401
+
 SIGMA = 2.0 * np.pi * np.arange(3) / 3.0  # chamber angles about the segment axis (rad)
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -38,32 +40,10 @@ Z = np.array([0.0, 0.0, 1.0])
 # ------------------------------------------------------------------------------------------
 
 
-def variant(spec, **changes):
-    """The preset with ``changes`` applied to every segment."""
-    segments = tuple(dataclasses.replace(segment, **changes) for segment in spec.segments)
-    return dataclasses.replace(spec, segments=segments)
 
 
-def linear(spec):
-    """The preset without strain stiffening (the linear elastic beam of the references)."""
-    return variant(spec, bending_stiffening=0.0, axial_stiffening=0.0)
 
 
-@pytest.fixture
-def make_sim():
-    """Factory of simulators (gravity on or off) that are all closed after the test."""
-    made = []
-
-    def factory(spec, gravity: bool = True) -> ArmSimulator:
-        sim = ArmSimulator(spec)
-        if not gravity:
-            sim.set_gravity([0.0, 0.0, 0.0])
-        made.append(sim)
-        return sim
-
-    yield factory
-    for sim in made:
-        sim.close()
 
 
 def smoothstep(u: float) -> float:

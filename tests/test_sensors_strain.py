@@ -26,6 +26,8 @@ from soft_gym.sensors.fbg import FBGFiber, FBGLayout, fbg_strain, rest_vertex_ar
 from soft_gym.sensors.strain_gauge import StrainGauges
 from soft_gym.sim import ArmSimulator
 
+from arm_variants import linear, variant  # noqa: F401
+
 SIGMA = 2.0 * np.pi * np.arange(3) / 3.0
 NM_PER_STRAIN = 1550.0 * (1.0 - 0.21)
 SETTLE_S = 3.0
@@ -36,31 +38,10 @@ SETTLE_S = 3.0
 # ------------------------------------------------------------------------------------------
 
 
-def variant(spec, **changes):
-    """The preset with ``changes`` applied to every segment."""
-    segments = tuple(dataclasses.replace(segment, **changes) for segment in spec.segments)
-    return dataclasses.replace(spec, segments=segments)
 
 
-def linear(spec, **changes):
-    """The preset without strain stiffening (the linear beam of the references)."""
-    return variant(spec, bending_stiffening=0.0, axial_stiffening=0.0, **changes)
 
 
-@pytest.fixture
-def make_sim():
-    made = []
-
-    def factory(spec, gravity: bool = False) -> ArmSimulator:
-        sim = ArmSimulator(spec)
-        if not gravity:
-            sim.set_gravity([0.0, 0.0, 0.0])
-        made.append(sim)
-        return sim
-
-    yield factory
-    for sim in made:
-        sim.close()
 
 
 def settle(sim: ArmSimulator, pressures, seconds: float = SETTLE_S) -> None:
@@ -149,7 +130,7 @@ def test_layout_on_two_segments_and_one_segment():
 @pytest.mark.parametrize("chamber", [0, 1, 2])
 def test_fbg_matches_analytic_arc(make_sim, chamber):
     spec = linear(get_preset("wang2023"))
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     pressures = one_chamber(spec, chamber, 60e3)
     settle(sim, pressures)
     fiber = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
@@ -162,7 +143,7 @@ def test_fbg_matches_analytic_arc(make_sim, chamber):
 
 def test_pure_function_matches_sensor(make_sim):
     spec = linear(get_preset("wang2023"), torsion=True)
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     settle(sim, [30e3, 70e3, 0.0], 0.3)  # mid-swing: curvature varies along the arm
     fiber = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, contact_strain_per_n=0.0, rate_hz=None)
     geometry = fiber.geometry(spec)
@@ -177,7 +158,7 @@ def test_outside_of_bend_is_stretched(make_sim):
     """A nearly axial fiber (huge pitch) on the pressurised chamber's side (the outside of the
     bend, the chamber lengthens) reads tension; on the opposite side compression."""
     spec = linear(get_preset("wang2023"))
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     settle(sim, one_chamber(spec, 0, 60e3))
     assert sim.chamber_lengths()[0] > sim.chamber_lengths()[1]
     outside = FBGFiber(FBGLayout(n_gratings=1, pitch_m=100.0, psi0_rad=SIGMA[0]),
@@ -193,7 +174,7 @@ def test_fbg_amplitude_linear_in_curvature_and_phase_follows_direction(make_sim)
     spec = linear(get_preset("wang2023"))
     fiber = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
     psi = fiber.geometry(spec).center_psi_rad
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     kappas, amplitudes, phases = [], [], {}
     for pressure in (20e3, 40e3, 60e3, 80e3, 100e3):
         pressures = one_chamber(spec, 0, pressure)
@@ -223,7 +204,7 @@ def test_twist_adds_the_formula_twist_term(make_sim, right_handed):
     spec = linear(get_preset("wang2023"), torsion=True)
     layout = FBGLayout(right_handed=right_handed)
     pressures = one_chamber(spec, 0, 50e3)
-    plain, twisted = make_sim(spec), make_sim(spec)
+    plain, twisted = make_sim(spec, gravity=False), make_sim(spec, gravity=False)
     for sim in (plain, twisted):
         settle(sim, pressures)
     angle = 0.05  # rad per link
@@ -242,7 +223,7 @@ def test_twist_adds_the_formula_twist_term(make_sim, right_handed):
 
 def test_local_twist_changes_only_gratings_on_that_link(make_sim):
     spec = linear(get_preset("wang2023"), torsion=True)
-    plain, twisted = make_sim(spec), make_sim(spec)
+    plain, twisted = make_sim(spec, gravity=False), make_sim(spec, gravity=False)
     for sim in (plain, twisted):
         settle(sim, one_chamber(spec, 0, 50e3))
     twisted.client.resetJointState(twisted.arm.body_id, int(twisted.arm.station_torsion_joint[2]),
@@ -265,7 +246,7 @@ def test_local_twist_changes_only_gratings_on_that_link(make_sim):
 
 def test_strain_gauges_match_surface_strain(make_sim):
     spec = linear(get_preset("wang2023"))
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     pressures = one_chamber(spec, 0, 60e3)
     settle(sim, pressures)
     gauges = StrainGauges(noise_std=0.0, rate_hz=None)
@@ -305,13 +286,13 @@ def test_push_on_fiber_disturbs_fbg_more_than_tip_force(make_sim):
     push on link 1 against a tip force giving the same tip deflection; the disturbance is the
     reading minus the reading of a contact-free fiber on the same shape."""
     spec = linear(get_preset("wang2023"))
-    pushed = make_sim(spec)
+    pushed = make_sim(spec, gravity=False)
     pushed.add_load(Push(force_n=(0.2, 0.0, 0.0), link=1, start_s=0.0, end_s=None, ramp_s=0.1))
     settle(pushed, np.zeros(3))
     target = _tip_deflection_x(pushed)
     assert target > 0.005
 
-    tipped = make_sim(spec)
+    tipped = make_sim(spec, gravity=False)
     tip_force = 0.04
     for _ in range(3):  # secant iterations on the (mildly nonlinear) deflection
         settle(tipped, np.zeros(3), 0.0)
@@ -343,7 +324,7 @@ def test_push_on_fiber_disturbs_fbg_more_than_tip_force(make_sim):
 
 def test_fbg_noise_std_is_one_picometre(make_sim):
     spec = get_preset("wang2023")
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     settle(sim, one_chamber(spec, 0, 40e3), 1.0)
     fiber = FBGFiber(strain_transfer=1.0, rate_hz=None)
     truth = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, rate_hz=None)
@@ -356,7 +337,7 @@ def test_fbg_noise_std_is_one_picometre(make_sim):
 
 def test_em_tracker_noise(make_sim):
     spec = get_preset("wang2023")
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     settle(sim, one_chamber(spec, 1, 60e3), 1.0)
     position, quaternion = sim.tip_pose()
     tracker = EMTracker(rate_hz=None)
@@ -387,7 +368,7 @@ def test_em_tracker_noise(make_sim):
     lambda: ChamberEncoders(rate_hz=40.0, resolution_m=1e-6), lambda: EMTracker(rate_hz=40.0)])
 def test_sample_and_hold_seed_and_space(make_sim, make_sensor):
     spec = get_preset("wang2023")
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     settle(sim, one_chamber(spec, 2, 50e3), 0.5)
     sensor = make_sensor()
     sensor.reset(sim, np.random.default_rng(7))
@@ -407,7 +388,7 @@ def test_sample_and_hold_seed_and_space(make_sim, make_sensor):
 
 def test_temperature_schedule_and_drift(make_sim):
     spec = get_preset("wang2023")
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     settle(sim, np.zeros(3), 0.2)
     plain = read(FBGFiber(strain_transfer=1.0, noise_std_nm=0.0), sim).astype(float)
     heated = read(FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, temperature_schedule=lambda t: 2.0), sim)
@@ -423,7 +404,7 @@ def test_temperature_schedule_and_drift(make_sim):
 
 def test_encoders_read_quantised_chamber_lengths(make_sim):
     spec = get_preset("zou2022")
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     settle(sim, [100e3, 0.0, 50e3], 1.0)
     encoder = ChamberEncoders(rate_hz=None, resolution_m=1e-4, noise_std_m=0.0)
     reading = read(encoder, sim).astype(float)
@@ -475,7 +456,7 @@ def test_bad_configurations_raise(build, name):
 
 
 def test_gauge_beyond_segment_raises(make_sim):
-    sim = make_sim(get_preset("wang2023"))
+    sim = make_sim(get_preset("wang2023"), gravity=False)
     gauges = StrainGauges(arc_fraction=0.99, gauge_length_m=0.01)
     with pytest.raises(ValueError, match="gauge_length_m"):
         gauges.space(sim)
@@ -485,7 +466,7 @@ def test_default_strain_transfer_gives_the_papers_wavelength_range(make_sim):
     """wang2023 Appendix: 0-0.158 nm over the spiral exploration; full one-chamber bending here
     should stay in that sub-nanometre range, far above the 1 pm noise."""
     spec = get_preset("wang2023")
-    sim = make_sim(spec)
+    sim = make_sim(spec, gravity=False)
     settle(sim, one_chamber(spec, 0, spec.p_max_pa[0]))
     peak = np.abs(read(FBGFiber(noise_std_nm=0.0), sim)).max()
     assert 0.05 < peak < 0.5
