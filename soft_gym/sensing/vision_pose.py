@@ -71,6 +71,7 @@ class VisionPoseEstimator:
         min_inliers: fewer PnP inliers than this means tracking is lost (DESIGN.md: ~30).
         ratio: Lowe ratio for descriptor matching.
         ransac_threshold_px: RANSAC reprojection threshold (px).
+        ransac_iterations: RANSAC iterations (the last pose seeds the solver, so few are needed).
         keyframe_inlier_ratio: a new keyframe is added when the inliers fall below this fraction
             of the nearest keyframe's own feature count.
         max_keyframes: oldest keyframes beyond this are dropped (never the calibration one).
@@ -90,6 +91,7 @@ class VisionPoseEstimator:
     keyframe_inlier_ratio: float = 0.35
     max_keyframes: int = 30
     match_keyframes: int = 6
+    ransac_iterations: int = 200
     keyframe_spacing_m: float = 0.0
     min_depth_m: float = 0.005
     max_depth_m: float = 1.0
@@ -120,8 +122,8 @@ class VisionPoseEstimator:
         twin = VisionPoseEstimator(
             self.camera_matrix.copy(), self.tip_from_camera.copy(), self.n_features,
             self.min_inliers, self.ratio, self.ransac_threshold_px, self.keyframe_inlier_ratio,
-            self.max_keyframes, self.match_keyframes, self.keyframe_spacing_m, self.min_depth_m,
-            self.max_depth_m)
+            self.max_keyframes, self.match_keyframes, self.ransac_iterations,
+            self.keyframe_spacing_m, self.min_depth_m, self.max_depth_m)
         twin.keyframes = copy.deepcopy(self.keyframes, memo)
         twin.last = copy.deepcopy(self.last, memo)
         return twin
@@ -205,7 +207,7 @@ class VisionPoseEstimator:
         tvec = camera_from_world[:3, 3].reshape(3, 1)
         ok, rvec, tvec, inliers = cv2.solvePnPRansac(
             object_points, image_points, self.camera_matrix, None, rvec.copy(), tvec.copy(),
-            useExtrinsicGuess=True, iterationsCount=200,
+            useExtrinsicGuess=True, iterationsCount=self.ransac_iterations,
             reprojectionError=self.ransac_threshold_px, confidence=0.999,
             flags=cv2.SOLVEPNP_ITERATIVE)
         if not ok or inliers is None or len(inliers) < self.min_inliers:
