@@ -14,7 +14,7 @@ from pybullet_utils import bullet_client
 
 from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_positive
-from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, TORSION, ArmBody, build_arm
+from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
 from soft_gym.robots.pneumatics import PneumaticSupply, chamber_loads
 from soft_gym.robots.spec import ArmSpec
 

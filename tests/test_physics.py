@@ -18,7 +18,6 @@ checked on its own (last test).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np

@@ -11,7 +11,6 @@ helix geometry of wang2023 (Section IV-A) puts grating ``j`` at ``s_j = s_0 + j 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg
-from scipy.spatial.distance import cdist
 
 from agents.learners import SlidingWindowGP, cholesky_rank1_update
 
