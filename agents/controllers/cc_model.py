@@ -41,13 +41,17 @@ class CCModelController(BaselinePolicy):
         probe_fraction: probe pressure as a fraction of ``p_max - p_pre``.
         probe_steps: control steps each probe is held before the pose is read.
         damping: damping of the pseudo-inverse ``J^T (J J^T + damping^2 I)^-1`` (m).
+        controlled_axes: task-space axes under control. wang2023 controls x and y only (its arm
+            barely extends, so its workspace is a thin curved surface) and leaves the chambers'
+            common mode to the null-space term of eq. (25); this simulated arm extends ~20 mm, and
+            the planar paths need z as well, so the default controls all three.
     """
 
     name = "cc_model"
 
     def __init__(self, env, kp: float = 0.06, null_space_gain: float = 0.1,
                  probe_fraction: float = 0.3, probe_steps: int = 30,
-                 damping: float = 1e-4) -> None:
+                 damping: float = 1e-4, controlled_axes: tuple[int, ...] = (0, 1, 2)) -> None:
         if env is None:
             raise ValueError("env must be the environment to control, got None")
         self.kp = require_positive("kp", kp)
@@ -59,6 +63,11 @@ class CCModelController(BaselinePolicy):
         self.probe_fraction = float(probe_fraction)
         self.probe_steps = probe_steps
         self.damping = require_positive("damping", damping)
+        axes = tuple(int(a) for a in controlled_axes)
+        if not axes or len(set(axes)) != len(axes) or not set(axes) <= {0, 1, 2}:
+            raise ValueError(f"controlled_axes must be distinct axes from (0, 1, 2), got "
+                             f"{controlled_axes!r}")
+        self.controlled_axes = axes
         self.env = env.unwrapped
         spec = self.env.spec_arm
         for part in ("pose", "target"):
@@ -76,6 +85,7 @@ class CCModelController(BaselinePolicy):
         """Estimate ``alpha`` (Pa/m) with one small probe per chamber (eq. (27)); resets the env."""
         env = self.env
         rest_action = pressures_to_action(self.p_low, self.p_low, self.p_high)
+        # the probes map the full tip displacement to chamber lengths
         jacobian_inverse = self._pseudo_inverse(cc_jacobian(self.rest_lengths, self.d))
         alpha = np.empty(len(self.rest_lengths))
         for chamber in range(len(alpha)):
@@ -118,10 +128,11 @@ class CCModelController(BaselinePolicy):
 
     def length_step(self, position: np.ndarray, target: np.ndarray) -> np.ndarray:
         """``du`` of eq. (25) for the desired displacement ``target - position`` (m)."""
-        jacobian = cc_jacobian(self.lengths, self.d)
+        axes = list(self.controlled_axes)
+        jacobian = cc_jacobian(self.lengths, self.d)[axes]
         inverse = self._pseudo_inverse(jacobian)
         null_space = np.eye(len(self.lengths)) - inverse @ jacobian
-        return inverse @ (target - position) + null_space @ (
+        return inverse @ (target - position)[axes] + null_space @ (
             self.null_space_gain * (self.rest_lengths - self.lengths))
 
     # ------------------------------------------------------------------ persistence
@@ -129,7 +140,8 @@ class CCModelController(BaselinePolicy):
         Path(path).write_text(json.dumps({
             "name": self.name, "kp": self.kp, "null_space_gain": self.null_space_gain,
             "probe_fraction": self.probe_fraction, "probe_steps": self.probe_steps,
-            "damping": self.damping, "alpha": None if self.alpha is None else self.alpha.tolist(),
+            "damping": self.damping, "controlled_axes": list(self.controlled_axes),
+            "alpha": None if self.alpha is None else self.alpha.tolist(),
         }, indent=2))
 
     @classmethod

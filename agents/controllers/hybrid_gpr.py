@@ -36,7 +36,8 @@ class HybridGPRController(CCModelController):
     """CC model + sliding-window GPR error compensator (wang2023 eqs. (25)-(29)).
 
     Args:
-        env, kp, null_space_gain, probe_fraction, probe_steps, damping: as for ``cc_model``.
+        env, kp, null_space_gain, probe_fraction, probe_steps, damping, controlled_axes: as for
+            ``cc_model``.
         window: GP window ``N_r_max`` (samples).
         n_init: samples before compensation starts (``N_c``).
         length_scale: GP length scale in the scaled input units.
@@ -52,11 +53,13 @@ class HybridGPRController(CCModelController):
 
     def __init__(self, env, kp: float = 0.06, null_space_gain: float = 0.1,
                  probe_fraction: float = 0.3, probe_steps: int = 30, damping: float = 1e-4,
-                 window: int = 300, n_init: int = 20, length_scale: float = 1.0,
+                 controlled_axes: tuple[int, ...] = (0, 1, 2), window: int = 300,
+                 n_init: int = 20, length_scale: float = 1.0,
                  signal_variance: float = 1.0, noise_variance: float = 1e-2,
                  min_displacement_m: float = 1e-5, max_effective_gain: float = 0.3) -> None:
         super().__init__(env, kp=kp, null_space_gain=null_space_gain,
-                         probe_fraction=probe_fraction, probe_steps=probe_steps, damping=damping)
+                         probe_fraction=probe_fraction, probe_steps=probe_steps, damping=damping,
+                         controlled_axes=controlled_axes)
         if not isinstance(n_init, int) or not 1 <= n_init <= window:
             raise ValueError(f"n_init must be an integer in [1, window={window}], got {n_init!r}")
         self.n_init = n_init
