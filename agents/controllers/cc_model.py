@@ -81,15 +81,19 @@ class CCModelController(BaselinePolicy):
         self.lengths = self.rest_lengths.copy()
 
     # ------------------------------------------------------------------ calibration
-    def calibrate(self) -> np.ndarray:
-        """Estimate ``alpha`` (Pa/m) with one small probe per chamber (eq. (27)); resets the env."""
+    def calibrate(self, seed: int = 0) -> np.ndarray:
+        """Estimate ``alpha`` (Pa/m) with one small probe per chamber (eq. (27)); resets the env.
+
+        ``seed`` seeds the env's first reset, so the probes' sensor noise, and hence ``alpha``,
+        are reproducible.
+        """
         env = self.env
         rest_action = pressures_to_action(self.p_low, self.p_low, self.p_high)
         # the probes map the full tip displacement to chamber lengths
         jacobian_inverse = self._pseudo_inverse(cc_jacobian(self.rest_lengths, self.d))
         alpha = np.empty(len(self.rest_lengths))
         for chamber in range(len(alpha)):
-            env.reset()
+            env.reset(seed=seed if chamber == 0 else None)
             observation = None
             for _ in range(self.probe_steps):
                 observation, *_ = env.step(rest_action)

@@ -44,6 +44,7 @@ class HybridGPRController(CCModelController):
         signal_variance, noise_variance: GP kernel parameters (relative error units).
         min_displacement_m: steps whose tip moved less than this add no sample (the relative
             error is ill-defined there).
+        learning_horizon: control steps over which motions are summed for one sample.
         max_effective_gain: cap on ``K_p (1 + e)``, the gain of eq. (26) once eq. (29) has scaled
             the command by ``1 + e``: the learned compensation may raise the loop gain only this
             far, which keeps the closed loop stable.
@@ -56,7 +57,8 @@ class HybridGPRController(CCModelController):
                  controlled_axes: tuple[int, ...] = (0, 1, 2), window: int = 300,
                  n_init: int = 20, length_scale: float = 1.0,
                  signal_variance: float = 1.0, noise_variance: float = 1e-2,
-                 min_displacement_m: float = 1e-5, max_effective_gain: float = 0.3) -> None:
+                 min_displacement_m: float = 1e-5, max_effective_gain: float = 0.3,
+                 learning_horizon: int = 1) -> None:
         super().__init__(env, kp=kp, null_space_gain=null_space_gain,
                          probe_fraction=probe_fraction, probe_steps=probe_steps, damping=damping,
                          controlled_axes=controlled_axes)
@@ -69,6 +71,10 @@ class HybridGPRController(CCModelController):
             raise ValueError(f"max_effective_gain must exceed kp={kp}, got {max_effective_gain!r}")
         # eq. (29) scales the command by (1 + e): cap it so K_p (1 + e) <= max_effective_gain
         self.max_relative_error = max_effective_gain / kp - 1.0
+        if not isinstance(learning_horizon, int) or learning_horizon < 1:
+            raise ValueError(f"learning_horizon must be an integer >= 1, got {learning_horizon!r}")
+        self.learning_horizon = learning_horizon
+        self._history: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
         self.gp = SlidingWindowGP(window=window, length_scales=length_scale,
                                   signal_variance=signal_variance, noise_variance=noise_variance)
         self.samples = 0
@@ -81,6 +87,7 @@ class HybridGPRController(CCModelController):
     def reset(self) -> None:
         super().reset()
         self._pending = None  # the GP's window persists: it is the robot's learned model
+        self._history = []
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         if self.alpha is None:
@@ -103,19 +110,29 @@ class HybridGPRController(CCModelController):
         return pressures_to_action(pressures, self.p_low, self.p_high), state
 
     def update(self, observation, action, reward, next_observation, info) -> None:
-        """Add the step's sample (eq. (28)): ``x = [u(k-1), dz(k)]`` with ``dz`` the tip motion
-        that happened, ``y = (dp_cmd - dz) / |dz|`` with ``dp_cmd`` the displacement the CC model
-        was asked for; queried with the desired motion, the GP then says how much more to ask
-        for so that the arm moves as desired (eq. (29))."""
+        """Add a sample (eq. (28)): ``x = [u(k-1), dz(k)]`` with ``dz`` the desired motion and
+        ``y = (dp_cmd - dp_r) / |dz|``, ``dp_cmd`` the displacement the CC model was asked for
+        (after compensation) and ``dp_r`` the motion achieved; at the fixed point the
+        compensated command makes the achieved motion equal the desired one (eq. (29)).
+
+        With ``learning_horizon = h > 1`` the commands, desired and achieved motions are summed
+        over ``h`` steps before the ratio is taken, so that the achieved motion outgrows the
+        feedback's noise (one control step moves the tip a fraction of a millimetre)."""
         if self._pending is None:
             return
         features, desired, command = self._pending
         self._pending = None
-        size = np.linalg.norm(desired)
-        if size < self.min_displacement_m:
+        self._history.append((features, desired, command, self._pose(observation)))
+        if len(self._history) < self.learning_horizon:
             return
-        actual = self._pose(next_observation) - self._pose(observation)
-        self.gp.add(features, (command - actual) / size)
+        oldest = self._history.pop(0)
+        desired_sum = oldest[1] + sum(entry[1] for entry in self._history)
+        command_sum = oldest[2] + sum(entry[2] for entry in self._history)
+        size = np.linalg.norm(desired_sum)
+        if size < self.min_displacement_m * self.learning_horizon:
+            return
+        achieved = self._pose(next_observation) - oldest[3]
+        self.gp.add(oldest[0], (command_sum - achieved) / size)
         self.samples += 1
 
     def save(self, path: str | Path) -> None:
@@ -126,7 +143,8 @@ class HybridGPRController(CCModelController):
         self.gp.save(directory / "gp.npz")
         (directory / "hybrid.json").write_text(json.dumps({
             "n_init": self.n_init, "min_displacement_m": self.min_displacement_m,
-            "max_effective_gain": self.max_effective_gain, "samples": self.samples}, indent=2))
+            "max_effective_gain": self.max_effective_gain,
+            "learning_horizon": self.learning_horizon, "samples": self.samples}, indent=2))
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "HybridGPRController":
