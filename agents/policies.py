@@ -66,7 +66,6 @@ class SB3Policy(BaselinePolicy):
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "SB3Policy":
-        from stable_baselines3.common.base_class import BaseAlgorithm  # noqa: F401
         import zipfile
 
         with zipfile.ZipFile(path) as archive:

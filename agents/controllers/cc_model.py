@@ -121,14 +121,18 @@ class CCModelController(BaselinePolicy):
         if self.alpha is None:
             raise ValueError("call calibrate() before predict(): alpha of eq. (27) is unknown")
         position = self._pose(observation)
-        target = self._next_target(observation)
-        step = self.length_step(position, target)
-        self.lengths = self.lengths + self.kp * step
-        pressures = self.p_low + self.alpha * (self.lengths - self.rest_lengths)
-        saturated = np.clip(pressures, self.p_low, self.p_high)
+        command = self.compensate(position, self._next_target(observation) - position)
+        self.lengths = self.lengths + self.kp * self.length_step(position, position + command)
+        pressures = np.clip(self.p_low + self.alpha * (self.lengths - self.rest_lengths),
+                            self.p_low, self.p_high)
         # anti-windup: the model lengths follow what the saturated pressures can produce
-        self.lengths = self.rest_lengths + (saturated - self.p_low) / self.alpha
-        return pressures_to_action(saturated, self.p_low, self.p_high), state
+        self.lengths = self.rest_lengths + (pressures - self.p_low) / self.alpha
+        return pressures_to_action(pressures, self.p_low, self.p_high), state
+
+    def compensate(self, position: np.ndarray, desired: np.ndarray) -> np.ndarray:
+        """The displacement handed to eq. (25) for the desired one (m); the pure model passes it
+        through, the hybrid controller adds its learned error (eq. (29))."""
+        return desired
 
     def length_step(self, position: np.ndarray, target: np.ndarray) -> np.ndarray:
         """``du`` of eq. (25) for the desired displacement ``target - position`` (m)."""

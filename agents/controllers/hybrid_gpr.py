@@ -26,7 +26,6 @@ import numpy as np
 
 from agents.controllers.cc_model import CCModelController
 from agents.learners.sliding_gp import SlidingWindowGP
-from agents.policies import pressures_to_action
 from soft_gym._validation import require_positive
 
 _MM = 1000.0
@@ -89,25 +88,17 @@ class HybridGPRController(CCModelController):
         self._pending = None  # the GP's window persists: it is the robot's learned model
         self._history = []
 
-    def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
-        if self.alpha is None:
-            raise ValueError("call calibrate() before predict(): alpha of eq. (27) is unknown")
-        position = self._pose(observation)
-        desired = self._next_target(observation) - position
+    def compensate(self, position: np.ndarray, desired: np.ndarray) -> np.ndarray:
+        """``dp~* = dp* + dp_e_hat |dp*|`` (eq. (29)) once ``n_init`` samples are in."""
         actuation = (self.p_low + self.alpha * (self.lengths - self.rest_lengths)) / self.p_high
         features = np.r_[actuation, desired * _MM]
         command = desired
         if self.compensating:
             relative = np.clip(self.gp.predict(features), -self.max_relative_error,
                                self.max_relative_error)
-            command = desired + relative * np.linalg.norm(desired)  # eq. (29)
+            command = desired + relative * np.linalg.norm(desired)
         self._pending = (features, desired, command)
-        step = self.length_step(position, position + command)
-        self.lengths = self.lengths + self.kp * step
-        pressures = np.clip(self.p_low + self.alpha * (self.lengths - self.rest_lengths),
-                            self.p_low, self.p_high)
-        self.lengths = self.rest_lengths + (pressures - self.p_low) / self.alpha
-        return pressures_to_action(pressures, self.p_low, self.p_high), state
+        return command
 
     def update(self, observation, action, reward, next_observation, info) -> None:
         """Add a sample (eq. (28)): ``x = [u(k-1), dz(k)]`` with ``dz`` the desired motion and

@@ -53,6 +53,7 @@ positions (m), ``em`` when an EM tracker runs, ``reprojection_error_px`` (``e_S`
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import gymnasium as gym
@@ -193,6 +194,9 @@ class SoftArmEnv(gym.Env):
         n = self.spec_arm.n_chambers
         self.action_space = spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
         part_spaces = {part: self._part_space(part) for part in obs}
+        ends = np.cumsum([int(np.prod(part_spaces[part].shape)) for part in obs])
+        self._part_slices = {part: slice(end - int(np.prod(part_spaces[part].shape)), end)
+                             for part, end in zip(obs, ends)}
         if obs_format == "dict":
             self.observation_space = spaces.Dict(part_spaces)
         else:
@@ -220,13 +224,7 @@ class SoftArmEnv(gym.Env):
                              f"got {part!r}")
         if isinstance(observation, dict):
             return np.asarray(observation[part])
-        start = 0
-        for name in self.obs_parts:
-            size = int(np.prod(self._part_space(name).shape))
-            if name == part:
-                return np.asarray(observation)[start:start + size]
-            start += size
-        raise AssertionError("unreachable")
+        return np.asarray(observation)[self._part_slices[part]]
 
     def feedback_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Tip position (m) and quaternion from the chosen feedback source."""
@@ -239,8 +237,6 @@ class SoftArmEnv(gym.Env):
 
     def _calibrate(self, use_cache: bool) -> None:
         """Calibrate the sensing pipeline (clean camera), or take a cached calibration."""
-        import copy
-
         cached = _CALIBRATIONS.get(self._calibration_key) if use_cache else None
         if cached is None:
             faults = self.pipeline.camera.faults
@@ -255,8 +251,6 @@ class SoftArmEnv(gym.Env):
 
     def _restore_calibration(self) -> None:
         """Put the sensing pipeline back to its state right after calibration."""
-        import copy
-
         vision, femp, samples = copy.deepcopy(self._calibrated_state)
         self.pipeline.vision, self.pipeline.femp = vision, femp
         self.pipeline.calibration_samples = samples
