@@ -49,32 +49,103 @@ class BaselinePolicy:
         raise NotImplementedError
 
 
+SB3_INTERFACE_KEYS = ("obs", "obs_format", "action_mode", "delta_fraction")
+"""Env keyword arguments that fix what an SB3 agent reads and writes (kept from its training)."""
+
+
 class SB3Policy(BaselinePolicy):
-    """A stable-baselines3 model behind the baseline face (loaded from ``sb3:PATH``)."""
+    """A stable-baselines3 model behind the baseline face (loaded from ``sb3:PATH``).
+
+    ``PATH`` is a run directory of ``python -m train`` (its ``model.zip``), a shipped agent's
+    directory, or a model ``.zip``. Observation normalisation saved beside the model
+    (``vecnormalize.pkl``, or ``best_vecnormalize.pkl`` for ``best_model.zip``) is applied
+    before the network, and ``config.yaml`` gives the env interface the agent was trained with
+    (:data:`SB3_INTERFACE_KEYS`).
+    """
 
     name = "sb3"
 
-    def __init__(self, model) -> None:
+    def __init__(self, model, normalization=None, config: dict | None = None) -> None:
         self.model = model
+        self.normalization = normalization
+        self.config = dict(config or {})
+
+    @property
+    def env_interface(self) -> dict:
+        """The training env's observation and action settings (``SB3_INTERFACE_KEYS``)."""
+        env_kwargs = self.config.get("env_kwargs", {})
+        return {key: env_kwargs[key] for key in SB3_INTERFACE_KEYS if key in env_kwargs}
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        if self.normalization is not None:
+            observation = self.normalization.normalize_obs(observation)
         return self.model.predict(observation, state=state, episode_start=episode_start,
                                   deterministic=deterministic)
 
     def save(self, path: str | Path) -> None:
-        self.model.save(path)
+        """Save as a directory: ``model.zip``, ``vecnormalize.pkl`` and ``config.yaml``."""
+        import pickle
+
+        import yaml
+
+        directory = Path(path)
+        directory.mkdir(parents=True, exist_ok=True)
+        self.model.save(directory / "model.zip")
+        if self.normalization is not None:
+            with open(directory / "vecnormalize.pkl", "wb") as handle:
+                pickle.dump(self.normalization, handle)
+        (directory / "config.yaml").write_text(yaml.safe_dump(self.config, sort_keys=False))
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "SB3Policy":
-        import zipfile
+        import pickle
 
-        with zipfile.ZipFile(path) as archive:
-            data = archive.read("data").decode()
-        for algorithm in ("SAC", "TD3", "PPO", "DDPG", "A2C"):
-            if f"stable_baselines3.{algorithm.lower()}" in data:
-                module = importlib.import_module("stable_baselines3")
-                return cls(getattr(module, algorithm).load(path, env=env))
-        raise ValueError(f"path {str(path)!r} holds no stable-baselines3 model this loader knows")
+        import yaml
+
+        path = Path(path)
+        model_path = path / "model.zip" if path.is_dir() else path
+        if not model_path.is_file():
+            raise ValueError(f"sb3 path {str(path)!r} is neither a model .zip nor a directory "
+                             "holding model.zip")
+        config_path = model_path.parent / "config.yaml"
+        config = yaml.safe_load(config_path.read_text()) if config_path.is_file() else {}
+        algorithm = str(config.get("algo") or _guess_algorithm(model_path)).upper()
+        module = importlib.import_module("stable_baselines3")
+        model = getattr(module, algorithm).load(model_path, device="cpu")
+        prefix = "best_" if model_path.name.startswith("best_") else ""
+        normalization = None
+        normalization_path = model_path.parent / f"{prefix}vecnormalize.pkl"
+        if normalization_path.is_file():
+            with open(normalization_path, "rb") as handle:
+                normalization = pickle.load(handle)
+            normalization.training = False
+            # what VecNormalize drops when pickled, so that this copy can be saved again
+            normalization.class_attributes, normalization.returns = {}, np.zeros(1)
+        policy = cls(model, normalization, config)
+        if env is not None and env.observation_space.shape != model.observation_space.shape:
+            raise ValueError(
+                f"the agent at {str(path)!r} reads observations of shape "
+                f"{model.observation_space.shape}, the env gives {env.observation_space.shape}: "
+                f"make the env with the agent's interface {policy.env_interface}")
+        return policy
+
+
+def _guess_algorithm(model_path: Path) -> str:
+    """The SB3 algorithm of a bare model ``.zip`` from the attributes it saved."""
+    import json
+    import zipfile
+
+    with zipfile.ZipFile(model_path) as archive:
+        data = json.loads(archive.read("data").decode())
+    if "n_epochs" in data:
+        return "PPO"
+    if "target_entropy" in data:
+        return "SAC"
+    if "policy_delay" in data:
+        return "TD3"  # DDPG is TD3 with a delay of 1 and no target noise: it loads the same
+    if "normalize_advantage" in data:
+        return "A2C"
+    raise ValueError(f"path {str(model_path)!r} holds no stable-baselines3 model this loader knows")
 
 
 def make_policy(name: str, env=None, **params: Any) -> BaselinePolicy:

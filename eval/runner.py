@@ -17,7 +17,7 @@ import numpy as np
 from tqdm import tqdm
 
 import soft_gym  # noqa: F401  (registers the env ids)
-from agents.policies import BaselinePolicy, make_policy
+from agents.policies import BaselinePolicy, SB3Policy, make_policy
 from soft_gym.tasks.paths import cycle_index
 
 ESTIMATE_KEYS = ("camera", "femp", "fused", "em")
@@ -116,7 +116,11 @@ def run_episode(env: gym.Env, policy: BaselinePolicy, seed: int = 0, learn: bool
 
 def build(config: RunConfig) -> tuple[gym.Env, BaselinePolicy]:
     """Make the env and the policy of ``config`` (calibrating the policy if it needs to)."""
-    env = gym.make(config.env_id, **config.env_kwargs)
+    env_kwargs = dict(config.env_kwargs)
+    if config.policy.startswith("sb3:"):
+        # an agent reads and writes what it was trained with; the scenario stays the run's
+        env_kwargs.update(SB3Policy.load(config.policy[4:]).env_interface)
+    env = gym.make(config.env_id, **env_kwargs)
     policy = make_policy(config.policy, env=env, **config.policy_params)
     if hasattr(policy, "calibrate"):
         policy.calibrate()

@@ -83,6 +83,7 @@ class ArmSimulator:
         self._configuration_tolerance = np.where(
             self._kind == AXIAL, 0.05 * self.arm.station_rest_length[self.arm.joint_station], 0.05)
         self._pressure_to_rest = self._pressure_to_rest_matrix()
+        self._stiffness_scale = 1.0
         self._substeps_per_gain_update = self._substeps_per_actuation * max(
             1, int(round(spec.control_period_s / spec.actuation_update_s)))
         self.gravity = spec.gravity_base.copy()
@@ -298,6 +299,18 @@ class ArmSimulator:
             self.client.resetJointState(self.arm.body_id, joint, float(value), 0.0)
         self._frames_substep = self._positions_substep = -1
         self._previous_velocity_valid = False
+
+    def set_stiffness_scale(self, scale: float) -> None:
+        """Multiply the arm's bending, torsion and axial stiffness (and with it the
+        stiffness-proportional damping) by ``scale`` relative to the spec; takes effect at the
+        next actuation update. Used by domain randomisation."""
+        scale = require_positive("scale", scale)
+        # the pressure moments stay; their rest angles shrink as the arm stiffens
+        self._pressure_to_rest = self._pressure_to_rest * (self._stiffness_scale / scale)
+        self._stiffness_scale = scale
+        self._stiffness0 = scale / self.arm.compliance
+        self._damping = self.arm.damping_time_s * self._stiffness0
+        self._implicit_stiffness = np.zeros(self.arm.n_joints)  # forces a gain refresh
 
     def add_load(self, load: Load) -> None:
         """Attach a scenario element; it is updated at the actuation rate."""

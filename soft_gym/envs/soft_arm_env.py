@@ -37,6 +37,13 @@ in one process) and on ``reset(options={"recalibrate": True})``. It keeps learni
 ``reset()`` calls; ``reset(seed=...)`` returns it to its calibrated state, so that a seed fixes an
 episode exactly. ``faults=`` puts visual faults on the camera (:mod:`soft_gym.scenarios.faults`).
 
+## Domain randomisation
+``randomization=True`` (or a dict of ranges, or a YAML path) draws, at every reset and from the
+env's seed, a load (tip mass, filling container, swaying mass or push), a visual fault (camera
+envs), a sensor-noise factor and the arm's stiffness and pneumatic time constant
+(:mod:`soft_gym.scenarios.randomization`). They add to ``scenario=`` and ``faults=``; ``info``
+holds the draw under ``randomization``. Off by default.
+
 ## Reward
 ``-||tip - target|| (m) - action_rate_weight * ||a_t - a_{t-1}||^2``.
 
@@ -63,6 +70,8 @@ from gymnasium import spaces
 from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.scenarios import make_scenario
+from soft_gym.scenarios.faults import make_faults
+from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConfig, nominal_noise
 from soft_gym.sensors import SENSORS, make_sensor
 from soft_gym.sim import ArmSimulator
 from soft_gym.tasks import ReachTask, TrackTask
@@ -85,7 +94,7 @@ class SoftArmEnv(gym.Env):
         preset: arm preset name (``wang2023``, ``zhao2021``, ``zou2022``, ``ho2018``) or an ArmSpec.
         task: ``"reach"`` or ``"track"``.
         path: tracking path (``circle``, ``pentagram``, ``rectangle``, ``spiral``, ``star``,
-            ``waypoints``); track only.
+            ``waypoints``), or a list of them to draw one per episode; track only.
         cycles: path repetitions; track only.
         speed_m_s: target speed (m/s); track only (default: a circle cycle in 20 s).
         waypoints_m: user path points (m), with ``path="waypoints"``.
@@ -96,6 +105,8 @@ class SoftArmEnv(gym.Env):
         sensor_config: keyword arguments per sensor name, e.g. ``{"fbg": {"noise_std_nm": 2e-3}}``.
         feedback: source of the ``pose`` part (see "Feedback pose" above).
         faults: visual faults on the eye-in-hand camera.
+        randomization: domain randomisation per episode (``None``/``False`` off, ``True``
+            defaults, a dict of ranges or a YAML path; see "Domain randomisation" above).
         sensing: keyword arguments of the sensing pipeline (``n_init``, ``femp``, ``fusion``,
             ``vision``, ``exploration``).
         action_mode: ``"absolute"`` or ``"delta"``.
@@ -115,6 +126,7 @@ class SoftArmEnv(gym.Env):
                  obs: tuple[str, ...] = STATE_PARTS, obs_format: str = "flat",
                  sensors: tuple[str, ...] = (), sensor_config: dict | None = None,
                  feedback: str = "fused", faults: Any = None, sensing: dict | None = None,
+                 randomization: Any = None,
                  action_mode: str = "absolute",
                  delta_fraction: float = 0.1, action_rate_weight: float = 0.001,
                  episode_steps: int = 100, settle_s: float = 0.5,
@@ -150,9 +162,13 @@ class SoftArmEnv(gym.Env):
         if action_rate_weight < 0:
             raise ValueError(f"action_rate_weight must be >= 0, got {action_rate_weight!r}")
         self.loads = make_scenario(scenario)
-        self.task = (ReachTask(self.spec_arm, episode_steps) if task == "reach" else
-                     TrackTask(self.spec_arm, path=path, cycles=cycles, speed_m_s=speed_m_s,
-                               waypoints_m=waypoints_m))
+        paths = [path] if isinstance(path, str) or task == "reach" else list(path)
+        if not paths:
+            raise ValueError(f"path must be a path name or a non-empty list of them, got {path!r}")
+        self.tasks = [ReachTask(self.spec_arm, episode_steps) if task == "reach" else
+                      TrackTask(self.spec_arm, path=name, cycles=cycles, speed_m_s=speed_m_s,
+                                waypoints_m=waypoints_m) for name in paths]
+        self.task = self.tasks[0]
         self.sim = ArmSimulator(self.spec_arm)
         for load in self.loads:
             self.sim.add_load(load)
@@ -175,6 +191,13 @@ class SoftArmEnv(gym.Env):
             if name == "fbg" and feedback in _PIPELINE_FEEDBACKS:
                 options.setdefault("rate_hz", None)  # F-emp reads the fiber every control step
             self.sensors[name] = make_sensor(name, **options)
+        self._faults = faults
+        self._nominal_noise = {name: nominal_noise(sensor) for name, sensor in self.sensors.items()}
+        self._nominal_time_constant_s = self.sim.supply.time_constant_s
+        config = RandomizationConfig.from_any(randomization)
+        self.randomizer = None if config is None else DomainRandomizer(
+            config, n_links=len(self.sim.arm.station_link), with_camera="image" in self.sensors)
+        self._draw = None
         self.pipeline = None
         self._estimates = None
         if feedback in _PIPELINE_FEEDBACKS:
@@ -282,7 +305,11 @@ class SoftArmEnv(gym.Env):
             self._calibrate(use_cache=False)
         elif seed is not None and self.pipeline is not None:
             self._restore_calibration()
+        if self.randomizer is not None:
+            self._apply_draw(self.randomizer.sample(self.np_random))
         self.sim.reset(settle_s=self.settle_s)
+        if len(self.tasks) > 1:
+            self.task = self.tasks[int(self.np_random.integers(len(self.tasks)))]
         self.task.reset(self.np_random)
         for sensor in self.sensors.values():
             sensor.reset(self.sim, self.np_random)
@@ -291,6 +318,20 @@ class SoftArmEnv(gym.Env):
         self._last_action = np.zeros(self.spec_arm.n_chambers)
         self._command = self._p_low.copy()
         return self._observation(), self._info()
+
+    def _apply_draw(self, draw) -> None:
+        """Put one episode's randomised loads, faults, noise and arm parameters in place."""
+        self._draw = draw
+        self.sim.clear_loads()
+        for load in self.loads + draw.scenario:
+            self.sim.add_load(load)
+        self.sim.set_stiffness_scale(draw.stiffness_scale)
+        self.sim.supply.time_constant_s = self._nominal_time_constant_s * draw.time_constant_scale
+        for name, sensor in self.sensors.items():
+            for attribute, value in self._nominal_noise[name].items():
+                setattr(sensor, attribute, value * draw.sensor_noise_scale)
+        if "image" in self.sensors:
+            self.sensors["image"].set_faults(make_faults(self._faults) + draw.faults)
 
     def step(self, action):
         action = self._check_action(action)
@@ -376,6 +417,7 @@ class SoftArmEnv(gym.Env):
             "sensors": {name: self._copy(sensor.read(self.sim, self.sim.time_s))
                         for name, sensor in self.sensors.items()},
             **({"estimates": self._estimate_info()} if self.pipeline is not None else {}),
+            **({"randomization": self._draw.describe()} if self._draw is not None else {}),
         }
 
     def _estimate_info(self) -> dict:

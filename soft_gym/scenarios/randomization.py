@@ -1,0 +1,200 @@
+"""Domain randomisation: a fresh draw of loads, faults, sensor noise and arm parameters per episode.
+
+Off by default. ``gymnasium.make(..., randomization=True)`` turns it on with the ranges below;
+a dict (or a YAML file's mapping, e.g. ``train/configs/randomization.yaml``) overrides any of them.
+Every draw comes from the env's ``np_random``, so ``reset(seed=...)`` fixes it.
+
+| field                          | default          | meaning                                             |
+|--------------------------------|------------------|-----------------------------------------------------|
+| ``load_weights``               | see below        | relative odds of each load kind per episode         |
+| ``tip_mass_kg``                | (0.0, 0.010)     | static tip mass (kg), uniform                       |
+| ``filling_added_kg``           | (0.002, 0.010)   | fluid a tip container gains (kg) from 14 g empty... |
+| ``filling_rate_kg_s``          | (0.0003, 0.001)  | ...at this rate (kg/s), from a start in [0, 10] s   |
+| ``swaying_mass_kg``            | (0.003, 0.010)   | ball hanging 20 mm under the tip (kg)               |
+| ``push_force_n``               | (0.05, 0.25)     | lateral push on a random link (N), random direction |
+| ``fault_weights``              | see below        | odds of each visual fault (camera envs only)        |
+| ``fault_strength``             | (0.3, 0.9)       | strength of the drawn fault                         |
+| ``sensor_noise_scale``         | (0.5, 2.0)       | factor on every sensor's noise std, log-uniform     |
+| ``stiffness_scale``            | (0.85, 1.15)     | factor on the arm's bending and axial stiffness     |
+| ``time_constant_scale``        | (0.7, 1.5)       | factor on the pneumatic time constant               |
+
+Load kinds: ``none`` 0.3, ``tip_mass`` 0.35, ``filling_load`` 0.1, ``swaying_mass`` 0.1,
+``push`` 0.15. Faults: ``none`` 0.5, ``moving_occluder`` (partial) 0.15, ``low_light`` 0.15,
+``led_glare`` 0.1, ``motion_blur`` 0.1. The defaults keep the tip load at or below 10 g, so a
+heavier load (e.g. 20 g) stays out of the training distribution for generalisation tests.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+LOAD_KINDS = ("none", "tip_mass", "filling_load", "swaying_mass", "push")
+FAULT_KINDS = ("none", "moving_occluder", "low_light", "led_glare", "motion_blur")
+NOISE_ATTRIBUTES = ("noise_std_nm", "noise_std_m", "position_noise_m", "orientation_noise_deg",
+                    "noise_std_dn", "noise_std")
+"""Sensor attributes holding a noise standard deviation (scaled by ``sensor_noise_scale``)."""
+
+
+@dataclass(frozen=True)
+class RandomizationConfig:
+    """Ranges of the per-episode draws (see the module docstring for units and defaults)."""
+
+    load_weights: dict = field(default_factory=lambda: {
+        "none": 0.3, "tip_mass": 0.35, "filling_load": 0.1, "swaying_mass": 0.1, "push": 0.15})
+    tip_mass_kg: tuple[float, float] = (0.0, 0.010)
+    filling_added_kg: tuple[float, float] = (0.002, 0.010)
+    filling_rate_kg_s: tuple[float, float] = (0.0003, 0.001)
+    swaying_mass_kg: tuple[float, float] = (0.003, 0.010)
+    push_force_n: tuple[float, float] = (0.05, 0.25)
+    fault_weights: dict = field(default_factory=lambda: {
+        "none": 0.5, "moving_occluder": 0.15, "low_light": 0.15, "led_glare": 0.1,
+        "motion_blur": 0.1})
+    fault_strength: tuple[float, float] = (0.3, 0.9)
+    sensor_noise_scale: tuple[float, float] = (0.5, 2.0)
+    stiffness_scale: tuple[float, float] = (0.85, 1.15)
+    time_constant_scale: tuple[float, float] = (0.7, 1.5)
+
+    def __post_init__(self) -> None:
+        _check_weights("load_weights", self.load_weights, LOAD_KINDS)
+        _check_weights("fault_weights", self.fault_weights, FAULT_KINDS)
+        for name, low_bound in (("tip_mass_kg", 0.0), ("filling_added_kg", 0.0),
+                                ("filling_rate_kg_s", 1e-12), ("swaying_mass_kg", 1e-12),
+                                ("push_force_n", 0.0), ("fault_strength", 0.0),
+                                ("sensor_noise_scale", 1e-12), ("stiffness_scale", 1e-12),
+                                ("time_constant_scale", 1e-12)):
+            value = getattr(self, name)
+            try:
+                low, high = (float(v) for v in value)
+            except (TypeError, ValueError) as error:
+                raise ValueError(f"{name} must be a (low, high) pair, got {value!r}") from error
+            if not (math.isfinite(low) and math.isfinite(high)) or low < low_bound or high < low:
+                raise ValueError(f"{name} must be a finite range with {low_bound} <= low <= high, "
+                                 f"got {value!r}")
+            object.__setattr__(self, name, (low, high))
+        if self.fault_strength[1] > 1.0:
+            raise ValueError(f"fault_strength must lie within [0, 1], got {self.fault_strength!r}")
+
+    @classmethod
+    def from_any(cls, config: Any) -> "RandomizationConfig | None":
+        """``None``/``False``: off; ``True``: defaults; a dict, a YAML path or a config: as given."""
+        if config is None or config is False:
+            return None
+        if config is True:
+            return cls()
+        if isinstance(config, cls):
+            return config
+        if isinstance(config, (str, Path)):
+            import yaml
+
+            path = Path(config)
+            if not path.is_file():
+                raise ValueError(f"randomization file {str(path)!r} does not exist")
+            config = yaml.safe_load(path.read_text()) or {}
+        if not isinstance(config, dict):
+            raise ValueError("randomization must be None, a bool, a dict of ranges, a YAML path "
+                             f"or a RandomizationConfig, got {config!r}")
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(config) - known)
+        if unknown:
+            raise ValueError(f"randomization keys must be among {sorted(known)}, got {unknown}")
+        return cls(**config)
+
+
+def _check_weights(name: str, weights: Any, kinds: tuple[str, ...]) -> None:
+    if not isinstance(weights, dict) or not weights:
+        raise ValueError(f"{name} must be a non-empty dict from {list(kinds)} to odds, "
+                         f"got {weights!r}")
+    unknown = sorted(set(weights) - set(kinds))
+    if unknown:
+        raise ValueError(f"{name} keys must be among {list(kinds)}, got {unknown}")
+    values = np.array([float(v) for v in weights.values()])
+    if not np.all(np.isfinite(values)) or np.any(values < 0) or values.sum() <= 0:
+        raise ValueError(f"{name} must be finite odds >= 0 with a positive sum, got {weights!r}")
+
+
+@dataclass(frozen=True)
+class EpisodeDraw:
+    """One episode's randomised conditions."""
+
+    scenario: list
+    faults: list
+    sensor_noise_scale: float
+    stiffness_scale: float
+    time_constant_scale: float
+
+    def describe(self) -> dict[str, Any]:
+        """A JSON-friendly summary (for ``info["randomization"]``)."""
+        return {"loads": [type(load).__name__ for load in self.scenario],
+                "faults": [type(fault).__name__ for fault in self.faults],
+                "sensor_noise_scale": self.sensor_noise_scale,
+                "stiffness_scale": self.stiffness_scale,
+                "time_constant_scale": self.time_constant_scale}
+
+
+class DomainRandomizer:
+    """Draws :class:`EpisodeDraw` s from a :class:`RandomizationConfig`.
+
+    Args:
+        config: the ranges.
+        n_links: number of arm links (pushes pick one).
+        with_camera: whether visual faults apply (the env has an eye-in-hand camera).
+    """
+
+    def __init__(self, config: RandomizationConfig, n_links: int, with_camera: bool) -> None:
+        self.config = config
+        self.n_links = int(n_links)
+        self.with_camera = bool(with_camera)
+
+    def sample(self, rng: np.random.Generator) -> EpisodeDraw:
+        from soft_gym.scenarios import FillingLoad, Push, SwayingMass, TipMass
+        from soft_gym.scenarios.faults import make_faults
+
+        c = self.config
+        uniform = lambda bounds: float(rng.uniform(*bounds))  # noqa: E731
+        load = _choose(rng, c.load_weights)
+        scenario: list = []
+        if load == "tip_mass":
+            scenario.append(TipMass(mass_kg=uniform(c.tip_mass_kg)))
+        elif load == "filling_load":
+            scenario.append(FillingLoad(added_mass_kg=uniform(c.filling_added_kg),
+                                        rate_kg_s=uniform(c.filling_rate_kg_s),
+                                        start_s=float(rng.uniform(0.0, 10.0))))
+        elif load == "swaying_mass":
+            scenario.append(SwayingMass(mass_kg=uniform(c.swaying_mass_kg)))
+        elif load == "push":
+            angle = rng.uniform(0.0, 2.0 * np.pi)
+            magnitude = uniform(c.push_force_n)
+            start = float(rng.uniform(1.0, 10.0))
+            scenario.append(Push(force_n=(magnitude * np.cos(angle), magnitude * np.sin(angle), 0.0),
+                                 link=int(rng.integers(self.n_links)), ramp_s=1.0,
+                                 start_s=start, end_s=start + float(rng.uniform(2.0, 6.0))))
+        faults: list = []
+        fault = _choose(rng, c.fault_weights) if self.with_camera else "none"
+        if fault != "none":
+            params: dict[str, Any] = {"name": fault, "strength": uniform(c.fault_strength)}
+            if fault == "moving_occluder":
+                params["mode"] = "partial"
+            faults = make_faults(params)
+        low, high = np.log(c.sensor_noise_scale)
+        return EpisodeDraw(scenario=scenario, faults=faults,
+                           sensor_noise_scale=float(np.exp(rng.uniform(low, high))),
+                           stiffness_scale=uniform(c.stiffness_scale),
+                           time_constant_scale=uniform(c.time_constant_scale))
+
+
+def _choose(rng: np.random.Generator, weights: dict) -> str:
+    names = list(weights)
+    odds = np.array([float(weights[name]) for name in names])
+    return names[int(rng.choice(len(names), p=odds / odds.sum()))]
+
+
+def nominal_noise(sensor) -> dict[str, float]:
+    """The noise standard deviations a sensor was built with (attribute name -> value)."""
+    return {name: float(getattr(sensor, name)) for name in NOISE_ATTRIBUTES
+            if isinstance(getattr(sensor, name, None), (int, float))}

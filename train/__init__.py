@@ -1,0 +1,1 @@
+"""Training stable-baselines3 agents on the soft-arm envs (``python -m train --help``)."""

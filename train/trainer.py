@@ -1,0 +1,256 @@
+"""Train a stable-baselines3 agent on a soft-arm env and keep everything needed to reproduce it.
+
+A run directory holds:
+
+* ``model.zip`` (final), ``best_model.zip`` (best evaluation), ``checkpoints/``;
+* ``vecnormalize.pkl`` / ``best_vecnormalize.pkl`` beside them when observations are normalised;
+* ``config.yaml``: the resolved algorithm, env id, env kwargs, hyperparameters, seed and envs;
+* ``versions.yaml``: Python and package versions and the git revision;
+* ``logs/`` (``progress.csv`` and TensorBoard events), ``monitor/`` (per-episode CSVs),
+  ``eval/evaluations.npz``, and ``learning_curve.png``.
+"""
+
+from __future__ import annotations
+
+import copy
+import platform
+import subprocess
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from stable_baselines3.common.callbacks import BaseCallback
+
+import soft_gym  # noqa: F401  (registers the env ids)
+from train.config import (OFF_POLICY, TrainSettings, algorithm_class, build_action_noise,
+                          read_hyperparameters, split_hyperparameters)
+
+MODEL_FILE = "model.zip"
+BEST_MODEL_FILE = "best_model.zip"
+NORMALIZATION_FILE = "vecnormalize.pkl"
+BEST_NORMALIZATION_FILE = "best_vecnormalize.pkl"
+REPLAY_BUFFER_FILE = "replay_buffer.pkl"
+
+
+@dataclass
+class TrainRequest:
+    """What to train (command-line options; ``None`` means "from the config file").
+
+    Attributes:
+        algo: ``sac``, ``td3``, ``ppo``, ``a2c`` or ``ddpg``.
+        env_id: Gymnasium id (e.g. ``SoftArmTrackWang2023-v0``).
+        env_kwargs: overrides of the config's ``env_kwargs``.
+        hyperparameters: overrides of the config's hyperparameters.
+        timesteps: total env steps (overrides ``n_timesteps``).
+        seed: seed of the envs, the networks and the evaluation.
+        n_envs: parallel envs (``SubprocVecEnv`` when > 1).
+        config_file: hyperparameter YAML (default ``train/configs/<algo>.yml``).
+        out_dir: where run directories are made.
+        run_name: the run directory's name (default ``<algo>_<env>_seed<seed>``).
+        resume: an earlier run directory to continue from.
+        eval_freq: env steps between evaluations (0: none).
+        eval_episodes: episodes per evaluation.
+        checkpoint_freq: env steps between checkpoints (0: none).
+        threads: torch threads.
+        progress: show a progress bar.
+    """
+
+    algo: str = "sac"
+    env_id: str = "SoftArmTrackWang2023-v0"
+    env_kwargs: dict = field(default_factory=dict)
+    hyperparameters: dict = field(default_factory=dict)
+    timesteps: int | None = None
+    seed: int = 0
+    n_envs: int | None = None
+    config_file: str | None = None
+    out_dir: str = "results/train"
+    run_name: str | None = None
+    resume: str | None = None
+    eval_freq: int = 10_000
+    eval_episodes: int = 2
+    checkpoint_freq: int = 50_000
+    threads: int = 1
+    progress: bool = True
+
+
+def resolve(request: TrainRequest) -> tuple[TrainSettings, dict]:
+    """The settings of a request: config entry, then the request's overrides."""
+    hyperparameters = read_hyperparameters(request.algo, request.env_id, request.config_file)
+    hyperparameters.update(request.hyperparameters)
+    if request.timesteps is not None:
+        hyperparameters["n_timesteps"] = request.timesteps
+    if request.n_envs is not None:
+        hyperparameters["n_envs"] = request.n_envs
+    settings = split_hyperparameters(request.algo, hyperparameters)
+    settings.env_kwargs.update(request.env_kwargs)
+    return settings, hyperparameters
+
+
+def versions() -> dict[str, str]:
+    """Python, package versions and the git revision of this checkout."""
+    import gymnasium
+    import pybullet  # noqa: F401
+    import stable_baselines3
+    import torch
+    from importlib.metadata import PackageNotFoundError, version
+
+    info = {"python": platform.python_version(), "platform": platform.platform(),
+            "gymnasium": gymnasium.__version__, "stable_baselines3": stable_baselines3.__version__,
+            "torch": str(torch.__version__), "numpy": np.__version__}
+    for package in ("pybullet", "soft-arm-gym"):
+        try:
+            info[package] = version(package)
+        except PackageNotFoundError:
+            info[package] = "unknown"
+    root = Path(__file__).resolve().parent.parent
+    try:
+        revision = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True,
+                                  text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain"], cwd=root, capture_output=True,
+                               text=True, check=True).stdout.strip()
+        info["git_revision"] = revision + ("-dirty" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        info["git_revision"] = "unknown"
+    return info
+
+
+def make_vec_env(env_id: str, env_kwargs: dict, n_envs: int, seed: int,
+                 monitor_dir: str | None = None):
+    """``n_envs`` monitored envs, in subprocesses when there are several."""
+    from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    vec_cls = SubprocVecEnv if n_envs > 1 else DummyVecEnv
+    kwargs = {"start_method": "spawn"} if n_envs > 1 else {}
+    if ":" not in env_id:
+        env_id = f"soft_gym:{env_id}"  # subprocesses import the package that registers the ids
+    return sb3_make_vec_env(env_id, n_envs=n_envs, seed=seed, env_kwargs=env_kwargs,
+                            monitor_dir=monitor_dir, vec_env_cls=vec_cls,
+                            vec_env_kwargs=kwargs or None,
+                            wrapper_kwargs=None)
+
+
+def train(request: TrainRequest) -> Path:
+    """Train (or resume) as ``request`` says; returns the run directory."""
+    import torch
+    from stable_baselines3.common.callbacks import (CallbackList, CheckpointCallback,
+                                                    EvalCallback)
+    from stable_baselines3.common.logger import configure
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    torch.set_num_threads(max(1, int(request.threads)))
+    if request.resume is not None:
+        run_dir = Path(request.resume)
+        saved = yaml.safe_load((run_dir / "config.yaml").read_text())
+        request = TrainRequest(**{**saved["request"], "resume": str(run_dir),
+                                  "timesteps": request.timesteps, "progress": request.progress})
+        settings, hyperparameters = resolve(request)
+    else:
+        settings, hyperparameters = resolve(request)
+        name = request.run_name or f"{request.algo}_{request.env_id}_seed{request.seed}"
+        run_dir = Path(request.out_dir) / name
+        if (run_dir / "config.yaml").exists():
+            raise ValueError(f"run directory {str(run_dir)!r} already holds a run: pick another "
+                             "run_name or pass resume")
+    run_dir.mkdir(parents=True, exist_ok=True)
+    algo_cls = algorithm_class(request.algo)
+
+    env = make_vec_env(request.env_id, settings.env_kwargs, settings.n_envs, request.seed,
+                       monitor_dir=str(run_dir / "monitor"))
+    eval_env = make_vec_env(request.env_id, settings.env_kwargs, 1, request.seed + 10_000)
+    if settings.normalize is not None:
+        if request.resume is not None and (run_dir / NORMALIZATION_FILE).exists():
+            env = VecNormalize.load(str(run_dir / NORMALIZATION_FILE), env)
+        else:
+            env = VecNormalize(env, **settings.normalize)
+        eval_env = VecNormalize(eval_env, training=False, norm_reward=False,
+                                **{k: v for k, v in settings.normalize.items()
+                                   if k not in ("norm_reward", "training")})
+
+    algo_kwargs = dict(settings.algo_kwargs)
+    if "action_noise" in algo_kwargs:
+        algo_kwargs["action_noise"] = build_action_noise(algo_kwargs["action_noise"],
+                                                         env.action_space.shape[0])
+    if request.resume is not None:
+        model = algo_cls.load(str(run_dir / MODEL_FILE), env=env)
+        if request.algo in OFF_POLICY and (run_dir / REPLAY_BUFFER_FILE).exists():
+            model.load_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
+    else:
+        model = algo_cls(settings.policy, env, seed=request.seed, verbose=0, **algo_kwargs)
+    model.set_logger(configure(str(run_dir / "logs"), ["csv", "tensorboard"]))
+
+    (run_dir / "config.yaml").write_text(yaml.safe_dump({
+        "request": {key: value for key, value in vars(request).items()
+                    if key not in ("resume", "progress")},
+        "algo": request.algo, "env_id": request.env_id,
+        "env_kwargs": copy.deepcopy(settings.env_kwargs),
+        "hyperparameters": hyperparameters, "seed": request.seed, "n_envs": settings.n_envs,
+    }, sort_keys=False))
+    (run_dir / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))
+
+    callbacks = [ThroughputCallback()]
+    if request.eval_freq > 0:
+        callbacks.append(EvalCallback(
+            eval_env, best_model_save_path=str(run_dir), log_path=str(run_dir / "eval"),
+            eval_freq=max(1, request.eval_freq // settings.n_envs),
+            n_eval_episodes=request.eval_episodes, deterministic=True,
+            callback_on_new_best=SaveNormalization(run_dir / BEST_NORMALIZATION_FILE)))
+    if request.checkpoint_freq > 0:
+        callbacks.append(CheckpointCallback(
+            save_freq=max(1, request.checkpoint_freq // settings.n_envs),
+            save_path=str(run_dir / "checkpoints"), name_prefix=request.algo,
+            save_vecnormalize=settings.normalize is not None))
+    started = time.perf_counter()
+    model.learn(total_timesteps=settings.n_timesteps, callback=CallbackList(callbacks),
+                progress_bar=request.progress, reset_num_timesteps=request.resume is None)
+    elapsed = time.perf_counter() - started
+    model.save(str(run_dir / MODEL_FILE))
+    if settings.normalize is not None:
+        model.get_vec_normalize_env().save(str(run_dir / NORMALIZATION_FILE))
+    if request.algo in OFF_POLICY:
+        model.save_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
+    summary = {"timesteps": int(model.num_timesteps), "wall_s": round(elapsed, 1),
+               "env_steps_per_s": round(callbacks[0].steps / max(elapsed, 1e-9), 1),
+               "n_envs": settings.n_envs}
+    with open(run_dir / "training.yaml", "a") as handle:
+        yaml.safe_dump([summary], handle, sort_keys=False)
+    env.close()
+    eval_env.close()
+    from train.curves import plot_learning_curve
+
+    plot_learning_curve(run_dir, title=f"{request.algo.upper()} on {request.env_id}")
+    return run_dir
+
+
+class SaveNormalization(BaseCallback):
+    """``callback_on_new_best``: save the normalisation statistics beside the best model."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__()
+        self.path = Path(path)
+
+    def _on_step(self) -> bool:
+        normalization = self.model.get_vec_normalize_env()
+        if normalization is not None:
+            normalization.save(str(self.path))
+        return True
+
+
+class ThroughputCallback(BaseCallback):
+    """Counts the env steps of one ``learn`` call (for the env steps/s figure)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.steps = 0
+
+    def _on_step(self) -> bool:
+        self.steps += self.training_env.num_envs
+        return True
+
+
+def describe(run_dir: str | Path) -> dict[str, Any]:
+    """The saved config of a run directory."""
+    return yaml.safe_load((Path(run_dir) / "config.yaml").read_text())
