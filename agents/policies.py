@@ -49,6 +49,26 @@ class BaselinePolicy:
         raise NotImplementedError
 
 
+SHIPPED_DIR = Path(__file__).resolve().parent / "trained"
+"""Trained agents kept in the repository, one directory each (``sb3:<name>`` loads one)."""
+
+
+def shipped_agents() -> dict[str, Path]:
+    """Name -> directory of every shipped agent (those holding a ``model.zip``)."""
+    if not SHIPPED_DIR.is_dir():
+        return {}
+    return {path.name: path for path in sorted(SHIPPED_DIR.iterdir())
+            if (path / "model.zip").is_file()}
+
+
+def resolve_sb3_path(path: str | Path) -> Path:
+    """A model path as given, or the shipped agent of that name."""
+    candidate = Path(path)
+    if not candidate.exists() and str(path) in shipped_agents():
+        return shipped_agents()[str(path)]
+    return candidate
+
+
 SB3_INTERFACE_KEYS = ("obs", "obs_format", "action_mode", "delta_fraction")
 """Env keyword arguments that fix what an SB3 agent reads and writes (kept from its training)."""
 
@@ -102,11 +122,11 @@ class SB3Policy(BaselinePolicy):
 
         import yaml
 
-        path = Path(path)
+        path = resolve_sb3_path(path)
         model_path = path / "model.zip" if path.is_dir() else path
         if not model_path.is_file():
-            raise ValueError(f"sb3 path {str(path)!r} is neither a model .zip nor a directory "
-                             "holding model.zip")
+            raise ValueError(f"sb3 path {str(path)!r} is neither a model .zip, a directory "
+                             f"holding model.zip, nor a shipped agent {sorted(shipped_agents())}")
         config_path = model_path.parent / "config.yaml"
         config = yaml.safe_load(config_path.read_text()) if config_path.is_file() else {}
         algorithm = str(config.get("algo") or _guess_algorithm(model_path)).upper()

@@ -433,3 +433,19 @@ def test_plots_are_deterministic(tmp_path) -> None:
     c = plot_estimation(tmp_path / "c.png", rec, "same").read_bytes()
     d = plot_estimation(tmp_path / "d.png", rec, "same").read_bytes()
     assert c == d
+
+
+def test_comparison_grid_writes_tables_and_plots(tmp_path):
+    from eval.compare import run_comparison
+
+    rows = run_comparison(["cc_model", "hybrid_gpr"], paths=["circle"],
+                          conditions=["nominal", "heavy_load"], seeds=[0], out=tmp_path,
+                          cycles=1, feedback="ground_truth", progress=False)
+    assert {(r["policy"], r["condition"]) for r in rows} == {
+        (p, c) for p in ("cc_model", "hybrid_gpr") for c in ("nominal", "heavy_load")}
+    assert all(r["vs cc_model (%)"] == 0.0 for r in rows if r["policy"] == "cc_model")
+    for name in ("compare.md", "compare.csv", "compare.json", "compare_circle.png",
+                 "error_circle_nominal.png", "error_circle_heavy_load.png"):
+        assert (tmp_path / name).is_file(), name
+    with pytest.raises(ValueError, match="conditions"):
+        run_comparison(["cc_model"], ["circle"], ["underwater"], [0], tmp_path)

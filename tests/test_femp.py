@@ -79,3 +79,21 @@ def test_bad_use_raises():
         FEmpEstimator(update_threshold_px=0.0)
     with pytest.raises(ValueError, match="positions_m"):
         FEmpEstimator().initialize(np.zeros((10, 17)), np.zeros((9, 3)), np.zeros((10, 4)))
+
+
+def test_exploration_common_mode_decouples_extension_from_bending():
+    """Without ``common`` the chambers' mean pressure (extension) is locked to the bend
+    amplitude; with it the calibration sequence also visits extended straight-ish shapes."""
+    from soft_gym.sensing.exploration import spiral_fractions
+
+    t = np.arange(0.0, 22.5, 0.05)
+    for common, locked in ((0.0, True), (0.3, False)):
+        fractions = spiral_fractions(t, turn_s=8.0, breath_s=45.0, low=0.05, high=0.6,
+                                     common=common, common_s=11.0)
+        mean = fractions.mean(axis=1)
+        bend = np.ptp(fractions, axis=1)
+        correlation = np.corrcoef(mean, bend)[0, 1]
+        assert (correlation > 0.99) == locked, correlation
+        assert np.all((fractions >= 0) & (fractions <= 1))
+    with pytest.raises(ValueError, match="common"):
+        spiral_fractions(t, common=1.5)

@@ -67,3 +67,33 @@ def test_bad_policy_requests_raise():
     with pytest.raises(ValueError, match="obs"):
         make_policy("cc_model", env=gym.make("SoftArmTrack-v0", feedback="ground_truth",
                                              obs=("pressure",)))
+
+
+def test_hybrid_compensation_never_reverses_or_overturns_a_command():
+    """Eq. (29) with a bounded learned error: the compensated command keeps a positive gain
+    along the desired motion, within [1 + min, 1 + max], and turns by at most max_turn_deg."""
+    env = gym.make("SoftArmTrack-v0", feedback="ground_truth")
+    policy = make_policy("hybrid_gpr", env=env, kp=0.06, max_turn_deg=30.0)
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        desired = rng.normal(size=3)
+        direction = desired / np.linalg.norm(desired)
+        relative = rng.normal(scale=5.0, size=3)
+        command = desired + policy.bounded_error(relative, direction) * np.linalg.norm(desired)
+        gain = command @ direction / np.linalg.norm(desired)
+        assert 1 + policy.min_relative_error - 1e-12 <= gain <= 1 + policy.max_relative_error + 1e-12
+        angle = np.degrees(np.arccos(np.clip(command @ direction / np.linalg.norm(command), -1, 1)))
+        assert angle <= 30.0 + 1e-9
+
+
+def test_hybrid_improves_on_the_model_with_noisy_em_feedback():
+    """With the EM tracker's 0.8 mm noise the compensator still learns (no divergence)."""
+    errors = {}
+    for policy in ("cc_model", "hybrid_gpr"):
+        record = run(RunConfig(policy=policy, policy_params={"kp": 0.04},
+                               env_kwargs={"path": "circle", "cycles": 3, "feedback": "em"}))
+        last = record["cycle"] == record["cycle"].max()
+        errors[policy] = (float(np.mean(record["error_mm"][last])),
+                          float(np.max(record["error_mm"][last])))
+    assert errors["hybrid_gpr"][0] <= 0.5 * errors["cc_model"][0], errors
+    assert errors["hybrid_gpr"][1] < errors["cc_model"][1], errors

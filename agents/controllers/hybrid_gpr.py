@@ -47,6 +47,10 @@ class HybridGPRController(CCModelController):
         max_effective_gain: cap on ``K_p (1 + e)``, the gain of eq. (26) once eq. (29) has scaled
             the command by ``1 + e``: the learned compensation may raise the loop gain only this
             far, which keeps the closed loop stable.
+        min_relative_error: floor of the predicted error along the desired motion (> -1): the
+            compensation may shrink a command but never reverse it, however noisy the samples.
+        max_turn_deg: largest angle by which the compensation may turn the command away from
+            the desired motion.
     """
 
     name = "hybrid_gpr"
@@ -57,7 +61,8 @@ class HybridGPRController(CCModelController):
                  n_init: int = 20, length_scale: float = 1.0,
                  signal_variance: float = 1.0, noise_variance: float = 1e-2,
                  min_displacement_m: float = 1e-5, max_effective_gain: float = 0.3,
-                 learning_horizon: int = 1) -> None:
+                 learning_horizon: int = 1, min_relative_error: float = -0.5,
+                 max_turn_deg: float = 30.0) -> None:
         super().__init__(env, kp=kp, null_space_gain=null_space_gain,
                          probe_fraction=probe_fraction, probe_steps=probe_steps, damping=damping,
                          controlled_axes=controlled_axes)
@@ -70,6 +75,12 @@ class HybridGPRController(CCModelController):
             raise ValueError(f"max_effective_gain must exceed kp={kp}, got {max_effective_gain!r}")
         # eq. (29) scales the command by (1 + e): cap it so K_p (1 + e) <= max_effective_gain
         self.max_relative_error = max_effective_gain / kp - 1.0
+        if not -1.0 < min_relative_error <= 0.0:
+            raise ValueError(f"min_relative_error must be in (-1, 0], got {min_relative_error!r}")
+        self.min_relative_error = float(min_relative_error)
+        if not 0.0 <= max_turn_deg < 90.0:
+            raise ValueError(f"max_turn_deg must be in [0, 90), got {max_turn_deg!r}")
+        self.max_turn_deg = float(max_turn_deg)
         if not isinstance(learning_horizon, int) or learning_horizon < 1:
             raise ValueError(f"learning_horizon must be an integer >= 1, got {learning_horizon!r}")
         self.learning_horizon = learning_horizon
@@ -93,12 +104,25 @@ class HybridGPRController(CCModelController):
         actuation = (self.p_low + self.alpha * (self.lengths - self.rest_lengths)) / self.p_high
         features = np.r_[actuation, desired * _MM]
         command = desired
-        if self.compensating:
-            relative = np.clip(self.gp.predict(features), -self.max_relative_error,
-                               self.max_relative_error)
-            command = desired + relative * np.linalg.norm(desired)
+        size = float(np.linalg.norm(desired))
+        if self.compensating and size > 0.0:
+            command = desired + self.bounded_error(self.gp.predict(features), desired / size) * size
         self._pending = (features, desired, command)
         return command
+
+    def bounded_error(self, relative: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        """The predicted relative error, bounded so that eq. (29) neither reverses the command
+        nor turns it by more than ``max_turn_deg``: its component along the desired direction is
+        clipped to ``[min_relative_error, max_relative_error]``, the rest to
+        ``tan(max_turn_deg) (1 + along)``."""
+        along = float(np.clip(relative @ direction, self.min_relative_error,
+                              self.max_relative_error))
+        across = relative - (relative @ direction) * direction
+        limit = np.tan(np.radians(self.max_turn_deg)) * (1.0 + along)
+        norm = float(np.linalg.norm(across))
+        if norm > limit:
+            across = across * (limit / norm)
+        return along * direction + across
 
     def update(self, observation, action, reward, next_observation, info) -> None:
         """Add a sample (eq. (28)): ``x = [u(k-1), dz(k)]`` with ``dz`` the desired motion and
@@ -135,7 +159,9 @@ class HybridGPRController(CCModelController):
         (directory / "hybrid.json").write_text(json.dumps({
             "n_init": self.n_init, "min_displacement_m": self.min_displacement_m,
             "max_effective_gain": self.max_effective_gain,
-            "learning_horizon": self.learning_horizon, "samples": self.samples}, indent=2))
+            "learning_horizon": self.learning_horizon,
+            "min_relative_error": self.min_relative_error, "max_turn_deg": self.max_turn_deg,
+            "samples": self.samples}, indent=2))
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "HybridGPRController":

@@ -67,6 +67,7 @@ class SensingPipeline:
         self.fusion = fusion or PoseFusion()
         self.vision_options = dict(vision or {})
         self.exploration = {"turn_s": 8.0, "breath_s": 45.0, "low": 0.05, "high": 0.6,
+                            "common": 0.3, "common_s": 11.0,
                             **(exploration or {})}
         self.vision: VisionPoseEstimator | None = None
         self.femp: FEmpEstimator | None = None

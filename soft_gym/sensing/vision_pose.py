@@ -79,8 +79,12 @@ class VisionPoseEstimator:
         keyframe_inlier_ratio: a new keyframe is added when the inliers fall below this fraction
             of the nearest keyframe's own feature count.
         max_keyframes: oldest keyframes beyond this are dropped (never the calibration one).
+            Dropping them lets the map be rebuilt from drifted poses on every pass over the same
+            views, so the default keeps a long run's map (a 3-cycle circle needs ~90).
         keyframe_spacing_m: no new keyframe closer than this to the nearest one (m): each
-            keyframe built from an estimated pose adds its error to the map, so fewer is better.
+            keyframe built from an estimated pose adds its error to the map, so fewer is better
+            (1 mm keeps the fused tracking error flat over repeated cycles; 2 mm starves the
+            clean spiral of keyframes).
         match_keyframes: each frame is matched against this many keyframes nearest to the last
             pose (a local map, as ORB-SLAM2's covisible keyframes), which bounds the cost.
         min_depth_m, max_depth_m: depth range of map points accepted from the depth buffer.
@@ -93,10 +97,10 @@ class VisionPoseEstimator:
     ratio: float = 0.8
     ransac_threshold_px: float = 2.0
     keyframe_inlier_ratio: float = 0.35
-    max_keyframes: int = 30
+    max_keyframes: int = 200
     match_keyframes: int = 6
     ransac_iterations: int = 200
-    keyframe_spacing_m: float = 0.0
+    keyframe_spacing_m: float = 0.001
     min_depth_m: float = 0.005
     max_depth_m: float = 1.0
     keyframes: list = field(default_factory=list, init=False, repr=False)

@@ -1,0 +1,149 @@
+"""RL agents against the baselines on the wang2023 paths, nominal and out of distribution.
+
+Every policy (baseline names or ``sb3:PATH``/shipped agent names) runs every path under every
+condition for every seed, with the same feedback source. The conditions:
+
+* ``nominal``: no load, no visual fault;
+* ``heavy_load``: a 20 g tip mass, twice the heaviest load of the shipped agents' training
+  randomisation (``soft_gym.scenarios.randomization``);
+* ``occlusion``: a hand covering the whole camera view for 2 s out of every 6 s from 5 s on
+  (wang2023 Fig. 6 ④), never seen in training (the agents trained with EM feedback).
+
+Outputs: ``compare.md`` (seed mean +- std of the tracking error over all cycles and over the last
+cycle, path deviation, max, and the improvement over ``cc_model``), ``compare.csv`` /
+``compare.json`` (every run), ``compare_<path>.png`` (bars per condition), and error-against-time
+plots of the first seed.
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+CONDITIONS: dict[str, dict[str, Any]] = {
+    "nominal": {},
+    "heavy_load": {"scenario": {"name": "tip_mass", "mass_kg": 0.02}},
+    "occlusion": {"faults": {"name": "moving_occluder", "mode": "full", "start_s": 5.0,
+                             "cover_s": 2.0, "period_s": 6.0}},
+}
+"""Condition name -> env keyword arguments."""
+
+
+def policy_label(policy: str) -> str:
+    """Short table label: the baseline name or the agent directory's name."""
+    return Path(policy[4:]).name if policy.startswith("sb3:") else policy
+
+
+def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Sequence[str],
+                   seeds: Sequence[int], out: str | Path, cycles: int = 2,
+                   feedback: str = "fused", kp: float = 0.06, preset: str = "wang2023",
+                   progress: bool = True) -> list[dict[str, Any]]:
+    """Run the comparison grid and write its outputs; returns the seed-aggregated rows."""
+    from eval.metrics import add_improvement, aggregate_seeds, summarize, summary_table
+    from eval.report import markdown_table, plot_error_time, write_json, write_records_csv
+    from eval.runner import RunConfig, run
+
+    unknown = [c for c in conditions if c not in CONDITIONS]
+    if unknown:
+        raise ValueError(f"conditions must be among {sorted(CONDITIONS)}, got {unknown}")
+    if cycles < 1:
+        raise ValueError(f"cycles must be >= 1, got {cycles!r}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows, first_seed_records = [], {}
+    grid = list(itertools.product(paths, conditions, seeds, policies))
+    for index, (path, condition, seed, policy) in enumerate(grid, start=1):
+        label = policy_label(policy)
+        params = {} if policy.startswith("sb3:") else {"kp": kp}
+        config = RunConfig(
+            policy=policy, policy_params=params, seed=seed,
+            env_kwargs={"preset": preset, "path": path, "cycles": cycles, "feedback": feedback,
+                        **CONDITIONS[condition]},
+            labels={"policy": label, "condition": condition, "path": path})
+        print(f"[{index}/{len(grid)}] {label} on {path}, {condition}, seed {seed}", flush=True)
+        record = run(config, progress=progress)
+        write_records_csv(out / "runs" / f"{label}_{path}_{condition}_seed{seed}.csv", record)
+        summary = summarize(record)
+        identity = {"policy": label, "path": path, "condition": condition, "seed": seed}
+        rows.append((identity, summary))
+        if seed == seeds[0]:
+            first_seed_records.setdefault((path, condition), {})[label] = record
+    table = summary_table(rows)
+    last = f"track_mean_mm_cycle{cycles}"
+    for row in table:
+        row["track_last_cycle_mm"] = row.get(last, np.nan)
+    table = add_improvement(table, baseline={"policy": "cc_model"},
+                            match=["path", "condition", "seed"])
+    write_json(out / "compare.json", table)
+    _write_csv(out / "compare.csv", table)
+    aggregated = aggregate_seeds(table, by=["policy", "path", "condition"])
+    for (path, condition), records in first_seed_records.items():
+        plot_error_time(out / f"error_{path}_{condition}.png", records,
+                        f"{preset} {path}, {condition}, {feedback} feedback (seed {seeds[0]})")
+    for path in paths:
+        _plot_bars(out / f"compare_{path}.png",
+                   [row for row in aggregated if row["path"] == path], conditions,
+                   f"{preset} {path}: tracking error, last cycle ({feedback} feedback)")
+    shown = []
+    for row in aggregated:
+        shown.append({
+            "policy": row["policy"], "path": row["path"], "condition": row["condition"],
+            "seeds": row["n_seeds"],
+            "track (mm)": _pm(row, "track_mean_mm"),
+            "last cycle (mm)": _pm(row, "track_last_cycle_mm"),
+            "deviation (mm)": _pm(row, "dev_mean_mm"),
+            "max (mm)": row["track_max_mm"],
+            "vs cc_model (%)": row["improvement_%"],
+        })
+    text = markdown_table(shown, float_format="{:.2f}")
+    (out / "compare.md").write_text(
+        f"# {preset}: agents against baselines ({feedback} feedback, {cycles} cycles, "
+        f"seeds {list(seeds)})\n\n" + text)
+    return shown
+
+
+def _pm(row: dict, column: str) -> str:
+    mean, std = row.get(column), row.get(f"{column}_seed_std")
+    if std is None or not np.isfinite(std):
+        return f"{mean:.2f}"
+    return f"{mean:.2f} ± {std:.2f}"
+
+
+def _write_csv(path: Path, rows: list[dict]) -> None:
+    import csv
+
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    with open(path, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def _plot_bars(path: Path, rows: list[dict], conditions: Sequence[str], title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    policies = list(dict.fromkeys(row["policy"] for row in rows))
+    width = 0.8 / max(len(policies), 1)
+    fig, ax = plt.subplots(figsize=(7.0, 3.6), constrained_layout=True)
+    x = np.arange(len(conditions))
+    for k, policy in enumerate(policies):
+        by_condition = {row["condition"]: row for row in rows if row["policy"] == policy}
+        means = [by_condition.get(c, {}).get("track_last_cycle_mm", np.nan) for c in conditions]
+        stds = [by_condition.get(c, {}).get("track_last_cycle_mm_seed_std", np.nan)
+                for c in conditions]
+        stds = [0.0 if not np.isfinite(s) else s for s in stds]
+        ax.bar(x + (k - (len(policies) - 1) / 2) * width, means, width, yerr=stds, capsize=3,
+               label=policy, color=f"C{k % 10}")
+    ax.set_xticks(x, conditions)
+    ax.set_ylabel("tracking error, last cycle (mm)")
+    ax.set_title(title, fontsize=10)
+    ax.grid(axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
