@@ -3,10 +3,13 @@
     python -m eval estimation --experiments clean occlusion lighting --steps 4000 --out results/estimation
     python -m eval track --policies cc_model hybrid_gpr --kp 0.04 0.1 --path circle --out results/track
 
-``benchmark`` (the README's main job): ``cc_model`` and ``hybrid_gpr`` on the wang2023 circle,
-3 cycles, with a 10 g tip load, fused camera/FBG feedback and a partly occluding hand moving in
-front of the camera during the third cycle; prints the table, writes CSV, JSON and plots
-(about 2 minutes on 2 cores).
+``benchmark`` (the README's main job): ``cc_model``, ``hybrid_gpr`` and the shipped SB3 agents on
+the wang2023 circle, 3 cycles, with a 10 g tip load, fused camera/FBG feedback and a partly
+occluding hand moving in front of the camera during the third cycle; prints the table, writes CSV,
+JSON and plots (under 3 minutes on 2 cores, the runs spread over two processes).
+
+``compare``: the SB3 agents against the baselines, nominal and out of distribution (see
+``eval/compare.py``).
 
 ``estimation``: the wang2023 estimation experiments (camera, F-emp and fusion vs ground truth;
 Figs. 6-7, Tables III, IV, VI). ``track``: baselines tracking a path on an arm preset, with loads,
@@ -21,30 +24,39 @@ import itertools
 import json
 from pathlib import Path
 
+import os
+
 from eval import compare as compare_module
 from eval.estimation import EXPERIMENTS, run_experiments
+
+
+DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
 
 
 def _track(args: argparse.Namespace) -> None:
     from eval.metrics import add_improvement, summarize, summary_table
     from eval.report import markdown_table, plot_error_time, plot_trajectory, write_json, \
         write_records_csv
-    from eval.runner import RunConfig, run
+    from eval.runner import RunConfig, run_many
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     scenario = json.loads(args.scenario) if args.scenario else None
     faults = json.loads(args.faults) if args.faults else None
     rows, records = [], {}
-    runs = list(itertools.product(args.kp, args.seeds, args.policies))
-    for kp, seed, policy in runs:
-        config = RunConfig(
-            policy=policy, policy_params={"kp": kp}, seed=seed,
-            env_kwargs={"preset": args.preset, "path": args.path, "cycles": args.cycles,
-                        "scenario": scenario, "faults": faults, "feedback": args.feedback})
+    # an SB3 agent has no K_p: it runs once per seed
+    runs = [(kp, seed, policy) for kp, seed, policy in itertools.product(args.kp, args.seeds,
+                                                                          args.policies)
+            if not (policy.startswith("sb3:") and kp != args.kp[0])]
+    configs = [RunConfig(
+        policy=policy, policy_params={} if policy.startswith("sb3:") else {"kp": kp}, seed=seed,
+        env_kwargs={"preset": args.preset, "path": args.path, "cycles": args.cycles,
+                    "scenario": scenario, "faults": faults, "feedback": args.feedback})
+        for kp, seed, policy in runs]
+    print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
+    records_in_order = run_many(configs, workers=args.workers, progress=True)
+    for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
         label = f"{compare_module.policy_label(policy)}_kp{kp}_seed{seed}"
-        print(f"running {label}", flush=True)
-        record = run(config, progress=True)
         records[label] = record
         write_records_csv(out / f"{label}.csv", record)
         plot_trajectory(out / f"{label}_trajectory.png", record, label)
@@ -74,6 +86,8 @@ def main(argv: list[str] | None = None) -> None:
     sub = parser.add_subparsers(dest="command", required=True)
     benchmark = sub.add_parser("benchmark", help="the small embedded default comparison")
     benchmark.add_argument("--out", default="results/benchmark", help="output directory")
+    benchmark.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
+                           help="runs in parallel processes (default: up to 2 cores)")
     estimation = sub.add_parser("estimation", help="wang2023 estimation experiments")
     estimation.add_argument("--experiments", nargs="+", default=["clean"],
                             choices=list(EXPERIMENTS) + ["all"],
@@ -98,6 +112,8 @@ def main(argv: list[str] | None = None) -> None:
                        help='visual faults as JSON, e.g. \'"wang2023_occlusion"\'')
     track.add_argument("--seeds", type=int, nargs="+", default=[0], help="episode seeds")
     track.add_argument("--out", default="results/track", help="output directory")
+    track.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
+                       help="runs in parallel processes (default: up to 2 cores)")
     compare = sub.add_parser(
         "compare", help="SB3 agents against the baselines, nominal and out of distribution",
         description=compare_module.__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -114,6 +130,8 @@ def main(argv: list[str] | None = None) -> None:
                          help="pose feedback of every policy: fused, camera, fbg, em, ground_truth")
     compare.add_argument("--kp", type=float, default=0.06, help="K_p of the CC baselines")
     compare.add_argument("--out", default="results/compare", help="output directory")
+    compare.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
+                         help="runs in parallel processes (default: up to 2 cores)")
     args = parser.parse_args(argv)
     if args.command == "compare":
         from agents.policies import shipped_agents
@@ -125,7 +143,7 @@ def main(argv: list[str] | None = None) -> None:
                          f"camera, got {args.feedback!r}")
         rows = compare_module.run_comparison(
             policies, args.paths, args.conditions, args.seeds, args.out, cycles=args.cycles,
-            feedback=args.feedback, kp=args.kp)
+            feedback=args.feedback, kp=args.kp, workers=args.workers)
         from eval.report import markdown_table
 
         print(markdown_table(rows, float_format="{:.2f}"))
@@ -139,7 +157,7 @@ def main(argv: list[str] | None = None) -> None:
             policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in shipped_agents()],
             kp=[0.06], preset="wang2023", path="circle",
             cycles=3, feedback="fused", scenario=json.dumps({"name": "tip_mass", "mass_kg": 0.01}),
-            faults=json.dumps(occluder), seeds=[0], out=args.out)
+            faults=json.dumps(occluder), seeds=[0], out=args.out, workers=args.workers)
         _track(args)
     elif args.command == "estimation":
         if args.steps < 600:

@@ -40,11 +40,11 @@ def policy_label(policy: str) -> str:
 def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Sequence[str],
                    seeds: Sequence[int], out: str | Path, cycles: int = 2,
                    feedback: str = "fused", kp: float = 0.06, preset: str = "wang2023",
-                   progress: bool = True) -> list[dict[str, Any]]:
+                   progress: bool = True, workers: int = 1) -> list[dict[str, Any]]:
     """Run the comparison grid and write its outputs; returns the seed-aggregated rows."""
     from eval.metrics import add_improvement, aggregate_seeds, summarize, summary_table
     from eval.report import markdown_table, plot_error_time, write_json, write_records_csv
-    from eval.runner import RunConfig, run
+    from eval.runner import RunConfig, run_many
 
     unknown = [c for c in conditions if c not in CONDITIONS]
     if unknown:
@@ -55,16 +55,14 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
     out.mkdir(parents=True, exist_ok=True)
     rows, first_seed_records = [], {}
     grid = list(itertools.product(paths, conditions, seeds, policies))
-    for index, (path, condition, seed, policy) in enumerate(grid, start=1):
+    configs = [RunConfig(
+        policy=policy, policy_params={} if policy.startswith("sb3:") else {"kp": kp}, seed=seed,
+        env_kwargs={"preset": preset, "path": path, "cycles": cycles, "feedback": feedback,
+                    **CONDITIONS[condition]}) for path, condition, seed, policy in grid]
+    print(f"{len(configs)} runs on {workers} worker(s)", flush=True)
+    records = run_many(configs, workers=workers, progress=progress)
+    for (path, condition, seed, policy), record in zip(grid, records):
         label = policy_label(policy)
-        params = {} if policy.startswith("sb3:") else {"kp": kp}
-        config = RunConfig(
-            policy=policy, policy_params=params, seed=seed,
-            env_kwargs={"preset": preset, "path": path, "cycles": cycles, "feedback": feedback,
-                        **CONDITIONS[condition]},
-            labels={"policy": label, "condition": condition, "path": path})
-        print(f"[{index}/{len(grid)}] {label} on {path}, {condition}, seed {seed}", flush=True)
-        record = run(config, progress=progress)
         write_records_csv(out / "runs" / f"{label}_{path}_{condition}_seed{seed}.csv", record)
         summary = summarize(record)
         identity = {"policy": label, "path": path, "condition": condition, "seed": seed}

@@ -135,3 +135,23 @@ def run(config: RunConfig, progress: bool = False) -> dict[str, np.ndarray]:
                            description=f"{config.policy} seed {config.seed}")
     finally:
         env.close()
+
+
+def run_many(configs: list[RunConfig], workers: int = 1,
+             progress: bool = False) -> list[dict[str, np.ndarray]]:
+    """Run several configurations, in ``workers`` processes when > 1; records in input order.
+
+    Each worker process calibrates its own sensing pipeline (the calibration is cached per
+    process), and seeded runs give the same records whichever process runs them.
+    """
+    if not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if workers == 1 or len(configs) <= 1:
+        return [run(config, progress=progress) for config in configs]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, len(configs)), mp_context=context) as pool:
+        return list(tqdm(pool.map(run, configs), total=len(configs), desc="runs",
+                         disable=not progress))

@@ -128,6 +128,26 @@ def test_sb3_agent_with_another_interface_is_refused(tmp_path):
     env.close()
 
 
+def test_shipping_keeps_what_loading_needs(tmp_path):
+    from train.ship import ship
+
+    run_dir = train(TrainRequest(algo="ppo", env_kwargs=FAST_ENV, timesteps=256,
+                                 hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1},
+                                 out_dir=str(tmp_path), eval_freq=0, checkpoint_freq=0,
+                                 progress=False))
+    shipped = ship(run_dir, "tiny", destination=tmp_path / "shipped")
+    assert sorted(p.name for p in shipped.iterdir()) == [
+        "config.yaml", "learning_curve.png", "model.zip", "source.txt", "training.yaml",
+        "vecnormalize.pkl", "versions.yaml"]
+    env = gym.make("SoftArmTrackWang2023-v0", **FAST_ENV)
+    observation, _ = env.reset(seed=0)
+    np.testing.assert_array_equal(make_policy(f"sb3:{run_dir}", env=env).predict(observation)[0],
+                                  make_policy(f"sb3:{shipped}", env=env).predict(observation)[0])
+    with pytest.raises(ValueError, match="best_model"):
+        ship(run_dir, "tiny", model="best", destination=tmp_path / "shipped")
+    env.close()
+
+
 def test_rl_zoo3_trains_a_registered_id(tmp_path):
     """rl-baselines3-zoo trains our ids from our config file (its own format)."""
     pytest.importorskip("rl_zoo3")
