@@ -56,7 +56,8 @@ def _track(args: argparse.Namespace) -> None:
     print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
     records_in_order = run_many(configs, workers=args.workers, progress=True)
     for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
-        label = f"{compare_module.policy_label(policy)}_kp{kp}_seed{seed}"
+        gain = "" if policy.startswith("sb3:") else f"_kp{kp}"
+        label = f"{compare_module.policy_label(policy)}{gain}_seed{seed}"
         records[label] = record
         write_records_csv(out / f"{label}.csv", record)
         plot_trajectory(out / f"{label}_trajectory.png", record, label)

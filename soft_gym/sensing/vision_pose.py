@@ -98,7 +98,7 @@ class VisionPoseEstimator:
     ransac_threshold_px: float = 2.0
     keyframe_inlier_ratio: float = 0.35
     max_keyframes: int = 200
-    match_keyframes: int = 6
+    match_keyframes: int = 3
     ransac_iterations: int = 200
     keyframe_spacing_m: float = 0.001
     min_depth_m: float = 0.005
