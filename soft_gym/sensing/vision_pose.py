@@ -86,7 +86,9 @@ class VisionPoseEstimator:
             (1 mm keeps the fused tracking error flat over repeated cycles; 2 mm starves the
             clean spiral of keyframes).
         match_keyframes: each frame is matched against this many keyframes nearest to the last
-            pose (a local map, as ORB-SLAM2's covisible keyframes), which bounds the cost.
+            pose (a local map, as ORB-SLAM2's covisible keyframes), which bounds the cost. With 3
+            the update is 12.9 instead of 14.4 ms, but a loaded arm's fused feedback error rises
+            from 0.9 to 1.6 mm.
         min_depth_m, max_depth_m: depth range of map points accepted from the depth buffer.
     """
 
@@ -98,7 +100,7 @@ class VisionPoseEstimator:
     ransac_threshold_px: float = 2.0
     keyframe_inlier_ratio: float = 0.35
     max_keyframes: int = 200
-    match_keyframes: int = 3
+    match_keyframes: int = 6
     ransac_iterations: int = 200
     keyframe_spacing_m: float = 0.001
     min_depth_m: float = 0.005
