@@ -71,6 +71,7 @@ def _track(args: argparse.Namespace) -> None:
                             column="improvement_last_%")
     table = add_improvement(table, baseline={"policy": "cc_model"}, metric="dev_last_cycle_mm",
                             column="dev_improvement_last_%")
+    _agents_against_first_gain(table, args.kp[0])
     plot_error_time(out / "error_time.png", records, f"{args.preset} {args.path}")
     write_json(out / "track.json", table)
     columns = ["policy", "kp", "seed", "track_mean_mm", "track_max_mm", "dev_mean_mm",
@@ -79,6 +80,22 @@ def _track(args: argparse.Namespace) -> None:
     text = markdown_table(table, columns=[c for c in columns if c in table[0]])
     (out / "track.md").write_text(text + "\n")
     print(text)
+
+
+def _agents_against_first_gain(table: list[dict], kp: float) -> None:
+    """SB3 agents have no K_p: their improvement is over ``cc_model`` at the first gain."""
+    from eval.metrics import improvement
+
+    columns = {"improvement_%": "track_mean_mm", "improvement_last_%": "track_last_cycle_mm",
+               "dev_improvement_last_%": "dev_last_cycle_mm"}
+    for row in table:
+        if not str(row["policy"]).startswith("sb3:"):
+            continue
+        baseline = [other for other in table if other["policy"] == "cc_model"
+                    and other.get("kp") == kp and other["seed"] == row["seed"]]
+        for column, metric in columns.items():
+            if baseline:
+                row[column] = 100.0 * improvement(baseline[0][metric], row[metric])
 
 
 def main(argv: list[str] | None = None) -> None:

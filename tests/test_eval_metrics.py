@@ -449,3 +449,19 @@ def test_comparison_grid_writes_tables_and_plots(tmp_path):
         assert (tmp_path / name).is_file(), name
     with pytest.raises(ValueError, match="conditions"):
         run_comparison(["cc_model"], ["circle"], ["underwater"], [0], tmp_path)
+
+
+def test_agents_are_compared_with_the_model_at_the_first_gain():
+    from eval.__main__ import _agents_against_first_gain
+
+    def row(policy, kp, mean, last, dev):
+        return {"policy": policy, "kp": kp, "seed": 0, "track_mean_mm": mean,
+                "track_last_cycle_mm": last, "dev_last_cycle_mm": dev}
+
+    table = [row("cc_model", 0.04, 4.0, 4.0, 2.0), row("cc_model", 0.1, 2.0, 2.0, 1.0),
+             row("sb3:agent", None, 1.0, 3.0, 3.0)]
+    _agents_against_first_gain(table, 0.04)
+    assert table[2]["improvement_%"] == pytest.approx(75.0)
+    assert table[2]["improvement_last_%"] == pytest.approx(25.0)
+    assert table[2]["dev_improvement_last_%"] == pytest.approx(-50.0)
+    assert "improvement_%" not in table[0]
