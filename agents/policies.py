@@ -142,12 +142,18 @@ class SB3Policy(BaselinePolicy):
             # what VecNormalize drops when pickled, so that this copy can be saved again
             normalization.class_attributes, normalization.returns = {}, np.zeros(1)
         policy = cls(model, normalization, config)
-        if env is not None and env.observation_space.shape != model.observation_space.shape:
-            raise ValueError(
-                f"the agent at {str(path)!r} reads observations of shape "
-                f"{model.observation_space.shape}, the env gives {env.observation_space.shape}: "
-                f"make the env with the agent's interface {policy.env_interface}")
+        if env is not None:
+            policy.check_env(env)
         return policy
+
+    def check_env(self, env) -> None:
+        """Raise ``ValueError`` unless ``env`` gives observations of the shape the agent reads."""
+        expected = self.model.observation_space.shape
+        if env.observation_space.shape != expected:
+            raise ValueError(
+                f"the agent reads observations of shape {expected}, the env gives "
+                f"{env.observation_space.shape}: make the env with the agent's interface "
+                f"{self.env_interface}")
 
 
 def _guess_algorithm(model_path: Path) -> str:

@@ -23,9 +23,8 @@ import time
 import numpy as np
 import torch
 
-from train.config import algorithm_class, build_action_noise, read_hyperparameters, \
-    split_hyperparameters
-from train.trainer import make_vec_env
+from train.config import read_hyperparameters, split_hyperparameters
+from train.trainer import make_vec_env, new_model
 
 
 def env_only(env_id: str, env_kwargs: dict, steps: int) -> float:
@@ -48,12 +47,8 @@ def learning(algo: str, env_id: str, n_envs: int, steps: int) -> float:
         env = make_vec_env(env_id, settings.env_kwargs, n_envs, seed=0, monitor_dir=monitor_dir)
         if settings.normalize is not None:
             env = VecNormalize(env, **settings.normalize)
-        kwargs = dict(settings.algo_kwargs)
-        if "action_noise" in kwargs:
-            kwargs["action_noise"] = build_action_noise(kwargs["action_noise"],
-                                                        env.action_space.shape[0])
-        model = algorithm_class(algo)(settings.policy, env, seed=0, **kwargs)
-        warmup = int(kwargs.get("learning_starts", 0)) + 200
+        model = new_model(algo, settings, env, seed=0)
+        warmup = int(settings.algo_kwargs.get("learning_starts", 0)) + 200
         model.learn(warmup)
         start = time.perf_counter()
         model.learn(steps, reset_num_timesteps=False)

@@ -43,7 +43,8 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
                    progress: bool = True, workers: int = 1) -> list[dict[str, Any]]:
     """Run the comparison grid and write its outputs; returns the seed-aggregated rows."""
     from eval.metrics import add_improvement, aggregate_seeds, summarize, summary_table
-    from eval.report import markdown_table, plot_error_time, write_json, write_records_csv
+    from eval.report import (markdown_table, plot_error_time, with_mean_std, write_json,
+                             write_records_csv)
     from eval.runner import RunConfig, run_many
 
     unknown = [c for c in conditions if c not in CONDITIONS]
@@ -85,29 +86,22 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
         _plot_bars(out / f"compare_{path}.png",
                    [row for row in aggregated if row["path"] == path], conditions,
                    f"{preset} {path}: tracking error, last cycle ({feedback} feedback)")
-    shown = []
-    for row in aggregated:
-        shown.append({
-            "policy": row["policy"], "path": row["path"], "condition": row["condition"],
-            "seeds": row["n_seeds"],
-            "track (mm)": _pm(row, "track_mean_mm"),
-            "last cycle (mm)": _pm(row, "track_last_cycle_mm"),
-            "deviation (mm)": _pm(row, "dev_mean_mm"),
-            "max (mm)": row["track_max_mm"],
-            "vs cc_model (%)": row["improvement_%"],
-        })
+    for metric in ("track_mean_mm", "track_last_cycle_mm", "dev_mean_mm"):
+        aggregated = with_mean_std(aggregated, metric, f"{metric}_seed_std", float_format="{:.2f}")
+    shown = [{
+        "policy": row["policy"], "path": row["path"], "condition": row["condition"],
+        "seeds": row["n_seeds"],
+        "track (mm)": row["track_mean_mm_pm"],
+        "last cycle (mm)": row["track_last_cycle_mm_pm"],
+        "deviation (mm)": row["dev_mean_mm_pm"],
+        "max (mm)": row["track_max_mm"],
+        "vs cc_model (%)": row["improvement_%"],
+    } for row in aggregated]
     text = markdown_table(shown, float_format="{:.2f}")
     (out / "compare.md").write_text(
         f"# {preset}: agents against baselines ({feedback} feedback, {cycles} cycles, "
         f"seeds {list(seeds)})\n\n" + text)
     return shown
-
-
-def _pm(row: dict, column: str) -> str:
-    mean, std = row.get(column), row.get(f"{column}_seed_std")
-    if std is None or not np.isfinite(std):
-        return f"{mean:.2f}"
-    return f"{mean:.2f} ± {std:.2f}"
 
 
 def _write_csv(path: Path, rows: list[dict]) -> None:

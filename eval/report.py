@@ -307,7 +307,7 @@ def with_mean_std(
 
     Returns:
         Copies of the rows with the new column (empty text where a value is
-        missing).
+        missing; the mean alone where the std is NaN, e.g. over a single seed).
     """
     name = column or f"{mean_column}_pm"
     out = []
@@ -316,6 +316,8 @@ def with_mean_std(
         m, s = row.get(mean_column), row.get(std_column)
         if m is None or s is None:
             new[name] = ""
+        elif _is_number(s) and not np.isfinite(s):
+            new[name] = _cell(m, float_format)
         else:
             new[name] = f"{_cell(m, float_format)} ± {_cell(s, float_format)}"
         out.append(new)

@@ -116,11 +116,13 @@ def run_episode(env: gym.Env, policy: BaselinePolicy, seed: int = 0, learn: bool
 
 def build(config: RunConfig) -> tuple[gym.Env, BaselinePolicy]:
     """Make the env and the policy of ``config`` (calibrating the policy if it needs to)."""
-    env_kwargs = dict(config.env_kwargs)
     if config.policy.startswith("sb3:"):
         # an agent reads and writes what it was trained with; the scenario stays the run's
-        env_kwargs.update(SB3Policy.load(config.policy[4:]).env_interface)
-    env = gym.make(config.env_id, **env_kwargs)
+        policy = SB3Policy.load(config.policy[4:])
+        env = gym.make(config.env_id, **{**config.env_kwargs, **policy.env_interface})
+        policy.check_env(env)
+        return env, policy
+    env = gym.make(config.env_id, **config.env_kwargs)
     policy = make_policy(config.policy, env=env, **config.policy_params)
     if hasattr(policy, "calibrate"):
         policy.calibrate()

@@ -82,8 +82,8 @@ class ArmSimulator:
         # joint motion after which the mass matrix is refreshed early: 0.05 rad or 5 % strain
         self._configuration_tolerance = np.where(
             self._kind == AXIAL, 0.05 * self.arm.station_rest_length[self.arm.joint_station], 0.05)
-        self._pressure_to_rest = self._pressure_to_rest_matrix()
-        self._stiffness_scale = 1.0
+        self._pressure_to_rest_nominal = self._pressure_to_rest_matrix()
+        self._pressure_to_rest = self._pressure_to_rest_nominal
         self._substeps_per_gain_update = self._substeps_per_actuation * max(
             1, int(round(spec.control_period_s / spec.actuation_update_s)))
         self.gravity = spec.gravity_base.copy()
@@ -306,8 +306,7 @@ class ArmSimulator:
         next actuation update. Used by domain randomisation."""
         scale = require_positive("scale", scale)
         # the pressure moments stay; their rest angles shrink as the arm stiffens
-        self._pressure_to_rest = self._pressure_to_rest * (self._stiffness_scale / scale)
-        self._stiffness_scale = scale
+        self._pressure_to_rest = self._pressure_to_rest_nominal / scale
         self._stiffness0 = scale / self.arm.compliance
         self._damping = self.arm.damping_time_s * self._stiffness0
         self._implicit_stiffness = np.zeros(self.arm.n_joints)  # forces a gain refresh

@@ -392,9 +392,11 @@ def test_markdown_table() -> None:
 
 
 def test_with_mean_std() -> None:
-    rows = with_mean_std([{"m": 16.942, "s": 5.421}, {"m": 1.0}], "m", "s", column="pm")
+    rows = with_mean_std([{"m": 16.942, "s": 5.421}, {"m": 1.0}, {"m": 2.0, "s": float("nan")}],
+                         "m", "s", column="pm")
     assert rows[0]["pm"] == "16.942 ± 5.421"
     assert rows[1]["pm"] == ""
+    assert rows[2]["pm"] == "2.000"
 
 
 def _assert_png(path) -> None:

@@ -18,7 +18,6 @@ import subprocess
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import yaml
@@ -133,6 +132,15 @@ def make_vec_env(env_id: str, env_kwargs: dict, n_envs: int, seed: int,
                             wrapper_kwargs=None)
 
 
+def new_model(algo: str, settings: TrainSettings, env, seed: int):
+    """A fresh ``algo`` model on ``env`` with the settings' hyperparameters (action noise built)."""
+    kwargs = dict(settings.algo_kwargs)
+    if "action_noise" in kwargs:
+        kwargs["action_noise"] = build_action_noise(kwargs["action_noise"],
+                                                    env.action_space.shape[0])
+    return algorithm_class(algo)(settings.policy, env, seed=seed, verbose=0, **kwargs)
+
+
 def train(request: TrainRequest) -> Path:
     """Train (or resume) as ``request`` says; returns the run directory."""
     import torch
@@ -170,16 +178,12 @@ def train(request: TrainRequest) -> Path:
                                 **{k: v for k, v in settings.normalize.items()
                                    if k not in ("norm_reward", "training")})
 
-    algo_kwargs = dict(settings.algo_kwargs)
-    if "action_noise" in algo_kwargs:
-        algo_kwargs["action_noise"] = build_action_noise(algo_kwargs["action_noise"],
-                                                         env.action_space.shape[0])
     if request.resume is not None:
         model = algo_cls.load(str(run_dir / MODEL_FILE), env=env)
         if request.algo in OFF_POLICY and (run_dir / REPLAY_BUFFER_FILE).exists():
             model.load_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
     else:
-        model = algo_cls(settings.policy, env, seed=request.seed, verbose=0, **algo_kwargs)
+        model = new_model(request.algo, settings, env, request.seed)
     model.set_logger(configure(str(run_dir / "logs"), ["csv", "tensorboard"]))
 
     (run_dir / "config.yaml").write_text(yaml.safe_dump({
@@ -249,8 +253,3 @@ class ThroughputCallback(BaseCallback):
     def _on_step(self) -> bool:
         self.steps += self.training_env.num_envs
         return True
-
-
-def describe(run_dir: str | Path) -> dict[str, Any]:
-    """The saved config of a run directory."""
-    return yaml.safe_load((Path(run_dir) / "config.yaml").read_text())

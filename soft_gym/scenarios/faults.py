@@ -330,6 +330,14 @@ class MovingOccluder(VisualFault):
                                                _rotation_to_quaternion(context.rotation))
 
 
+def _add_sensor_noise(image: np.ndarray, shot_gain: float, read_noise_dn: float,
+                      rng: np.random.Generator) -> np.ndarray:
+    """``image + n`` with ``n ~ N(0, shot_gain I + read_noise_dn^2)`` per pixel (DN)."""
+    variance = shot_gain * np.clip(image, 0.0, None) + read_noise_dn ** 2
+    noise = rng.standard_normal(image.shape, dtype=np.float32)
+    return image + noise * np.sqrt(variance, dtype=np.float32)
+
+
 @dataclass
 class LowLight(VisualFault):
     """Weak lighting down to complete darkness (wang2023 Fig. 7 ②; darkness during 75-150 s).
@@ -357,9 +365,8 @@ class LowLight(VisualFault):
         if strength <= 0.0:
             return image
         signal = np.clip(image, 0.0, None) * (1.0 - strength)
-        variance = strength * self.shot_noise_gain * signal + (strength * self.read_noise_dn) ** 2
-        noise = context.rng.standard_normal(image.shape, dtype=np.float32)
-        return signal + noise * np.sqrt(variance, dtype=np.float32)
+        return _add_sensor_noise(signal, strength * self.shot_noise_gain,
+                                 strength * self.read_noise_dn, context.rng)
 
 
 @dataclass
@@ -539,10 +546,8 @@ class SensorNoise(VisualFault):
         strength = self.strength_at(context.time_s)
         if strength <= 0.0:
             return image
-        variance = (strength * self.shot_noise_gain) * np.clip(image, 0.0, None) + (
-            strength * self.read_noise_dn) ** 2
-        noise = context.rng.standard_normal(image.shape, dtype=np.float32)
-        return image + noise * np.sqrt(variance, dtype=np.float32)
+        return _add_sensor_noise(image, strength * self.shot_noise_gain,
+                                 strength * self.read_noise_dn, context.rng)
 
 
 FAULTS: dict[str, type[VisualFault]] = {
