@@ -3,7 +3,8 @@
 Prints mean and 95th-percentile microseconds per call for: the FBG readout (17 gratings), one
 eye-in-hand camera frame at 160 x 120, the vision pose update on that frame, camera + vision
 together, the OS-ELM update (N = 200) and prediction, and a whole env step with fused feedback
-next to one with ground-truth feedback (their ratio is the cost of the sensing).
+next to one with ground-truth feedback (their ratio is the cost of the sensing), driven by the
+slow spiral of the estimation experiments and, for fused feedback, by a random action per step.
 
     python bench/sensor_speed.py [--steps 300] [--json out.json]
 """
@@ -77,17 +78,26 @@ def main(argv: list[str] | None = None) -> None:
         model.predict(x)
         timings["elm_update"].append(middle - start)
         timings["elm_predict"].append(time.perf_counter() - middle)
-    for feedback in ("ground_truth", "fused"):
+    # the env steps twice: with the slow spiral of the estimation experiments (smooth motion,
+    # the vision tracker's search by projection holds) and with a random pressure every step
+    # (the worst case: the image jumps and each frame is matched against the whole local map)
+    for feedback, actions in (("ground_truth", "spiral"), ("fused", "spiral"),
+                              ("fused", "random")):
         env = gym.make("SoftArmReach-v0", feedback=feedback, episode_steps=10**6)
         env.reset(seed=0)
         env.action_space.seed(0)
         steps = []
-        for _ in range(args.steps):
-            action = env.action_space.sample()
+        for k in range(args.steps):
+            if actions == "random":
+                action = env.action_space.sample()
+            else:
+                fraction = spiral_fractions(k * spec.control_period_s, low=0.05, high=0.3)
+                action = (2.0 * fraction - 1.0).astype(np.float32)
             start = time.perf_counter()
             env.step(action)
             steps.append(time.perf_counter() - start)
-        timings[f"env_step_{feedback}"] = steps
+        name = f"env_step_{feedback}" + ("_random_actions" if actions == "random" else "")
+        timings[name] = steps
         env.close()
     results = {name: stats(values) for name, values in timings.items()}
     results["fused_over_ground_truth"] = (results["env_step_fused"]["mean_us"]
@@ -97,7 +107,8 @@ def main(argv: list[str] | None = None) -> None:
         if isinstance(value, dict):
             print(f"{name:<26} {value['mean_us']:10.1f} {value['p95_us']:10.1f}")
     print(f"fused env step / ground-truth env step: {results['fused_over_ground_truth']:.1f}x; "
-          f"fused env steps/s: {1e6 / results['env_step_fused']['mean_us']:.0f}")
+          f"fused env steps/s: {1e6 / results['env_step_fused']['mean_us']:.0f} (spiral), "
+          f"{1e6 / results['env_step_fused_random_actions']['mean_us']:.0f} (random actions)")
     if args.json:
         with open(args.json, "w") as handle:
             json.dump(results, handle, indent=2)

@@ -261,6 +261,21 @@ def test_motion_blur_lowers_sharpness_when_the_tip_moves():
     assert max(ratios) < 0.5, ratios
 
 
+def test_motion_blur_streak_trails_the_motion():
+    """The exposure ends at the frame time: a point now at p was at p - s v earlier in the
+    exposure, so its streak runs from p - v to p with its centroid at p - v / 2."""
+    image = np.zeros((40, 60), np.float32)
+    image[20, 30] = 1.0
+    for vector in (np.array([6.0, 0.0]), np.array([-3.0, 4.0])):
+        blurred = cv2.filter2D(image, -1, MotionBlur.kernel(vector),
+                               borderType=cv2.BORDER_CONSTANT)
+        rows, columns = np.nonzero(blurred > 1e-6)
+        weights = blurred[rows, columns]
+        centroid = np.array([np.sum(columns * weights), np.sum(rows * weights)]) / weights.sum()
+        np.testing.assert_allclose(centroid, np.array([30.0, 20.0]) - vector / 2, atol=0.05)
+        assert blurred.sum() == pytest.approx(1.0, abs=1e-5)
+
+
 # ---------------------------------------------------------------------- schedules and registry
 def test_schedules_interpolate_and_step():
     fault = LowLight(start_s=10.0, end_s=30.0, strength=[(10, 0.0), (20, 0.8), (20, 1.0)])

@@ -80,12 +80,11 @@ def test_full_occlusion_and_darkness_lose_tracking_and_hold_the_last_pose(fault)
 
 @pytest.mark.parametrize("fault, factor", [
     ({"name": "moving_occluder", "mode": "partial", "strength": 0.9}, 2.0),
-    ({"name": "led_glare", "strength": 1.0}, 1.4),
+    ({"name": "led_glare", "strength": 1.0}, 2.0),
 ])
 def test_partial_occlusion_and_glare_raise_the_error(clean, fault, factor):
-    """Measured (300 steps): partial occluder 1.50 mm (2.3x), glare 0.98 mm (1.5x), clean
-    0.64 mm. The paper's figures show about 2x; the glare falls short since the map keeps its
-    keyframes (no new ones within 1 mm of an old one), so glare-corrupted frames rarely enter it."""
+    """Measured (300 steps): partial occluder 1.74 mm (2.5x), glare 1.64 mm (2.3x), clean
+    0.70 mm; the paper's figures show about 2x."""
     clean_errors, clean_e_s, _, _ = clean
     errors, e_s, lost, _ = _run(faults=fault, steps=300)
     assert np.mean(e_s[~lost]) > np.mean(clean_e_s[:300])
@@ -94,12 +93,18 @@ def test_partial_occlusion_and_glare_raise_the_error(clean, fault, factor):
 
 
 def test_motion_blur_raises_the_error_of_fast_motion():
-    """Measured: 0.80 mm blurred vs 0.56 mm clean at the same fast spiral (1.4x, short of the
-    paper's 2x: the 160 x 120 ORB tracker loses few features to a few pixels of blur)."""
-    blurred, _, _, _ = _run(faults={"name": "motion_blur", "strength": 1.0, "exposure_s": 0.1},
-                            steps=300, turn_s=3.0)
-    sharp, _, _, _ = _run(steps=300, turn_s=3.0)
-    assert np.mean(blurred) > 1.2 * np.mean(sharp)
+    """A fast spiral (one turn a second, the tip at ~17 mm/s, ~3 px of blur per frame) with the
+    exposure as long as the 20 Hz frame interval. Measured: 1.39 mm blurred vs 0.59 mm sharp
+    (2.3x): the blurred features sit half an exposure behind the frame's pose, and fewer of
+    them are found."""
+    blurred, blurred_e_s, lost, _ = _run(
+        faults={"name": "motion_blur", "strength": 1.0, "exposure_s": 0.05},
+        steps=300, turn_s=1.0)
+    sharp, sharp_e_s, _, _ = _run(steps=300, turn_s=1.0)
+    assert not lost.any()
+    assert np.mean(blurred_e_s) > np.mean(sharp_e_s)
+    assert np.mean(blurred) >= 2.0 * np.mean(sharp), (
+        f"{np.mean(blurred):.2f} mm blurred vs {np.mean(sharp):.2f} mm sharp")
 
 
 def test_bad_configuration_raises():
@@ -110,3 +115,58 @@ def test_bad_configuration_raises():
     estimator = VisionPoseEstimator(np.eye(3), np.eye(4))
     with pytest.raises(ValueError, match="calibrate"):
         estimator.update(np.zeros((120, 160, 3), np.uint8))
+
+
+def _reference_match_by_projection(estimator, pixels, descriptors, map_descriptors, map_points,
+                                   camera_from_world, width, height):
+    """Slow loop version of the search by projection, for comparison."""
+    K = estimator.camera_matrix
+    radius = estimator.search_radius_px
+    projected = {}
+    for j, point in enumerate(map_points):
+        p = camera_from_world[:3, :3] @ point + camera_from_world[:3, 3]
+        if p[2] <= estimator.min_depth_m:
+            continue
+        u, v = K[0, 0] * p[0] / p[2] + K[0, 2], K[1, 1] * p[1] / p[2] + K[1, 2]
+        if -radius < u < width + radius and -radius < v < height + radius:
+            projected[j] = np.array([u, v])
+    chosen = {}
+    for i, pixel in enumerate(pixels):
+        candidates = sorted(
+            (int(np.unpackbits(descriptors[i] ^ map_descriptors[j]).sum()), j)
+            for j, uv in projected.items() if np.linalg.norm(uv - pixel) <= radius)
+        if not candidates:
+            continue
+        best, j = candidates[0]
+        second = candidates[1][0] if len(candidates) > 1 else np.inf
+        if best <= estimator.max_descriptor_distance and best < estimator.ratio * second:
+            if j not in chosen or (best, i) < chosen[j]:
+                chosen[j] = (best, i)
+    return sorted((i, j) for j, (_, i) in chosen.items())
+
+
+def test_search_by_projection_matches_a_slow_reference():
+    rng = np.random.default_rng(3)
+    K = np.array([[73.0, 0.0, 80.0], [0.0, 73.0, 60.0], [0.0, 0.0, 1.0]])
+    estimator = VisionPoseEstimator(K, np.eye(4), search_radius_px=6.0)
+    world_from_camera = np.eye(4)
+    estimator.last = estimator._estimate(world_from_camera, 0.0, 100, False)
+    estimator.previous = estimator.last
+    map_points = np.c_[rng.uniform(-0.06, 0.06, (400, 2)), rng.uniform(0.03, 0.08, 400)]
+    map_descriptors = rng.integers(0, 256, (400, 32), dtype=np.uint8)
+    # features: noisy projections of half the map points with a few flipped bits, plus clutter
+    seen = rng.choice(400, 200, replace=False)
+    pixels = (map_points[seen, :2] / map_points[seen, 2:] * 73.0 + [80.0, 60.0]
+              + rng.normal(0.0, 1.5, (200, 2)))
+    pixels = np.vstack([pixels, rng.uniform([0, 0], [160, 120], (100, 2))])
+    descriptors = np.vstack([map_descriptors[seen], rng.integers(0, 256, (100, 32), np.uint8)])
+    flips = rng.integers(0, 256, descriptors.shape, dtype=np.uint8) & rng.integers(
+        0, 256, descriptors.shape, dtype=np.uint8) & rng.integers(0, 256, descriptors.shape,
+                                                                  dtype=np.uint8)
+    descriptors = descriptors ^ flips
+    query, train = estimator._match_by_projection(pixels, descriptors, map_descriptors,
+                                                  map_points, 160, 120)
+    reference = _reference_match_by_projection(estimator, pixels, descriptors, map_descriptors,
+                                                map_points, np.eye(4), 160, 120)
+    assert len(reference) > 100
+    assert sorted(zip(query.tolist(), train.tolist())) == reference

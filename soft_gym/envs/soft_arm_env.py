@@ -254,7 +254,8 @@ class SoftArmEnv(gym.Env):
         if self.feedback == "ground_truth":
             return self.sim.tip_pose()
         if self.feedback == "em":
-            reading = np.asarray(self.sensors["em"].read(self.sim, self.sim.time_s), dtype=float)
+            reading = np.asarray(self.sensors["em"].reading_at(self.sim, self.sim.time_s),
+                                 dtype=float)
             return reading[:3], reading[3:]
         return getattr(self._estimates, self.feedback if self.feedback != "fbg" else "femp")
 
@@ -393,7 +394,7 @@ class SoftArmEnv(gym.Env):
 
     def _part(self, part: str) -> np.ndarray:
         if part in self.sensors:
-            return np.array(self.sensors[part].read(self.sim, self.sim.time_s))
+            return np.array(self.sensors[part].reading_at(self.sim, self.sim.time_s))
         if part == "pose":
             position, quaternion = self.feedback_pose()
             value = np.r_[position, quaternion]
@@ -414,7 +415,7 @@ class SoftArmEnv(gym.Env):
             "backbone_m": self.sim.backbone(), "chamber_lengths_m": self.sim.chamber_lengths(),
             "pressures_pa": self.sim.pressures_pa, "time_s": self.sim.time_s,
             "step": self._step,
-            "sensors": {name: self._copy(sensor.read(self.sim, self.sim.time_s))
+            "sensors": {name: self._copy(sensor.reading_at(self.sim, self.sim.time_s))
                         for name, sensor in self.sensors.items()},
             **({"estimates": self._estimate_info()} if self.pipeline is not None else {}),
             **({"randomization": self._draw.describe()} if self._draw is not None else {}),
@@ -427,7 +428,7 @@ class SoftArmEnv(gym.Env):
                 "reprojection_error_px": estimates.reprojection_error_px,
                 "lost": estimates.lost}
         if "em" in self.sensors:
-            info["em"] = np.asarray(self.sensors["em"].read(self.sim, self.sim.time_s)[:3],
+            info["em"] = np.asarray(self.sensors["em"].reading_at(self.sim, self.sim.time_s)[:3],
                                     dtype=float)
         return info
 

@@ -102,9 +102,9 @@ class SensingPipeline:
                                         **self.exploration)
             sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
             sim.step_physics(spec.control_period_s)
-            estimate = self.vision.update(self.camera.read(sim, sim.time_s),
+            estimate = self.vision.update(self.camera.reading_at(sim, sim.time_s),
                                           self.camera.last_depth)
-            reading = self.fbg.read(sim, sim.time_s)
+            reading = self.fbg.reading_at(sim, sim.time_s)
             if not estimate.lost and estimate.reprojection_error_px < threshold:
                 shifts.append(np.asarray(reading, dtype=float))
                 positions.append(estimate.position_m)
@@ -122,9 +122,9 @@ class SensingPipeline:
         """Read the camera and the FBG now, update F-emp selectively, fuse (wang2023 eq. (18))."""
         if not self.is_calibrated:
             raise ValueError("the sensing pipeline is not calibrated: call calibrate() first")
-        frame = self.camera.read(sim, sim.time_s)
+        frame = self.camera.reading_at(sim, sim.time_s)
         vision: VisionEstimate = self.vision.update(frame, self.camera.last_depth)
-        reading = np.asarray(self.fbg.read(sim, sim.time_s), dtype=float)
+        reading = np.asarray(self.fbg.reading_at(sim, sim.time_s), dtype=float)
         femp_pose = self.femp.predict(reading)
         updated = self.femp.update(reading, vision.position_m, vision.quaternion,
                                    vision.reprojection_error_px, vision.lost)
