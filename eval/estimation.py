@@ -12,6 +12,9 @@ sensing pipeline runs with the given visual faults and loads (wang2023 Section I
 | `flick`     | a fast flick on the tip every 10 s                                  | Table IV     |
 | `init`      | flicks, with F-emp initialised from 450 / 900 / 1800 samples        | Table VI     |
 
+For `init`, each run explores 1800 steps and F-emp is labelled by the last 450 / 900 / 1800 of
+them, so the three share the same vision map and differ only in F-emp's initialisation.
+
 Each run writes a per-step CSV and an error-vs-time PNG; the Markdown table lists mean, max, std
 and RMSE (mm) of each estimator per phase.
 """
@@ -69,14 +72,17 @@ def _conditions(experiment: str, duration_s: float) -> tuple[object, object]:
 
 
 def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: int = 0,
-                   progress: bool = True) -> dict[str, np.ndarray]:
-    """One estimation run; returns the per-step record (see :mod:`eval.runner`)."""
+                   progress: bool = True, map_steps: int = 0) -> dict[str, np.ndarray]:
+    """One estimation run; returns the per-step record (see :mod:`eval.runner`).
+
+    ``n_init`` and ``map_steps`` go to the sensing pipeline: F-emp is initialised from the
+    ``n_init`` exploration steps that follow ``map_steps`` steps of vision mapping alone."""
     if experiment not in EXPERIMENTS:
         raise ValueError(f"experiment must be one of {list(EXPERIMENTS)}, got {experiment!r}")
     duration_s = steps * 0.05
     faults, scenario = _conditions(experiment, duration_s)
     env = gym.make("SoftArmReach-v0", preset="wang2023", feedback="fused", faults=faults,
-                   scenario=scenario, episode_steps=steps, sensing={"n_init": n_init})
+                   scenario=scenario, episode_steps=steps, sensing={"n_init": n_init, "map_steps": map_steps})
     unwrapped = env.unwrapped
     spec = unwrapped.spec_arm
     env.reset(seed=seed)
@@ -110,8 +116,11 @@ def run_experiments(experiments: list[str], out_dir: str | Path, steps: int = 40
         inits = (450, 900, 1800) if experiment == "init" else (450,)
         for n_init in inits:
             name = experiment if experiment != "init" else f"init{n_init}"
+            # init: one exploration of max(inits) steps for every run, F-emp labelled by its
+            # last n_init steps, so the vision map (and the camera's labels) are the same
+            map_steps = max(inits) - n_init
             record = run_estimation(experiment, steps=steps, n_init=n_init, seed=seed,
-                                    progress=progress)
+                                    progress=progress, map_steps=map_steps)
             phases = _phases(experiment, steps * 0.05)
             errors = estimation_errors(record, phases=phases)
             write_records_csv(out / f"{name}.csv", record)

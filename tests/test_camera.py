@@ -363,3 +363,25 @@ def test_stereo_triangulation_recovers_the_backbone():
     # the rig is parallel (zou2022 eqs. 13-15): same rows, disparity f T_x / Z
     np.testing.assert_allclose(uv["left"][1], uv["right"][1], atol=1e-9)
     assert np.all(uv["left"][0] > uv["right"][0])
+
+
+def test_stereo_images_show_the_extended_arm_without_gaps():
+    """zou2022's links stretch to ~3x their rest length: the rendered body must still cover the
+    whole backbone between the joints (each link's visual spans its stretched length)."""
+    sim = _sim("zou2022", pressures=[300e3, 300e3, 300e3], seconds=2.0)
+    rest = get_preset("zou2022").length_m
+    backbone = sim.backbone()
+    assert np.sum(np.linalg.norm(np.diff(backbone, axis=0), axis=1)) > 2.5 * rest
+    stereo = StereoCamera()
+    stereo.reset(sim, np.random.default_rng(0))
+    reading = stereo.sample(sim)
+    fractions = np.linspace(0.05, 0.95, 10)
+    points = np.vstack([a + f * (b - a) for a, b in zip(backbone[1:-1], backbone[2:])
+                        for f in fractions])
+    homogeneous = np.vstack([points.T, np.ones(len(points))])
+    for side in ("left", "right"):
+        projected = reading[f"P_{side}"] @ homogeneous
+        hsv = cv2.cvtColor(reading[side], cv2.COLOR_RGB2HSV)
+        for u, v in (projected[:2] / projected[2]).T:
+            h, s, _ = hsv[int(round(v)), int(round(u))]
+            assert 5 <= h <= 25 and s > 100, (side, u, v, h, s)

@@ -102,8 +102,14 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         link_mass = segment.mass_kg / segment.n_links
         cyl_col = client.createCollisionShape(pybullet.GEOM_CYLINDER, radius=radius, height=ds,
                                               collisionFramePosition=[0, 0, ds / 2])
-        cyl_vis = client.createVisualShape(pybullet.GEOM_CYLINDER, radius=radius, length=ds,
-                                           visualFramePosition=[0, 0, ds / 2], rgbaColor=rgba)
+        # The axial joint slides a link's body away from its joint by up to ``stretch``: the
+        # visual reaches back by that much, so a stretched arm renders without gaps (at rest the
+        # extra length hides inside the previous link, or in the base mount for the first one)
+        stretch = (segment.max_extension_ratio - 1.0) * ds
+        cyl_vis = client.createVisualShape(pybullet.GEOM_CYLINDER, radius=radius,
+                                           length=ds + stretch,
+                                           visualFramePosition=[0, 0, (ds - stretch) / 2],
+                                           rgbaColor=rgba)
         for j in range(segment.n_links):
             # Alternate the order of the two bending joints from link to link: Rx(a) Ry(b) twists
             # the link by about +ab/2 about its axis and Ry(b) Rx(a) by -ab/2, so alternating
@@ -185,9 +191,11 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
             torsion_joints.append(sub_joints.get(TORSION, -1))
             station += 1
 
+    first = spec.segments[0]
+    mount_m = 0.004 + (first.max_extension_ratio - 1.0) * first.link_length_m
     base_visual = client.createVisualShape(pybullet.GEOM_CYLINDER,
-                                           radius=spec.segments[0].outer_radius_m * 1.3,
-                                           length=0.004, visualFramePosition=[0, 0, -0.002],
+                                           radius=first.outer_radius_m * 1.3,
+                                           length=mount_m, visualFramePosition=[0, 0, -mount_m / 2],
                                            rgbaColor=[0.3, 0.3, 0.3, 1])
     n = len(link_masses)
     body = client.createMultiBody(

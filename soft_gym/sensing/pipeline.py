@@ -53,13 +53,24 @@ class SensingPipeline:
         fusion: eq. (18) bounds (a :class:`PoseFusion`).
         vision: keyword arguments of :class:`VisionPoseEstimator`.
         exploration: keyword arguments of :func:`spiral_fractions` for the calibration sequence.
+        map_steps: steps of the exploration spent on the vision map alone before the ``n_init``
+            steps that label F-emp (wang2023 moves the arm "until the initialization for visual
+            features was ready" before the ELM initialisation). The vision map grows from
+            drifted estimated poses, so the camera's accuracy depends on how long it has
+            explored; comparing F-emp initialised from different ``n_init`` on the same vision
+            map needs the same ``map_steps + n_init``. Default 0: the map is built while F-emp's
+            samples are collected.
     """
 
     def __init__(self, camera: EyeInHandCamera, fbg: FBGFiber, n_init: int = 450,
                  femp: dict | None = None, fusion: PoseFusion | None = None,
-                 vision: dict | None = None, exploration: dict | None = None) -> None:
+                 vision: dict | None = None, exploration: dict | None = None,
+                 map_steps: int = 0) -> None:
         if not isinstance(n_init, int) or n_init < 10:
             raise ValueError(f"n_init must be an integer >= 10, got {n_init!r}")
+        if isinstance(map_steps, bool) or not isinstance(map_steps, int) or map_steps < 0:
+            raise ValueError(f"map_steps must be an integer >= 0, got {map_steps!r}")
+        self.map_steps = map_steps
         self.camera = camera
         self.fbg = fbg
         self.n_init = n_init
@@ -83,7 +94,8 @@ class SensingPipeline:
         self.fbg.reset(sim, rng)
 
     def calibrate(self, sim, rng: np.random.Generator) -> int:
-        """Vision map at the current (rest) pose, then F-emp from the spiral exploration.
+        """Vision map at the current (rest) pose, then F-emp from the spiral exploration
+        (``map_steps`` steps for the map alone, then ``n_init`` labelled steps).
 
         Leaves the arm wherever the exploration ends: the caller resets it. Returns the number
         of camera-labelled samples F-emp was initialised with.
@@ -97,13 +109,15 @@ class SensingPipeline:
         spec = sim.spec
         shifts, positions, quaternions = [], [], []
         threshold = self.femp_options.get("update_threshold_px", 1.4)
-        for k in range(self.n_init):
+        for k in range(self.map_steps + self.n_init):
             fraction = spiral_fractions(k * spec.control_period_s, spec.n_segments,
                                         **self.exploration)
             sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
             sim.step_physics(spec.control_period_s)
             estimate = self.vision.update(self.camera.reading_at(sim, sim.time_s),
                                           self.camera.last_depth)
+            if k < self.map_steps:
+                continue
             reading = self.fbg.reading_at(sim, sim.time_s)
             if not estimate.lost and estimate.reprojection_error_px < threshold:
                 shifts.append(np.asarray(reading, dtype=float))

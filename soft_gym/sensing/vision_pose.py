@@ -23,6 +23,7 @@ Conventions: camera frame as OpenCV (x right, y down, z forward); poses are 4x4 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import cv2
@@ -151,12 +152,9 @@ class VisionPoseEstimator:
         """A copy with its own map (OpenCV's ORB and matcher objects are rebuilt, not copied)."""
         import copy
 
-        twin = VisionPoseEstimator(
-            self.camera_matrix.copy(), self.tip_from_camera.copy(), self.n_features,
-            self.min_inliers, self.ratio, self.ransac_threshold_px, self.keyframe_inlier_ratio,
-            self.max_keyframes, self.match_keyframes, self.ransac_iterations,
-            self.keyframe_spacing_m, self.search_radius_px, self.max_descriptor_distance,
-            self.min_depth_m, self.max_depth_m)
+        settings = {f.name: copy.deepcopy(getattr(self, f.name), memo)
+                    for f in dataclasses.fields(self) if f.init}
+        twin = VisionPoseEstimator(**settings)
         twin.keyframes = copy.deepcopy(self.keyframes, memo)
         twin.last = copy.deepcopy(self.last, memo)
         twin.previous = copy.deepcopy(self.previous, memo)
