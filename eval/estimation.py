@@ -8,9 +8,14 @@ sensing pipeline runs with the given visual faults and loads (wang2023 Section I
 | `clean`     | nothing                                                             | IV-C         |
 | `occlusion` | moving partial occluder 100-160 s, full ~2 s covers 160-200 s       | Fig. 6       |
 | `lighting`  | low light 25-75 s, darkness 75-150 s, moving LED glare 150-200 s    | Fig. 7       |
-| `push`      | slow 0.3 N push on the tip cap 40-70 s, then on the fiber-covered body 110-140 s | Table III |
+| `push`      | slow push on the tip cap 40-70 s, then on the fiber-covered body 110-140 s | Table III |
 | `flick`     | a fast flick on the tip every 10 s                                  | Table IV     |
 | `init`      | flicks, with F-emp initialised from 450 / 900 / 1800 samples        | Table VI     |
+
+The two pushes each displace the resting tip by ~15 mm, as the paper's did ("undesired
+displacements (~15 mm) were induced by the push", Fig. 13): 0.07 N on the tip cap (15.8 mm) and
+0.3 N on the second link of the fiber-covered body (14.3 mm), so the body push presses four times
+harder on the fiber.
 
 For `init`, each run explores 1800 steps and F-emp is labelled by the last 450 / 900 / 1800 of
 them, so the three share the same vision map and differ only in F-emp's initialisation.
@@ -61,7 +66,7 @@ def _conditions(experiment: str, duration_s: float) -> tuple[object, object]:
         return {"name": "wang2023_lighting", "time_scale": s}, None
     if experiment == "push":
         return None, [
-            {"name": "push", "force_n": (0.3, 0.0, 0.0), "on_tip_cap": True, "start_s": 40 * s,
+            {"name": "push", "force_n": (0.07, 0.0, 0.0), "on_tip_cap": True, "start_s": 40 * s,
              "end_s": 70 * s, "ramp_s": 10 * s},
             {"name": "push", "force_n": (0.3, 0.0, 0.0), "link": 1, "start_s": 110 * s,
              "end_s": 140 * s, "ramp_s": 10 * s}]
