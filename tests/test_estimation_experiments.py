@@ -6,7 +6,6 @@ The default suite runs a 40 %-length lighting run; the full 4000-step runs are m
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from eval.estimation import _phases, run_estimation
@@ -59,18 +58,18 @@ def test_fusion_bounds_the_error_when_the_camera_is_blind(full_runs):
 
 
 @pytest.mark.slow
-def test_push_on_the_fiber_degrades_femp_relative_to_the_camera(full_runs):
-    """Table III: in every case of the paper, F-emp's error relative to SLAM's is larger for the
-    push on the fiber-covered body than for the push on the tip cap; fusion stays close to the
-    better source."""
+def test_push_on_the_body_degrades_femp_more_than_on_the_tip_cap(full_runs):
+    """Table III pattern: pushes that each displace the tip ~15 mm; F-emp's mean error is larger
+    under the push on the fiber-covered body, and fusion stays close to the better source.
+    Measured: F-emp 1.61 mm (tip cap) and 1.83 mm (body) against 1.05 mm free; fused 1.62 and
+    1.85 mm."""
     errors = full_runs["push"]
-    ratios = {}
-    for phase in ("push on tip cap", "push on body"):
-        femp, camera, fused = (_phase(errors, name, phase)["mean_mm"]
-                               for name in ("femp", "camera", "fused"))
-        ratios[phase] = femp / camera
-        assert fused <= max(femp, camera) + 0.05
-    assert ratios["push on body"] > ratios["push on tip cap"], ratios
+    femp = {phase: _phase(errors, "femp", phase)["mean_mm"]
+            for phase in ("push on tip cap", "push on body")}
+    assert femp["push on body"] > femp["push on tip cap"], femp
+    for phase in femp:
+        best = min(_phase(errors, name, phase)["mean_mm"] for name in ("femp", "camera"))
+        assert _phase(errors, "fused", phase)["mean_mm"] <= best + 0.05, phase
 
 
 @pytest.mark.slow

@@ -149,9 +149,6 @@ def test_search_by_projection_matches_a_slow_reference():
     rng = np.random.default_rng(3)
     K = np.array([[73.0, 0.0, 80.0], [0.0, 73.0, 60.0], [0.0, 0.0, 1.0]])
     estimator = VisionPoseEstimator(K, np.eye(4), search_radius_px=6.0)
-    world_from_camera = np.eye(4)
-    estimator.last = estimator._estimate(world_from_camera, 0.0, 100, False)
-    estimator.previous = estimator.last
     map_points = np.c_[rng.uniform(-0.06, 0.06, (400, 2)), rng.uniform(0.03, 0.08, 400)]
     map_descriptors = rng.integers(0, 256, (400, 32), dtype=np.uint8)
     # features: noisy projections of half the map points with a few flipped bits, plus clutter
@@ -165,8 +162,47 @@ def test_search_by_projection_matches_a_slow_reference():
                                                                   dtype=np.uint8)
     descriptors = descriptors ^ flips
     query, train = estimator._match_by_projection(pixels, descriptors, map_descriptors,
-                                                  map_points, 160, 120)
+                                                  map_points, np.eye(4), 160, 120)
     reference = _reference_match_by_projection(estimator, pixels, descriptors, map_descriptors,
                                                 map_points, np.eye(4), 160, 120)
     assert len(reference) > 100
     assert sorted(zip(query.tolist(), train.tolist())) == reference
+
+
+def test_a_pose_prior_replaces_the_motion_model_under_jerky_motion(monkeypatch):
+    """With a new random pressure every frame the constant-velocity prediction misses and each
+    frame is matched against the whole local map; a tip-pose prior from another sensor (here the
+    true pose, as F-emp approximates it) keeps the search by projection working."""
+    spec = get_preset("wang2023")
+    rng = np.random.default_rng(4)
+    pressures = spec.p_pre_pa + rng.uniform(0.0, 0.5, (80, 3)) * (spec.p_max_pa - spec.p_pre_pa)
+    results = {}
+    for use_prior in (False, True):
+        sim = ArmSimulator(spec)
+        sim.reset(settle_s=0.5)
+        camera = EyeInHandCamera()
+        camera.reset(sim, np.random.default_rng(0))
+        tip_from_camera = np.eye(4)
+        tip_from_camera[:3, 3] = camera.offset_m
+        estimator = VisionPoseEstimator(camera.K(), tip_from_camera)
+        estimator.calibrate(*camera.render_clean(sim), camera.pose_matrix(sim))
+        full_matches = []
+        original = estimator._match_all
+        monkeypatch.setattr(estimator, "_match_all",
+                            lambda *args: full_matches.append(1) or original(*args))
+        errors = []
+        for target in pressures:
+            sim.set_pressures(target)
+            sim.step_physics(spec.control_period_s)
+            prior = None
+            if use_prior:
+                prior = camera.pose_matrix(sim) @ np.linalg.inv(tip_from_camera)
+            estimate = estimator.update(camera.read(sim, sim.time_s), camera.last_depth, prior)
+            errors.append(np.linalg.norm(estimate.position_m - sim.tip_pose()[0]) * 1000)
+        sim.close()
+        results[use_prior] = (len(full_matches), float(np.mean(errors)))
+    assert results[False][0] > 20, results
+    assert results[True][0] <= 3, results
+    assert results[True][1] < 2.0, results
+    with pytest.raises(ValueError, match="prior_world_from_tip"):
+        estimator.update(np.zeros((120, 160, 3), np.uint8) + 100, None, np.eye(3))

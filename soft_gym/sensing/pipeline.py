@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym.sensing.exploration import spiral_fractions
 from soft_gym.sensing.femp import FEmpEstimator
 from soft_gym.sensing.fusion import PoseFusion
@@ -60,17 +61,24 @@ class SensingPipeline:
             explored; comparing F-emp initialised from different ``n_init`` on the same vision
             map needs the same ``map_steps + n_init``. Default 0: the map is built while F-emp's
             samples are collected.
+        femp_prior: give the vision tracker F-emp's pose (from this step's FBG reading) as the
+            prediction for its search by projection, instead of the constant-velocity model.
+            F-emp follows the arm within ~1 mm whatever the actuation, so with a random action
+            every step the tracker rarely falls back to matching the whole local map.
     """
 
     def __init__(self, camera: EyeInHandCamera, fbg: FBGFiber, n_init: int = 450,
                  femp: dict | None = None, fusion: PoseFusion | None = None,
                  vision: dict | None = None, exploration: dict | None = None,
-                 map_steps: int = 0) -> None:
+                 map_steps: int = 0, femp_prior: bool = True) -> None:
         if not isinstance(n_init, int) or n_init < 10:
             raise ValueError(f"n_init must be an integer >= 10, got {n_init!r}")
         if isinstance(map_steps, bool) or not isinstance(map_steps, int) or map_steps < 0:
             raise ValueError(f"map_steps must be an integer >= 0, got {map_steps!r}")
         self.map_steps = map_steps
+        if not isinstance(femp_prior, (bool, np.bool_)):
+            raise ValueError(f"femp_prior must be True or False, got {femp_prior!r}")
+        self.femp_prior = bool(femp_prior)
         self.camera = camera
         self.fbg = fbg
         self.n_init = n_init
@@ -136,10 +144,15 @@ class SensingPipeline:
         """Read the camera and the FBG now, update F-emp selectively, fuse (wang2023 eq. (18))."""
         if not self.is_calibrated:
             raise ValueError("the sensing pipeline is not calibrated: call calibrate() first")
-        frame = self.camera.reading_at(sim, sim.time_s)
-        vision: VisionEstimate = self.vision.update(frame, self.camera.last_depth)
         reading = np.asarray(self.fbg.reading_at(sim, sim.time_s), dtype=float)
         femp_pose = self.femp.predict(reading)
+        frame = self.camera.reading_at(sim, sim.time_s)
+        prior = None
+        if self.femp_prior:
+            prior = np.eye(4)
+            prior[:3, :3] = quaternion_to_matrix(femp_pose[1])
+            prior[:3, 3] = femp_pose[0]
+        vision: VisionEstimate = self.vision.update(frame, self.camera.last_depth, prior)
         updated = self.femp.update(reading, vision.position_m, vision.quaternion,
                                    vision.reprojection_error_px, vision.lost)
         fused = self.fusion.fuse(vision.position_m, vision.quaternion, *femp_pose,
