@@ -7,6 +7,9 @@ import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
 from soft_gym.sensing.fusion import PoseFusion, slerp
+from soft_gym.sensing.pipeline import SensingPipeline
+from soft_gym.sensors.camera import EyeInHandCamera
+from soft_gym.sensors.fbg import FBGFiber
 
 CAMERA = (np.array([0.01, 0.0, 0.09]), Rotation.from_euler("x", 10, degrees=True).as_quat())
 FEMP = (np.array([0.012, 0.002, 0.088]), Rotation.from_euler("y", 20, degrees=True).as_quat())
@@ -46,3 +49,14 @@ def test_slerp_matches_scipy():
 def test_bad_bounds_raise(lower, upper, name):
     with pytest.raises(ValueError, match=name):
         PoseFusion(lower, upper)
+
+
+@pytest.mark.parametrize("options, name", [
+    ({"n_init": 5}, "n_init"),
+    ({"map_steps": -1}, "map_steps"),
+    ({"map_steps": 2.5}, "map_steps"),
+    ({"femp_prior": 1}, "femp_prior"),
+])
+def test_bad_sensing_pipeline_options_raise(options, name):
+    with pytest.raises(ValueError, match=name):
+        SensingPipeline(EyeInHandCamera(), FBGFiber(), **options)

@@ -108,7 +108,7 @@ class SoftArmEnv(gym.Env):
         randomization: domain randomisation per episode (``None``/``False`` off, ``True``
             defaults, a dict of ranges or a YAML path; see "Domain randomisation" above).
         sensing: keyword arguments of the sensing pipeline (``n_init``, ``femp``, ``fusion``,
-            ``vision``, ``exploration``).
+            ``vision``, ``exploration``, ``map_steps``, ``femp_prior``).
         action_mode: ``"absolute"`` or ``"delta"``.
         delta_fraction: pressure change per unit action in delta mode, as a fraction of p_max.
         action_rate_weight: weight of the action-rate penalty.
