@@ -22,9 +22,8 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
-from pathlib import Path
-
 import os
+from pathlib import Path
 
 from eval import compare as compare_module
 from eval.estimation import EXPERIMENTS, run_experiments

@@ -39,6 +39,8 @@ from eval.report import markdown_table, plot_estimation, write_json, write_recor
 from soft_gym.sensing.exploration import spiral_fractions
 
 EXPERIMENTS = ("clean", "occlusion", "lighting", "push", "flick", "init")
+INIT_SAMPLES = (450, 900, 1800)
+"""F-emp initialisation sizes of the ``init`` experiment (wang2023 Table VI)."""
 ESTIMATORS = ("camera", "femp", "fused")
 
 
@@ -78,21 +80,29 @@ def _conditions(experiment: str, duration_s: float) -> tuple[object, object]:
     return None, None
 
 
-def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: int = 0,
-                   progress: bool = True, map_steps: int = 0,
-                   femp_prior: bool = True) -> dict[str, np.ndarray]:
-    """One estimation run; returns the per-step record (see :mod:`eval.runner`).
+def _sensing(experiment: str, n_init: int) -> dict:
+    """Sensing-pipeline options of an experiment: F-emp initialised from ``n_init`` samples.
 
-    ``n_init``, ``map_steps`` and ``femp_prior`` go to the sensing pipeline: F-emp is initialised
-    from the ``n_init`` exploration steps that follow ``map_steps`` steps of vision mapping
-    alone, and with ``femp_prior`` its pose guides the vision tracker's matching."""
+    ``init`` explores ``max(INIT_SAMPLES)`` steps whatever ``n_init`` and labels F-emp with the
+    last ``n_init`` of them, and keeps F-emp out of the vision tracker's matching, so every
+    ``n_init`` sees the same camera estimates."""
+    if experiment != "init":
+        return {"n_init": n_init}
+    if not isinstance(n_init, int) or not 10 <= n_init <= max(INIT_SAMPLES):
+        raise ValueError(f"n_init must be an integer in [10, {max(INIT_SAMPLES)}] for the init "
+                         f"experiment, got {n_init!r}")
+    return {"n_init": n_init, "map_steps": max(INIT_SAMPLES) - n_init, "femp_prior": False}
+
+
+def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: int = 0,
+                   progress: bool = True) -> dict[str, np.ndarray]:
+    """One estimation run; returns the per-step record (see :mod:`eval.runner`)."""
     if experiment not in EXPERIMENTS:
         raise ValueError(f"experiment must be one of {list(EXPERIMENTS)}, got {experiment!r}")
     duration_s = steps * 0.05
     faults, scenario = _conditions(experiment, duration_s)
     env = gym.make("SoftArmReach-v0", preset="wang2023", feedback="fused", faults=faults,
-                   scenario=scenario, episode_steps=steps, sensing={"n_init": n_init, "map_steps": map_steps,
-                                                       "femp_prior": femp_prior})
+                   scenario=scenario, episode_steps=steps, sensing=_sensing(experiment, n_init))
     unwrapped = env.unwrapped
     spec = unwrapped.spec_arm
     env.reset(seed=seed)
@@ -123,16 +133,11 @@ def run_experiments(experiments: list[str], out_dir: str | Path, steps: int = 40
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     for experiment in experiments:
-        inits = (450, 900, 1800) if experiment == "init" else (450,)
+        inits = INIT_SAMPLES if experiment == "init" else (450,)
         for n_init in inits:
             name = experiment if experiment != "init" else f"init{n_init}"
-            # init: one exploration of max(inits) steps for every run, F-emp labelled by its
-            # last n_init steps, and F-emp kept out of the tracker's matching, so the camera
-            # (and so F-emp's labels) is the same in all three runs
-            init = experiment == "init"
             record = run_estimation(experiment, steps=steps, n_init=n_init, seed=seed,
-                                    progress=progress, map_steps=max(inits) - n_init,
-                                    femp_prior=not init)
+                                    progress=progress)
             phases = _phases(experiment, steps * 0.05)
             errors = estimation_errors(record, phases=phases)
             write_records_csv(out / f"{name}.csv", record)

@@ -93,7 +93,7 @@ def test_partial_occlusion_and_glare_raise_the_error(clean, fault, factor):
 
 
 def test_motion_blur_raises_the_error_of_fast_motion():
-    """A fast spiral (one turn a second, the tip at ~17 mm/s, ~3 px of blur per frame) with the
+    """A fast spiral (one turn a second, the tip at 15 mm/s, 2.7 px of blur per frame) with the
     exposure as long as the 20 Hz frame interval. Measured: 1.39 mm blurred vs 0.59 mm sharp
     (2.3x): the blurred features sit half an exposure behind the frame's pose, and fewer of
     them are found."""

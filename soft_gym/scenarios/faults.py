@@ -387,8 +387,9 @@ class LEDGlare(VisualFault):
         core_gain: peak of the core in full-scale units (> 1 saturates).
         veil: peak of the wide veil in full-scale units. An LED shining straight into a small
             endoscope lens scatters over much of the frame; at 0.6 the veil alone lifts the
-            image by 60 % of full scale at the blob and still by ~20 % two core radii away,
-            and the vision tracker's mean error on the slow spiral doubles (2.3x clean).
+            image by 60 % of full scale at the blob and still by 48 % two core radii away
+            (``0.6 exp(-4 / 18)``), and the vision tracker's mean error on the slow spiral
+            doubles (2.3x clean).
         frequency_range_hz: range of the path's frequencies (Hz).
         colour: RGB of the LED light (0..1).
     """

@@ -6,8 +6,9 @@ DESIGN.md section 5:
 * the first keyframe is built at calibration from the known camera pose and the depth buffer,
   which fixes the metric scale (the paper calibrates scale with the EM tracker);
 * later keyframes are added from the *estimated* pose (and the depth buffer), so drift is real;
-* every frame, ORB descriptors are matched to the local map: by projection from the
-  constant-velocity predicted pose, comparing only map points projected near each feature
+* every frame, ORB descriptors are matched to the local map: by projection from the predicted
+  pose (constant velocity, or a prior from another sensor), comparing only map points projected
+  near each feature
   (ORB-SLAM2's search by projection), or against every map point after a loss or when that
   finds too few (Hamming distance, Lowe ratio test);
   ``cv2.solvePnPRansac`` finds the camera pose and ``cv2.solvePnPRefineLM`` refines it on the
@@ -95,9 +96,9 @@ class VisionPoseEstimator:
             the matching is cheaper, but a loaded arm's fused feedback error rose from 0.9 to
             1.6 mm.
         search_radius_px: guided matching (ORB-SLAM2's search by projection): the local map is
-            projected with the constant-velocity prediction of the camera pose, and each feature
-            is compared only with map points within this radius (px). 6 px is about 4x the
-            image motion per frame of the slow spiral and cuts matching from ~14 to ~4 ms. If the
+            projected from the predicted camera pose (see :meth:`update`), and each feature is
+            compared only with map points within this radius (px). The slow spiral moves the
+            image ~0.4 px per frame, and the update takes ~10 instead of ~20 ms. If the
             guided search finds fewer than ``2 min_inliers`` matches, or PnP fails on them, the
             frame is matched against the whole local map (relocalisation). ``None`` always
             matches against the whole local map: 2x slower, and in the 100 s estimation spiral
