@@ -14,8 +14,8 @@ sensing pipeline runs with the given visual faults and loads (wang2023 Section I
 
 The two pushes each displace the resting tip by ~15 mm, as the paper's did ("undesired
 displacements (~15 mm) were induced by the push", Fig. 13): 0.07 N on the tip cap (15.8 mm) and
-0.3 N on the second link of the fiber-covered body (14.3 mm), so the body push presses four times
-harder on the fiber.
+0.3 N on the second link of the fiber-covered body (14.3 mm), where it also strains the gratings
+under it (:mod:`soft_gym.sensors.fbg`, contact strain).
 
 For `init`, each run explores 1800 steps and F-emp is labelled by the last 450 / 900 / 1800 of
 them, and F-emp does not guide the vision tracker, so the three share the same camera estimates
@@ -42,6 +42,15 @@ EXPERIMENTS = ("clean", "occlusion", "lighting", "push", "flick", "init")
 INIT_SAMPLES = (450, 900, 1800)
 """F-emp initialisation sizes of the ``init`` experiment (wang2023 Table VI)."""
 ESTIMATORS = ("camera", "femp", "fused")
+ESTIMATION_SPIRAL = {"turn_s": 10.0, "breath_s": 80.0, "low": 0.05, "high": 0.45}
+"""The estimation sequence (:func:`spiral_fractions` keywords; wang2023 Section IV-B: "a
+trajectory that spreads out from the initial position"). The bending direction turns every 10 s
+while the amplitude breathes between 5 % and 45 % of the pressure range every 80 s, so the tip
+spreads out to the outer trajectory (~13 mm from the rest position) at 40, 120 and 200 s and
+comes back in between. The full covers of ``occlusion`` (160-200 s) thus fall on the way out,
+where the steps are longest, as the paper's did (its outer trajectory was in the last 175-200 s).
+With a 60 s breath the covers fell around the innermost turn (180 s) and the held camera pose
+was at most 11 mm off."""
 
 
 def _phases(experiment: str, duration_s: float) -> list[tuple[str, float, float]]:
@@ -110,9 +119,7 @@ def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: 
         "time_s", "tip_m", "target_m", "camera_m", "femp_m", "fused_m", "reprojection_error_px",
         "lost")}
     for k in tqdm(range(steps), desc=experiment, disable=not progress, leave=False):
-        # the estimation sequence: a slow spiral over the workspace (wang2023 IV-B)
-        fraction = spiral_fractions(k * spec.control_period_s, turn_s=10.0, breath_s=60.0,
-                                    low=0.05, high=0.45)
+        fraction = spiral_fractions(k * spec.control_period_s, **ESTIMATION_SPIRAL)
         _, _, _, _, info = env.step((2.0 * fraction - 1.0).astype(np.float32))
         estimates = info["estimates"]
         columns["time_s"].append(info["time_s"])
