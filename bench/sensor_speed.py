@@ -3,8 +3,9 @@
 Prints mean and 95th-percentile microseconds per call for: the FBG readout (17 gratings), one
 eye-in-hand camera frame at 160 x 120, the vision pose update on that frame, camera + vision
 together, the OS-ELM update (N = 200) and prediction, and a whole env step with fused feedback
-next to one with ground-truth feedback (their ratio is the cost of the sensing), driven by the
-slow spiral of the estimation experiments and, for fused feedback, by a random action per step.
+next to one with ground-truth feedback (their ratio is the cost of the sensing), driven by a
+slow spiral (a turn every 8 s, 5-30 % of the pressure range) and, for fused feedback, by a random
+action per step.
 
     python bench/sensor_speed.py [--steps 300] [--json out.json]
 """
@@ -78,9 +79,9 @@ def main(argv: list[str] | None = None) -> None:
         model.predict(x)
         timings["elm_update"].append(middle - start)
         timings["elm_predict"].append(time.perf_counter() - middle)
-    # the env steps twice: with the slow spiral of the estimation experiments (smooth motion,
-    # the vision tracker's search by projection holds) and with a random pressure every step
-    # (the worst case: the image jumps and each frame is matched against the whole local map)
+    # the env steps twice: with the slow spiral (smooth motion, the vision tracker's search by
+    # projection holds) and with a random pressure every step (the worst case: the image jumps
+    # and each frame is matched against the whole local map)
     for feedback, actions in (("ground_truth", "spiral"), ("fused", "spiral"),
                               ("fused", "random")):
         env = gym.make("SoftArmReach-v0", feedback=feedback, episode_steps=10**6)

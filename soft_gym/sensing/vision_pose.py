@@ -8,9 +8,8 @@ DESIGN.md section 5:
 * later keyframes are added from the *estimated* pose (and the depth buffer), so drift is real;
 * every frame, ORB descriptors are matched to the local map: by projection from the predicted
   pose (constant velocity, or a prior from another sensor), comparing only map points projected
-  near each feature
-  (ORB-SLAM2's search by projection), or against every map point after a loss or when that
-  finds too few (Hamming distance, Lowe ratio test);
+  near each feature (ORB-SLAM2's search by projection), or against every map point after a loss
+  or when that finds too few (Hamming distance, Lowe ratio test);
   ``cv2.solvePnPRansac`` finds the camera pose and ``cv2.solvePnPRefineLM`` refines it on the
   inliers;
 * the quality measure ``e_S`` is the RMS reprojection error of the inliers (px), as the paper's
