@@ -13,10 +13,11 @@ import pybullet
 from pybullet_utils import bullet_client
 
 from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_to_matrix
-from soft_gym._validation import as_finite_array, require_positive
+from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
 from soft_gym.robots.pneumatics import PneumaticSupply, chamber_loads
-from soft_gym.robots.spec import ArmSpec
+from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
+from soft_gym.robots.stops import STOP_STIFFNESS_FACTOR, EndStops
 
 
 _IMPLICIT_FRACTION = 0.25
@@ -24,7 +25,6 @@ _IMPLICIT_FRACTION = 0.25
 
 _STIFFNESS_MARGIN = 1.25
 """Factor on the tangent stiffness used in the implicit term, so it stays ahead of stiffening."""
-
 
 class Load(Protocol):
     """What the simulator expects of a scenario element (see :mod:`soft_gym.scenarios`)."""
@@ -36,6 +36,8 @@ class Load(Protocol):
     def reset(self, sim: "ArmSimulator") -> None: ...
 
     def detach(self, sim: "ArmSimulator") -> None: ...
+
+    def peak_load_n(self, gravity_m_s2: float) -> float: ...
 
 
 class ArmSimulator:
@@ -63,6 +65,13 @@ class ArmSimulator:
         self.client.setTimeStep(self.physics_dt_s)
         self.client.setPhysicsEngineParameter(numSolverIterations=10)
         self.arm: ArmBody = build_arm(self.client, spec)
+        self._nominal_inertia = self._read_link_inertia()
+        # PyBullet builds its inverse-dynamics tree (behind calculateMassMatrix) on the first call
+        # and never updates it when a link's mass changes later; build it now, from the nominal
+        # masses, and add every change on top (:meth:`mass_matrix`)
+        self.client.calculateMassMatrix(self.arm.body_id, [0.0] * self.arm.n_joints)
+        self._inertia_changes: dict[int, tuple[float, np.ndarray]] = {}
+        self._tip_payloads: dict[str, float] = {}
         self.supply = PneumaticSupply(spec)
         self._joints = list(range(self.arm.n_joints))
         self._kind = self.arm.joint_kind
@@ -70,6 +79,8 @@ class ArmSimulator:
         self._chamber_weights = self._segment_bend_weights()
         self._stiffness0 = 1.0 / self.arm.compliance
         self._damping = self.arm.damping_time_s * self._stiffness0
+        self._stops = EndStops(self.arm.lower_limit, self.arm.upper_limit,
+                               stiffness=STOP_STIFFNESS_FACTOR / self.arm.compliance)
         self._station_links = self.arm.station_link.tolist()
         self._frames_substep = self._positions_substep = -1  # read-out caches, per substep
         self._state = np.zeros(4 * self.arm.n_joints)
@@ -78,6 +89,7 @@ class ArmSimulator:
         self._torque_offset = np.zeros(self.arm.n_joints)
         self._solve = np.eye(self.arm.n_joints)
         self._implicit_stiffness = np.zeros(self.arm.n_joints)
+        self._load_torque = np.zeros(self.arm.n_joints)
         self._gain_configuration = np.zeros(self.arm.n_joints)
         # joint motion after which the mass matrix is refreshed early: 0.05 rad or 5 % strain
         self._configuration_tolerance = np.where(
@@ -93,7 +105,6 @@ class ArmSimulator:
         self._substep = 0
         self._forces: dict[str, tuple[int, np.ndarray, np.ndarray]] = {}
         self._off_body_forces: set[str] = set()
-        self._tip_force = np.zeros(3)
         self.reset()
 
     # ------------------------------------------------------------------ public face (DESIGN 8)
@@ -114,19 +125,21 @@ class ArmSimulator:
         count = len(joints)
         state = self._state  # [spring force K(q) q, v, v_previous, torque_previous]
         k0, beta, scale = self._stiffness0, self.arm.stiffening, self.arm.strain_scale
+        stop_force = self._stops.force
         for _ in range(n):
             states = get_states(body, joints)
             q = np.fromiter((s[0] for s in states), dtype=float, count=count)
             state[count:2 * count] = [s[1] for s in states]
             if self._substep % self._substeps_per_actuation == 0:
                 self._update_actuation(q)
-            # secant spring force with strain stiffening, k0 (1 + beta strain^2) q, every substep
+            # secant spring force with strain stiffening, k0 (1 + beta strain^2) q, every substep,
+            # plus the end stops' force as a joint nears its limits
             strain = q * scale
-            state[:count] = k0 * q * (1.0 + beta * strain * strain)
+            state[:count] = k0 * q * (1.0 + beta * strain * strain) + stop_force(q)
             torque = self._torque_offset + self._torque_gain @ state
-            set_motors(body, joints, torque_mode, forces=torque.tolist())
             if self._forces:
-                self._apply_forces()
+                torque += self._solve @ self._external_joint_torque(q)
+            set_motors(body, joints, torque_mode, forces=torque.tolist())
             simulate()
             state[2 * count:3 * count] = state[count:2 * count]
             state[3 * count:] = torque
@@ -141,10 +154,15 @@ class ArmSimulator:
         """Set gravity in the base frame (m/s^2)."""
         self.gravity = as_finite_array("vector_m_s2", vector_m_s2, shape=(3,))
         self.client.setGravity(*self.gravity)
+        if self._tip_payloads:
+            self._apply_tip_payload()
 
     def apply_tip_force(self, force_n: np.ndarray) -> None:
         """Apply a force (N, base frame) at the tip, held until changed (zeros removes it)."""
         force = as_finite_array("force_n", force_n, shape=(3,))
+        if np.linalg.norm(force) > self.spec.max_load_n:
+            raise ValueError(f"force_n must be at most {self.spec.max_load_n:.3g} N in magnitude "
+                             f"on the {self.spec.name} arm (max_load_n), got {force.tolist()}")
         self.set_external_force("tip", self.arm.tip_link, force,
                                 local_point_m=(0.0, 0.0, self.arm.station_rest_length[-1]),
                                 on_body=False)
@@ -312,14 +330,31 @@ class ArmSimulator:
         self._implicit_stiffness = np.zeros(self.arm.n_joints)  # forces a gain refresh
 
     def add_load(self, load: Load) -> None:
-        """Attach a scenario element; it is updated at the actuation rate."""
+        """Attach a scenario element; it is updated at the actuation rate.
+
+        Raises:
+            ValueError: if the loads together would weigh or push more than the arm bears
+                (:attr:`~soft_gym.robots.spec.ArmSpec.max_load_n`).
+        """
+        g = float(np.linalg.norm(self.spec.gravity_base))
+        total = sum(other.peak_load_n(g) for other in self.loads) + load.peak_load_n(g)
+        if total > self.spec.max_load_n * (1 + 1e-9):
+            raise ValueError(
+                f"scenario loads must total at most {self.spec.max_load_n:.3g} N on the "
+                f"{self.spec.name} arm (max_load_n: {MAX_LOAD_TO_WEIGHT:g}x its "
+                f"{self.spec.mass_kg * 1e3:.0f} g weight), got {total:.3g} N with {load!r}")
         load.attach(self)
         self.loads.append(load)
 
     def clear_loads(self) -> None:
+        """Detach every load and restore all they changed: link masses and inertias, held
+        forces (the arm is then as built, whatever loads it carried)."""
         for load in self.loads:
             load.detach(self)
         self.loads.clear()
+        self._tip_payloads.clear()
+        for link in list(self._inertia_changes):
+            self._set_link_inertia(link, *self._nominal_inertia[link])
         self._forces.clear()
         self._off_body_forces.clear()
 
@@ -343,7 +378,27 @@ class ArmSimulator:
         if local_point_m is None:
             local_point_m = (0.0, 0.0, 0.5 * self._link_length(link))
         self._forces[key] = (int(link), force, np.asarray(local_point_m, dtype=float))
-        self._refresh_force_points()
+
+    def set_tip_payload(self, key: str, mass_kg: float) -> None:
+        """Carry a point mass (kg) at the tip under ``key`` (tip masses, a filling container).
+
+        Payloads of several keys add up; ``0`` removes one. The tip link's mass and inertia and
+        the weight at the tip follow at once; :meth:`clear_loads` removes them all.
+        """
+        mass_kg = require_non_negative("mass_kg", mass_kg)
+        if mass_kg == 0.0:
+            if self._tip_payloads.pop(key, None) is None:
+                return
+        elif self._tip_payloads.get(key) == mass_kg:
+            return
+        else:
+            self._tip_payloads[key] = mass_kg
+        self._apply_tip_payload()
+
+    @property
+    def tip_payload_kg(self) -> float:
+        """Total point mass carried at the tip (kg)."""
+        return float(sum(self._tip_payloads.values()))
 
     def link_mass(self, link: int) -> float:
         return float(self.client.getDynamicsInfo(self.arm.body_id, link)[0])
@@ -411,19 +466,23 @@ class ArmSimulator:
         for load in self.loads:
             load.update(self, now_s)
         pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
-        load_torque = self._stiffness0 * (self._pressure_to_rest @ pressure)
-        tangent = self._stiffness0
-        if self._stiffening:
-            strain_squared = (q * self.arm.strain_scale) ** 2
-            tangent = self._stiffness0 * (1.0 + 3.0 * self.arm.stiffening * strain_squared)
+        self._load_torque = self._stiffness0 * (self._pressure_to_rest @ pressure)
+        tangent = self._tangent_stiffness(q)
         if (self._substep % self._substeps_per_gain_update == 0
                 or np.any(tangent > self._implicit_stiffness)
                 or np.any(np.abs(q - self._gain_configuration) > self._configuration_tolerance)):
             # stiffening outgrew the implicit gains, or the arm moved enough to change M
             self._update_implicit_gains(q, _STIFFNESS_MARGIN * tangent)
-        self._torque_offset = self._solve @ load_torque
-        if self._forces:
-            self._refresh_force_points()
+        self._torque_offset = self._solve @ self._load_torque
+
+    def _tangent_stiffness(self, q: np.ndarray) -> np.ndarray:
+        """Tangent stiffness of every joint at ``q``: ``k0 (1 + 3 beta strain^2)`` plus the end
+        stops' (:class:`~soft_gym.robots.stops.EndStops`)."""
+        tangent = self._stiffness0
+        if self._stiffening:
+            strain_squared = (q * self.arm.strain_scale) ** 2
+            tangent = self._stiffness0 * (1.0 + 3.0 * self.arm.stiffening * strain_squared)
+        return tangent + self._stops.stiffness_at(q)
 
     def _update_implicit_gains(self, q: np.ndarray, tangent_stiffness: np.ndarray) -> None:
         """Semi-implicit spring update (Newmark-like, a stable-PD form).
@@ -445,7 +504,7 @@ class ArmSimulator:
         stiffness = tangent_stiffness
         self._implicit_stiffness = tangent_stiffness
         self._gain_configuration = q.copy()
-        mass = np.array(self.client.calculateMassMatrix(self.arm.body_id, q.tolist()))
+        mass = self.mass_matrix(q)
         velocity_gain = self._damping + _IMPLICIT_FRACTION * h * stiffness
         response = h * velocity_gain[:, None] * np.linalg.inv(mass)
         solve = np.linalg.inv(np.eye(len(q)) + response)
@@ -464,20 +523,99 @@ class ArmSimulator:
             gain[:, 2 * n:] = 0.0
         self._solve = solve
 
-    def _refresh_force_points(self) -> None:
-        """Recompute where held forces act (world points move with the arm)."""
-        self._force_points = {}
-        for key, (link, _, local_point) in self._forces.items():
-            state = self.client.getLinkState(self.arm.body_id, link, computeForwardKinematics=1)
-            rotation = quaternion_to_matrix(np.asarray(state[5]))
-            self._force_points[key] = np.asarray(state[4]) + rotation @ local_point
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """Joint-space mass matrix (kg, kg m, kg m^2) at joint positions ``q``, with the links'
+        current masses and inertias (tip payloads included).
+
+        PyBullet's ``calculateMassMatrix`` keeps the masses its tree was built with (the nominal
+        ones, see ``__init__``); each changed link adds ``dm Jv^T Jv + Jw^T R dI R^T Jw`` with its
+        centre-of-mass Jacobians ``Jv``, ``Jw`` and orientation ``R``.
+        """
+        body, positions = self.arm.body_id, q.tolist()
+        mass = np.array(self.client.calculateMassMatrix(body, positions))
+        if self._inertia_changes:
+            zeros = [0.0] * len(positions)
+            for link, (added_mass, added_inertia) in self._inertia_changes.items():
+                # the point is given in the link frame (not about the centre of mass)
+                com = list(self.client.getDynamicsInfo(body, link)[3])
+                linear, angular = self.client.calculateJacobian(body, link, com, positions,
+                                                                zeros, zeros)
+                jv, jw = np.asarray(linear), np.asarray(angular)
+                rotation = quaternion_to_matrix(np.asarray(
+                    self.client.getLinkState(body, link, computeForwardKinematics=1)[1]))
+                world_inertia = (rotation * added_inertia) @ rotation.T
+                mass += added_mass * jv.T @ jv + jw.T @ world_inertia @ jw
+        return mass
+
+    def _read_link_inertia(self) -> dict[int, tuple[float, np.ndarray]]:
+        """Mass (kg) and principal inertia (kg m^2) of every link, as PyBullet holds them."""
+        info = [self.client.getDynamicsInfo(self.arm.body_id, link) for link in self._all_links()]
+        return {link: (float(i[0]), np.array(i[2], dtype=float))
+                for link, i in zip(self._all_links(), info)}
+
+    def _all_links(self) -> range:
+        return range(self.arm.n_joints)
+
+    def _set_link_inertia(self, link: int, mass_kg: float, inertia_kg_m2: np.ndarray) -> None:
+        """Give ``link`` a mass and principal inertia (its centre of mass stays where it is)."""
+        nominal_mass, nominal_inertia = self._nominal_inertia[link]
+        self.client.changeDynamics(self.arm.body_id, link, mass=float(mass_kg),
+                                   localInertiaDiagonal=np.asarray(inertia_kg_m2).tolist())
+        added = (mass_kg - nominal_mass, np.asarray(inertia_kg_m2) - nominal_inertia)
+        if added[0] == 0.0 and not np.any(added[1]):
+            self._inertia_changes.pop(link, None)
+        else:
+            self._inertia_changes[link] = added
+        self._implicit_stiffness = np.zeros(self.arm.n_joints)  # refresh M at the next update
+
+    def _apply_tip_payload(self) -> None:
+        """Put the sum of the tip payloads on the tip link: mass, inertia and weight at the tip.
+
+        PyBullet keeps the link's centre of mass ``c`` where it is, so the payload's mass sits at
+        ``c``: its inertia about ``c`` gains ``m r^2`` about the transverse axes (``r`` from ``c``
+        to the tip), and a held force couple (``m g`` at the tip, ``-m g`` at ``c``) moves the
+        weight's line of action to the tip without changing the net force.
+        """
+        link = self.arm.tip_link
+        payload = sum(self._tip_payloads.values())
+        nominal_mass, nominal_inertia = self._nominal_inertia[link]
+        com = np.asarray(self.client.getDynamicsInfo(self.arm.body_id, link)[3])
+        tip_point = np.array([0.0, 0.0, self.arm.station_rest_length[-1]])
+        lever_m = np.linalg.norm(tip_point - com)
+        inertia = nominal_inertia + payload * lever_m**2 * np.array([1.0, 1.0, 0.0])
+        self._set_link_inertia(link, nominal_mass + payload, inertia)
+        weight = payload * self.gravity
+        self.set_external_force("payload_tip", link, weight, tuple(tip_point), on_body=False)
+        self.set_external_force("payload_com", link, -weight, tuple(com), on_body=False)
+
+    def _external_joint_torque(self, q: np.ndarray) -> np.ndarray:
+        """Generalised force (N m or N per joint) of the held external forces at ``q``.
+
+        ``tau = Jv^T F + Jw^T (r x F)`` per link, with the Jacobians of the link frame's origin and
+        ``r`` from that origin to the point of action. The simulator applies it through the
+        semi-implicit update as part of the joint torque, evaluated at the substep's own
+        configuration: measured after the fact like gravity (one substep late), a force of a few
+        newtons on a light link makes the update unstable.
+        """
+        body, positions = self.arm.body_id, q.tolist()
+        zeros = [0.0] * len(positions)
+        per_link: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        for link, force, local_point in self._forces.values():
+            total, moment_about_origin = per_link.get(link, (np.zeros(3), np.zeros(3)))
+            per_link[link] = (total + force, moment_about_origin + np.cross(
+                self._link_rotation(link) @ local_point, force))
+        torque = np.zeros(len(positions))
+        for link, (force, moment) in per_link.items():
+            linear, angular = self.client.calculateJacobian(body, link, [0.0, 0.0, 0.0],
+                                                            positions, zeros, zeros)
+            torque += np.asarray(linear).T @ force + np.asarray(angular).T @ moment
+        return torque
+
+    def _link_rotation(self, link: int) -> np.ndarray:
+        """Rotation matrix of ``link``'s frame (base frame) in the current state."""
+        state = self.client.getLinkState(self.arm.body_id, link, computeForwardKinematics=1)
+        return quaternion_to_matrix(np.asarray(state[5]))
 
     def _link_length(self, link: int) -> float:
         matches = np.nonzero(self.arm.station_link == link)[0]
         return float(self.arm.station_rest_length[matches[0]]) if len(matches) else 0.0
-
-    def _apply_forces(self) -> None:
-        apply = self.client.applyExternalForce
-        for key, (link, force, _) in self._forces.items():
-            apply(self.arm.body_id, link, force.tolist(), self._force_points[key].tolist(),
-                  pybullet.WORLD_FRAME)

@@ -24,7 +24,7 @@ def test_filling_load_mass_rises_at_its_rate_to_its_maximum():
     load = FillingLoad()
     sim = _bent_sim(load)
     tip = sim.arm.tip_link
-    base = load._base_mass
+    base = sim.link_mass(tip) - sim.tip_payload_kg
     sim.step_physics(4.0)
     assert sim.link_mass(tip) - base == pytest.approx(0.014, abs=1e-6)
     sim.step_physics(5.0)  # t = 9 s: 4 s of filling at 0.6 g/s

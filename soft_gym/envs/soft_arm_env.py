@@ -195,8 +195,11 @@ class SoftArmEnv(gym.Env):
         self._nominal_noise = {name: nominal_noise(sensor) for name, sensor in self.sensors.items()}
         self._nominal_time_constant_s = self.sim.supply.time_constant_s
         config = RandomizationConfig.from_any(randomization)
+        gravity = float(np.linalg.norm(self.spec_arm.gravity_base))
+        fixed_load_n = sum(load.peak_load_n(gravity) for load in self.loads)
         self.randomizer = None if config is None else DomainRandomizer(
-            config, n_links=len(self.sim.arm.station_link), with_camera="image" in self.sensors)
+            config, n_links=len(self.sim.arm.station_link), with_camera="image" in self.sensors,
+            max_load_n=self.spec_arm.max_load_n - fixed_load_n)
         self._draw = None
         self.pipeline = None
         self._estimates = None

@@ -21,6 +21,16 @@ import numpy as np
 from soft_gym._validation import require_in_range, require_non_negative, require_positive
 
 MOUNTS = ("hanging", "upright", "horizontal")
+GRAVITY_M_S2 = 9.81
+
+MAX_LOAD_TO_WEIGHT = 4.0
+"""Heaviest load an arm bears, as a multiple of its own weight (:attr:`ArmSpec.max_load_n`).
+
+Tip masses, a filling container, a swaying mass and held pushes together may weigh or push at
+most this much. Up to it the simulated arm stays on its joints' end stops under any actuation
+and from any direction (``tests/test_runaway.py``); at eight times its weight a hanging ho2018
+arm under random pressures no longer does. The papers' loads are well inside it (zhao2021's
+263 g is about its arm's own weight, ho2018's 24 g about half)."""
 """How the arm base is mounted: hanging (tip down, the papers' setups), upright, horizontal."""
 
 
@@ -239,8 +249,23 @@ class ArmSpec:
         return 2.0 * segment.damping_ratio / self.first_bending_mode_rad_s
 
     @property
+    def mass_kg(self) -> float:
+        """Mass of the whole arm, fixed tip masses included (kg)."""
+        return sum(segment.mass_kg + segment.extra_tip_mass_kg for segment in self.segments)
+
+    @property
+    def max_load_n(self) -> float:
+        """Largest total load the arm accepts (N): ``MAX_LOAD_TO_WEIGHT`` times its weight."""
+        return MAX_LOAD_TO_WEIGHT * self.mass_kg * GRAVITY_M_S2
+
+    @property
+    def max_reach_m(self) -> float:
+        """Farthest the tip can be from the base (m): every link at its longest."""
+        return sum(segment.length_m * segment.max_extension_ratio for segment in self.segments)
+
+    @property
     def gravity_base(self) -> np.ndarray:
         """Gravity in the base frame (m/s^2) for the mount."""
-        g = 9.81
+        g = GRAVITY_M_S2
         return {"hanging": np.array([0.0, 0.0, g]), "upright": np.array([0.0, 0.0, -g]),
                 "horizontal": np.array([-g, 0.0, 0.0])}[self.mount]

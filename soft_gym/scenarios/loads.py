@@ -33,6 +33,11 @@ class _Timed:
     def active(self, time_s: float) -> bool:
         return time_s >= self.start_s and (self.end_s is None or time_s < self.end_s)
 
+    def peak_load_n(self, gravity_m_s2: float) -> float:
+        """Largest weight or force (N) the element puts on the arm (checked against
+        :attr:`soft_gym.robots.spec.ArmSpec.max_load_n` when it is attached)."""
+        return 0.0
+
     def attach(self, sim) -> None:  # noqa: D102 - default: nothing to build
         pass
 
@@ -47,42 +52,28 @@ class _Timed:
 class _TipMassBase(_Timed):
     """Adds a time-varying point mass at the tip.
 
-    The mass is added to the tip link in PyBullet (inertia, gravity, dynamics). PyBullet keeps the
-    link's centre of mass where it was, so the weight would act there rather than at the tip; a
-    held force couple (``-m g`` at the centre of mass, ``+m g`` at the tip) moves its line of
-    action to the tip without changing the net force.
+    The simulator carries it as a tip payload (:meth:`soft_gym.sim.ArmSimulator.set_tip_payload`):
+    the tip link's mass and inertia grow and the weight acts at the tip. Detaching or clearing
+    the loads restores the link exactly as it was built.
     """
-
-    _base_mass: float = field(default=0.0, init=False, repr=False)
-    _applied: float = field(default=-1.0, init=False, repr=False)
-
-    def attach(self, sim) -> None:
-        self._base_mass = sim.link_mass(sim.arm.tip_link)
-        self._applied = -1.0
 
     def extra_mass_kg(self, time_s: float) -> float:
         raise NotImplementedError
 
-    def _keys(self) -> tuple[str, str]:
-        return f"tipmass{id(self)}_tip", f"tipmass{id(self)}_com"
+    def peak_mass_kg(self) -> float:
+        raise NotImplementedError
+
+    def peak_load_n(self, gravity_m_s2: float) -> float:
+        return self.peak_mass_kg() * gravity_m_s2
+
+    def _key(self) -> str:
+        return f"tipmass{id(self)}"
 
     def update(self, sim, time_s: float) -> None:
-        extra = self.extra_mass_kg(time_s) if self.active(time_s) else 0.0
-        link = sim.arm.tip_link
-        if abs(extra - self._applied) > 1e-9:
-            sim.client.changeDynamics(sim.arm.body_id, link, mass=self._base_mass + extra)
-            self._applied = extra
-        weight = extra * sim.gravity
-        com = sim.client.getDynamicsInfo(sim.arm.body_id, link)[3]
-        at_tip, at_com = self._keys()
-        sim.set_external_force(at_tip, link, weight, (0.0, 0.0, sim.arm.station_rest_length[-1]),
-                               on_body=False)
-        sim.set_external_force(at_com, link, -weight, com, on_body=False)
+        sim.set_tip_payload(self._key(), self.extra_mass_kg(time_s) if self.active(time_s) else 0.0)
 
     def detach(self, sim) -> None:
-        sim.client.changeDynamics(sim.arm.body_id, sim.arm.tip_link, mass=self._base_mass)
-        for key in self._keys():
-            sim.set_external_force(key, sim.arm.tip_link, np.zeros(3))
+        sim.set_tip_payload(self._key(), 0.0)
 
 
 @dataclass
@@ -96,6 +87,9 @@ class TipMass(_TipMassBase):
         self._check_window()
 
     def extra_mass_kg(self, time_s: float) -> float:
+        return self.mass_kg
+
+    def peak_mass_kg(self) -> float:
         return self.mass_kg
 
 
@@ -125,6 +119,9 @@ class FillingLoad(_TipMassBase):
         filled = min(self.added_mass_kg, max(0.0, time_s - self.start_s) * self.rate_kg_s)
         return self.initial_mass_kg + filled
 
+    def peak_mass_kg(self) -> float:
+        return self.initial_mass_kg + self.added_mass_kg
+
 
 @dataclass
 class SwayingMass(_Timed):
@@ -141,6 +138,9 @@ class SwayingMass(_Timed):
         require_positive("length_m", self.length_m)
         require_positive("radius_m", self.radius_m)
         self._check_window()
+
+    def peak_load_n(self, gravity_m_s2: float) -> float:
+        return self.mass_kg * gravity_m_s2
 
     def attach(self, sim) -> None:
         client = sim.client
@@ -216,6 +216,9 @@ class Push(_Timed):
 
     def attach(self, sim) -> None:
         self._link_index(sim)
+
+    def peak_load_n(self, gravity_m_s2: float) -> float:
+        return float(np.linalg.norm(self.force_n))
 
     def scale(self, time_s: float) -> float:
         if not self.active(time_s):

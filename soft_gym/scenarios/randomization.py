@@ -34,6 +34,9 @@ from typing import Any
 
 import numpy as np
 
+from soft_gym.robots.spec import GRAVITY_M_S2
+from soft_gym.scenarios.loads import FillingLoad
+
 LOAD_KINDS = ("none", "tip_mass", "filling_load", "swaying_mass", "push")
 FAULT_KINDS = ("none", "moving_occluder", "low_light", "led_glare", "motion_blur")
 NOISE_ATTRIBUTES = ("noise_std_nm", "noise_std_m", "position_noise_m", "orientation_noise_deg",
@@ -144,15 +147,40 @@ class DomainRandomizer:
         config: the ranges.
         n_links: number of arm links (pushes pick one).
         with_camera: whether visual faults apply (the env has an eye-in-hand camera).
+        max_load_n: the heaviest load a draw may add (N), e.g. the arm's
+            :attr:`~soft_gym.robots.spec.ArmSpec.max_load_n` less the fixed scenario's loads;
+            ``None`` checks nothing.
+
+    Raises:
+        ValueError: if a range with non-zero odds can draw a load heavier than ``max_load_n``.
     """
 
-    def __init__(self, config: RandomizationConfig, n_links: int, with_camera: bool) -> None:
+    def __init__(self, config: RandomizationConfig, n_links: int, with_camera: bool,
+                 max_load_n: float | None = None) -> None:
         self.config = config
         self.n_links = int(n_links)
         self.with_camera = bool(with_camera)
+        if max_load_n is not None:
+            for name, heaviest_n in self.heaviest_loads_n().items():
+                if heaviest_n > max_load_n * (1 + 1e-9):
+                    raise ValueError(
+                        f"randomization {name} can draw a load of {heaviest_n:.3g} N, more than "
+                        f"the {max_load_n:.3g} N the arm bears beside the fixed scenario "
+                        "(ArmSpec.max_load_n): lower its upper bound")
+
+    def heaviest_loads_n(self, gravity_m_s2: float = GRAVITY_M_S2) -> dict[str, float]:
+        """Heaviest weight or force (N) each load kind with non-zero odds can draw, by range."""
+        c, odds = self.config, self.config.load_weights
+        heaviest = {"tip_mass_kg": c.tip_mass_kg[1] * gravity_m_s2 * (odds.get("tip_mass", 0) > 0),
+                    "filling_added_kg": (FillingLoad.initial_mass_kg + c.filling_added_kg[1])
+                    * gravity_m_s2 * (odds.get("filling_load", 0) > 0),
+                    "swaying_mass_kg": c.swaying_mass_kg[1] * gravity_m_s2
+                    * (odds.get("swaying_mass", 0) > 0),
+                    "push_force_n": c.push_force_n[1] * (odds.get("push", 0) > 0)}
+        return {name: float(value) for name, value in heaviest.items() if value > 0}
 
     def sample(self, rng: np.random.Generator) -> EpisodeDraw:
-        from soft_gym.scenarios import FillingLoad, Push, SwayingMass, TipMass
+        from soft_gym.scenarios import Push, SwayingMass, TipMass
         from soft_gym.scenarios.faults import make_faults
 
         c = self.config

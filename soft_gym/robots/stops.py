@@ -1,0 +1,65 @@
+"""End stops of the arm's joints: how far a link can stretch, shorten, bend and twist.
+
+A soft arm stops lengthening or bending at a limit: a braided sleeve or zhao2021's central thread
+at full extension, the chamber walls folding against each other at full bend. Each joint of the
+discrete beam (:mod:`soft_gym.robots.builder`) gets that limit as a locking spring: over the last
+``band`` of its range towards a limit the stiffness rises linearly from zero to ``stiffness``
+(``STOP_STIFFNESS_FACTOR`` times the joint's material stiffness) and stays there beyond the limit,
+like the locking stretch of a Gent hyperelastic solid. The force is smooth (C1), so the
+simulator's semi-implicit update sees the stop's true tangent stiffness as the joint closes in,
+and a load the arm can bear (:func:`soft_gym.robots.spec.ArmSpec.max_tip_load_n`) holds the
+joint within a few per cent of its limit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+STOP_STIFFNESS_FACTOR = 100.0
+"""Stiffness of a joint past its limit over the joint's small-strain material stiffness."""
+
+STOP_BAND = 0.25
+"""Fraction of a joint's range (from the straight, unstretched arm to the limit) over which the
+stop's stiffness builds up."""
+
+
+class EndStops:
+    """Locking springs at each joint's lower and upper limit.
+
+    Args:
+        lower: lower joint limits (rad or m), shape (n_joints,), each < 0.
+        upper: upper joint limits (rad or m), shape (n_joints,), each > 0.
+        stiffness: full stop stiffness per joint (N m/rad or N/m), shape (n_joints,).
+    """
+
+    def __init__(self, lower: np.ndarray, upper: np.ndarray, stiffness: np.ndarray) -> None:
+        self.lower = np.asarray(lower, dtype=float)
+        self.upper = np.asarray(upper, dtype=float)
+        if np.any(self.lower >= 0) or np.any(self.upper <= 0):
+            raise ValueError("joint limits must straddle the rest position 0: lower < 0 < upper, "
+                             f"got lower {self.lower.tolist()} and upper {self.upper.tolist()}")
+        self.stiffness = np.asarray(stiffness, dtype=float)
+        self._band_high = STOP_BAND * self.upper
+        self._band_low = STOP_BAND * -self.lower
+        self._start_high = self.upper - self._band_high
+        self._start_low = self.lower + self._band_low
+
+    def force(self, q: np.ndarray) -> np.ndarray:
+        """Restoring force of the stops at ``q`` (N m or N), positive along ``q``'s sign."""
+        high = self._locking(q - self._start_high, self._band_high)
+        low = self._locking(self._start_low - q, self._band_low)
+        return self.stiffness * (high - low)
+
+    def stiffness_at(self, q: np.ndarray) -> np.ndarray:
+        """Tangent stiffness ``d force / d q`` at ``q``."""
+        high = np.clip((q - self._start_high) / self._band_high, 0.0, 1.0)
+        low = np.clip((self._start_low - q) / self._band_low, 0.0, 1.0)
+        return self.stiffness * (high + low)
+
+    @staticmethod
+    def _locking(depth: np.ndarray, band: np.ndarray) -> np.ndarray:
+        """Integral of the unit stiffness ramp: ``d^2 / (2 b)`` inside the band (``0 <= d <= b``),
+        ``d - b / 2`` beyond it, 0 before it."""
+        depth = np.maximum(depth, 0.0)
+        inside = np.minimum(depth, band)
+        return inside * inside / (2.0 * band) + (depth - inside)
