@@ -26,6 +26,15 @@ _IMPLICIT_FRACTION = 0.25
 _STIFFNESS_MARGIN = 1.25
 """Factor on the tangent stiffness used in the implicit term, so it stays ahead of stiffening."""
 
+_DIVERGED_PAST_LIMIT = 1.5
+"""A joint this many times past its limit means the integration diverged (the end stops hold
+every load the arm accepts within 1.1 times, ``tests/test_runaway.py``)."""
+
+
+class PhysicsDivergedError(RuntimeError):
+    """The simulation left the physical range (a joint far past its end stop)."""
+
+
 class Load(Protocol):
     """What the simulator expects of a scenario element (see :mod:`soft_gym.scenarios`)."""
 
@@ -149,6 +158,8 @@ class ArmSimulator:
                 self._previous_velocity_valid = True
                 self._update_implicit_gains(q, self._implicit_stiffness)
         self.time_s = self._substep * self.physics_dt_s
+        if n:
+            self._check_within_stops()
 
     def set_gravity(self, vector_m_s2: np.ndarray) -> None:
         """Set gravity in the base frame (m/s^2)."""
@@ -474,6 +485,18 @@ class ArmSimulator:
             # stiffening outgrew the implicit gains, or the arm moved enough to change M
             self._update_implicit_gains(q, _STIFFNESS_MARGIN * tangent)
         self._torque_offset = self._solve @ self._load_torque
+
+    def _check_within_stops(self) -> None:
+        """Raise if a joint has gone far past its end stop: the simulation has diverged, and
+        its states must not reach an observation or a training batch."""
+        q = self.joint_positions()
+        past = np.maximum(q / self.arm.upper_limit, q / self.arm.lower_limit)
+        worst = int(np.argmax(past))
+        if past[worst] > _DIVERGED_PAST_LIMIT:
+            raise PhysicsDivergedError(
+                f"joint {worst} of the {self.spec.name} arm is at {past[worst]:.1f} times its "
+                f"limit at t = {self.time_s:.3f} s with loads {self.loads!r}: the simulation "
+                "diverged")
 
     def _tangent_stiffness(self, q: np.ndarray) -> np.ndarray:
         """Tangent stiffness of every joint at ``q``: ``k0 (1 + 3 beta strain^2)`` plus the end

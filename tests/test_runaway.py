@@ -19,7 +19,7 @@ from soft_gym.robots.spec import GRAVITY_M_S2
 from soft_gym.robots.stops import EndStops
 from soft_gym.scenarios import Push, SwayingMass, TipMass
 from soft_gym.scenarios.randomization import RandomizationConfig
-from soft_gym.sim import ArmSimulator
+from soft_gym.sim import ArmSimulator, PhysicsDivergedError
 
 PRESETS = ("wang2023", "zhao2021", "zou2022", "ho2018")
 
@@ -212,3 +212,11 @@ def test_end_stops_lock_smoothly():
         assert np.allclose(slope, stops.stiffness_at(q), rtol=1e-4, atol=1e-3)
     assert stops.stiffness_at(np.array([1.2, 0.8]))[0] == 100.0
     assert stops.force(np.array([-1.2, 0.0]))[0] < 0
+
+
+def test_a_diverged_simulation_raises_instead_of_reporting_states():
+    sim = ArmSimulator(get_preset("wang2023"))
+    sim.set_joint_positions(3.0 * sim.arm.upper_limit)
+    with pytest.raises(PhysicsDivergedError, match="times its limit"):
+        sim.step_physics(sim.physics_dt_s)
+    sim.close()

@@ -7,8 +7,9 @@ discrete beam (:mod:`soft_gym.robots.builder`) gets that limit as a locking spri
 (``STOP_STIFFNESS_FACTOR`` times the joint's material stiffness) and stays there beyond the limit,
 like the locking stretch of a Gent hyperelastic solid. The force is smooth (C1), so the
 simulator's semi-implicit update sees the stop's true tangent stiffness as the joint closes in,
-and a load the arm can bear (:func:`soft_gym.robots.spec.ArmSpec.max_tip_load_n`) holds the
-joint within a few per cent of its limit.
+and any load the arm accepts (:attr:`soft_gym.robots.spec.ArmSpec.max_load_n`) leaves every joint
+within 10 % of its limit. PyBullet's own joint-limit constraint, set by the builder at the same
+limits, stays in place behind the stop.
 """
 
 from __future__ import annotations
