@@ -1,7 +1,7 @@
 """The baseline-policy protocol and a registry of baselines by name.
 
 Every baseline has stable-baselines3's face, so the benchmark runner drives baselines and SB3
-models alike (DESIGN.md section 6):
+models alike (docs/architecture.md, "Baselines"):
 
 * ``reset()`` at the start of an episode;
 * ``predict(obs, state=None, episode_start=None, deterministic=True) -> (action, state)``;
@@ -9,7 +9,9 @@ models alike (DESIGN.md section 6):
 * ``save(path)`` / ``load(path)``.
 
 Baselines read only what the real robot gives them: the observation (whose ``pose`` part is the
-env's feedback source) and sensor signals; never privileged simulator state.
+env's feedback source) and sensor signals; never privileged simulator state. Baselines that
+decide chamber pressures turn them into actions with the env's own map,
+:class:`soft_gym.robots.actuation.Actuation` (``Actuation.of_env(env)``), in either action mode.
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from soft_gym._registry import build, parse_spec
 
 BASELINES: dict[str, str] = {
     "cc_model": "agents.controllers.cc_model:CCModelController",
@@ -175,20 +179,14 @@ def _guess_algorithm(model_path: Path) -> str:
 
 
 def make_policy(name: str, env=None, **params: Any) -> BaselinePolicy:
-    """Build a baseline by name (see :data:`BASELINES`), or load ``"sb3:PATH"``."""
-    if name.startswith("sb3:"):
+    """Build a baseline by name (see :data:`BASELINES`), or load ``"sb3:PATH"``.
+
+    ``name`` is parsed by :func:`soft_gym._registry.parse_spec` (a name string only).
+    """
+    if isinstance(name, str) and name.startswith("sb3:"):
         return SB3Policy.load(name[4:], env=env)
-    if name not in BASELINES:
-        raise ValueError(f"policy must be one of {sorted(BASELINES)} or 'sb3:PATH', got {name!r}")
-    module_name, class_name = BASELINES[name].split(":")
+    (spec,) = parse_spec(name, "policy", BASELINES, forms=("name",), also=("sb3:PATH",))
+    module_name, class_name = BASELINES[spec.name].split(":")
     cls = getattr(importlib.import_module(module_name), class_name)
-    try:
-        return cls(env, **params)
-    except TypeError as error:
-        raise ValueError(f"policy {name!r} got invalid parameters {params}: {error}") from error
+    return build("policy", spec.name, lambda **kwargs: cls(env, **kwargs), params)
 
-
-def pressures_to_action(pressures_pa: np.ndarray, p_low: np.ndarray, p_high: np.ndarray) -> np.ndarray:
-    """Absolute-mode action in [-1, 1] for chamber pressures (Pa), saturating at the limits."""
-    fraction = (np.asarray(pressures_pa) - p_low) / (p_high - p_low)
-    return np.clip(2.0 * fraction - 1.0, -1.0, 1.0).astype(np.float32)

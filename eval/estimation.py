@@ -36,6 +36,7 @@ from tqdm import tqdm
 import soft_gym  # noqa: F401
 from eval.metrics import estimation_errors
 from eval.report import markdown_table, plot_estimation, write_json, write_records_csv
+from soft_gym.robots.actuation import Actuation, pressure_at_fraction
 from soft_gym.sensing.exploration import spiral_fractions
 
 EXPERIMENTS = ("clean", "occlusion", "lighting", "push", "flick", "init")
@@ -114,13 +115,14 @@ def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: 
                    scenario=scenario, episode_steps=steps, sensing=_sensing(experiment, n_init))
     unwrapped = env.unwrapped
     spec = unwrapped.spec_arm
+    actuation = Actuation.of_env(env)
     env.reset(seed=seed)
     columns: dict[str, list] = {key: [] for key in (
         "time_s", "tip_m", "target_m", "camera_m", "femp_m", "fused_m", "reprojection_error_px",
-        "lost")}
+        "lost", "femp_weight", "femp_updated")}
     for k in tqdm(range(steps), desc=experiment, disable=not progress, leave=False):
         fraction = spiral_fractions(k * spec.control_period_s, **ESTIMATION_SPIRAL)
-        _, _, _, _, info = env.step((2.0 * fraction - 1.0).astype(np.float32))
+        _, _, _, _, info = env.step(actuation.action(pressure_at_fraction(spec, fraction)))
         estimates = info["estimates"]
         columns["time_s"].append(info["time_s"])
         columns["tip_m"].append(info["tip_position_m"])
@@ -129,8 +131,29 @@ def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: 
             columns[f"{key}_m"].append(estimates[key])
         columns["reprojection_error_px"].append(estimates["reprojection_error_px"])
         columns["lost"].append(float(estimates["lost"]))
+        columns["femp_weight"].append(estimates["femp_weight"])
+        columns["femp_updated"].append(float(estimates["femp_updated"]))
     env.close()
     return {key: np.asarray(value, dtype=float) for key, value in columns.items()}
+
+
+def fusion_weights(record: dict[str, np.ndarray], start_s: float = 0.0,
+                   end_s: float = np.inf) -> dict[str, float]:
+    """How the fusion used the camera over ``[start_s, end_s)``: F-emp's mean weight, the share
+    of frames where the camera's weight is at least one half, that share among the frames where
+    the camera was the more accurate, and the share of frames F-emp learned from."""
+    inside = (record["time_s"] >= start_s) & (record["time_s"] < end_s)
+    weight = record["femp_weight"][inside]
+    camera_error = np.linalg.norm(record["camera_m"][inside] - record["tip_m"][inside], axis=1)
+    femp_error = np.linalg.norm(record["femp_m"][inside] - record["tip_m"][inside], axis=1)
+    camera_better = camera_error < femp_error
+    trusted = weight <= 0.5
+    return {"femp_weight_mean": float(weight.mean()) if weight.size else float("nan"),
+            "camera_trusted_share": float(trusted.mean()) if weight.size else float("nan"),
+            "camera_trusted_when_better": (float(trusted[camera_better].mean())
+                                           if camera_better.any() else float("nan")),
+            "femp_updated_share": (float(record["femp_updated"][inside].mean())
+                                   if weight.size else float("nan"))}
 
 
 def run_experiments(experiments: list[str], out_dir: str | Path, steps: int = 4000,
@@ -150,12 +173,13 @@ def run_experiments(experiments: list[str], out_dir: str | Path, steps: int = 40
             write_records_csv(out / f"{name}.csv", record)
             plot_estimation(out / f"{name}.png", record, f"wang2023 estimation: {name}",
                             phases=phases)
-            for phase, _, _ in phases:
+            for phase, start_s, end_s in phases:
                 row = {"experiment": name, "phase": phase}
                 for estimator in ESTIMATORS:
                     stats = errors[estimator]["phases"][phase]
                     for key in ("mean_mm", "max_mm", "std_mm", "rmse_mm"):
                         row[f"{estimator}_{key}"] = stats[key]
+                row.update(fusion_weights(record, start_s, end_s))
                 rows.append(row)
     write_json(out / "estimation.json", rows)
     (out / "estimation.md").write_text(markdown_table(rows) + "\n")

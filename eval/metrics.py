@@ -1,6 +1,6 @@
 """Benchmark metrics: tracking error, path deviation, estimation error, tables.
 
-The metrics follow DESIGN.md section 7 and the tables of Wang et al. 2023
+The metrics follow docs/architecture.md, "Tasks and metrics", and the tables of Wang et al. 2023
 (Tables I-II): tracking error (distance from the current target to the tip),
 path deviation (distance from the tip to the closest point of the path), each
 reported as mean +- std and max, overall and per path cycle, and the

@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.robots.presets import PRESETS
 from soft_gym.sim import ArmSimulator
 
@@ -38,7 +39,7 @@ def run(presets: list[str], hold_s: float) -> list[dict]:
         for pattern, make in PATTERNS.items():
             fraction = make(spec.n_chambers)
             sim.reset(settle_s=1.0)
-            sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
+            sim.set_pressures(pressure_at_fraction(spec, fraction))
             start = time.perf_counter()
             sim.step_physics(hold_s)
             wall = time.perf_counter() - start

@@ -47,6 +47,9 @@ from typing import Any, Dict, Literal, Optional, Sequence, Tuple, Union, overloa
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from soft_gym._quaternion import quaternion_multiply
+from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD, CHAMBER_COS, CHAMBER_SIN
+
 __all__ = [
     "CHAMBER_ANGLES",
     "curvature_from_lengths",
@@ -64,12 +67,13 @@ FloatArray = NDArray[np.float64]
 #: Chamber distance from the segment axis: a scalar or one value per segment (m).
 DistanceLike = Union[float, Sequence[float], FloatArray]
 
-#: Angular positions ``sigma_i = 2*pi*i/3`` (rad) of the three chambers of a segment.
-CHAMBER_ANGLES: FloatArray = 2.0 * np.pi * np.arange(3) / 3.0
+#: Angular positions ``sigma_i = 2*pi*i/3`` (rad) of the three chambers of a segment: the
+#: library's one copy, :data:`soft_gym.robots.actuation.CHAMBER_ANGLES_RAD` (read-only).
+CHAMBER_ANGLES: FloatArray = CHAMBER_ANGLES_RAD
 # Exact cosines / sines of CHAMBER_ANGLES, so that equal chamber lengths give exactly zero
 # curvature (np.cos(2*pi/3) is not exactly -1/2 in floating point).
-_COS_SIGMA: FloatArray = np.array([1.0, -0.5, -0.5])
-_SIN_SIGMA: FloatArray = np.array([0.0, 0.5 * np.sqrt(3.0), -0.5 * np.sqrt(3.0)])
+_COS_SIGMA: FloatArray = CHAMBER_COS
+_SIN_SIGMA: FloatArray = CHAMBER_SIN
 
 # Below this value of u = theta^2 the derivatives of the sinc terms use Taylor series.
 _SERIES_U = 1e-2
@@ -310,14 +314,6 @@ def _segment_quaternion(s: FloatArray, kx: FloatArray, ky: FloatArray) -> FloatA
     theta, _, _, half = _sinc_terms(u)
     factor = 0.5 * half * s  # sin(theta/2)/theta * s
     return np.stack([-ky * factor, kx * factor, np.zeros_like(s), np.cos(0.5 * theta)], axis=-1)
-
-
-def _quaternion_multiply(q1: FloatArray, q2: FloatArray) -> FloatArray:
-    v1, w1 = q1[..., :3], q1[..., 3:]
-    v2, w2 = q2[..., :3], q2[..., 3:]
-    vector = w1 * v2 + w2 * v1 + np.cross(v1, v2)
-    scalar = w1 * w2 - np.sum(v1 * v2, axis=-1, keepdims=True)
-    return np.concatenate([vector, scalar], axis=-1)
 
 
 def _chain(
@@ -602,7 +598,7 @@ def cc_tip_pose(lengths: ArrayLike, d: DistanceLike) -> Tuple[FloatArray, FloatA
     quats = _segment_quaternion(s, kx, ky)
     quat = quats[..., 0, :]
     for k in range(1, n_segments):
-        quat = _quaternion_multiply(quat, quats[..., k, :])
+        quat = quaternion_multiply(quat, quats[..., k, :])
     quat = quat / np.linalg.norm(quat, axis=-1, keepdims=True)
     quat = np.where(quat[..., 3:] < 0.0, -quat, quat)
     return tips[..., -1, :], quat

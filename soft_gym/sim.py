@@ -1,6 +1,7 @@
 """The arm simulator: one PyBullet client, one arm, its pneumatics and the loads acting on it.
 
-This is ``env.unwrapped.sim`` (DESIGN.md section 8). Everything is in the arm's base frame, which is
+This is ``env.unwrapped.sim`` (docs/architecture.md, "Simulator public face"). Everything is in
+the arm's base frame, which is
 PyBullet's world frame here; the mount only decides the gravity vector.
 """
 
@@ -14,6 +15,7 @@ from pybullet_utils import bullet_client
 
 from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
+from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
 from soft_gym.robots.pneumatics import PneumaticSupply, chamber_loads
 from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
@@ -116,7 +118,7 @@ class ArmSimulator:
         self._off_body_forces: set[str] = set()
         self.reset()
 
-    # ------------------------------------------------------------------ public face (DESIGN 8)
+    # ----------------------------------------------------------- public face (docs/architecture.md)
     def set_pressures(self, pressures_pa: np.ndarray) -> None:
         """Command chamber pressures (Pa, gauge), shape (n_chambers,), each in [0, p_max]."""
         self.supply.command(pressures_pa)
@@ -208,7 +210,7 @@ class ArmSimulator:
         """
         q = self.joint_positions()
         arc, theta_x, theta_y = self._segment_arc_and_bend(q)
-        sigma = 2.0 * np.pi * np.arange(3) / 3.0
+        sigma = CHAMBER_ANGLES_RAD
         d = self.spec.chamber_offset_m[:, None]
         lengths = arc[:, None] + d * (theta_x[:, None] * np.sin(sigma) - theta_y[:, None] * np.cos(sigma))
         return lengths.reshape(-1)
@@ -489,7 +491,8 @@ class ArmSimulator:
     def _check_within_stops(self) -> None:
         """Raise if a joint has gone far past its end stop: the simulation has diverged, and
         its states must not reach an observation or a training batch."""
-        q = self.joint_positions()
+        states = self.client.getJointStates(self.arm.body_id, self._joints)
+        q = np.array([state[0] for state in states])
         past = np.maximum(q / self.arm.upper_limit, q / self.arm.lower_limit)
         worst = int(np.argmax(past))
         if past[worst] > _DIVERGED_PAST_LIMIT:

@@ -9,9 +9,10 @@ import pytest
 from pybullet_utils import bullet_client
 
 from soft_gym.robots import get_preset
-from soft_gym.scenarios.faults import (FAULT_PRESETS, FAULTS, LEDGlare, LowLight, MotionBlur,
-                                       MovingOccluder, SensorNoise, make_faults)
-from soft_gym.sensors.camera import CameraIntrinsics, EyeInHandCamera, render
+from soft_gym.sensors.camera import EyeInHandCamera, render
+from soft_gym.sensors.faults import (FAULT_PRESETS, FAULTS, LEDGlare, LowLight, MotionBlur,
+                                     MovingOccluder, SensorNoise, make_faults)
+from soft_gym.sensors.intrinsics import CameraIntrinsics
 from soft_gym.sensors.scene import build_scene
 from soft_gym.sensors.stereo import StereoCamera
 from soft_gym.sim import ArmSimulator
@@ -385,3 +386,15 @@ def test_stereo_images_show_the_extended_arm_without_gaps():
         for u, v in (projected[:2] / projected[2]).T:
             h, s, _ = hsv[int(round(v)), int(round(u))]
             assert 5 <= h <= 25 and s > 100, (side, u, v, h, s)
+
+
+def test_faults_belong_to_the_camera_without_an_import_cycle():
+    """The faults need the intrinsics, not the camera: importing them loads no camera module,
+    and the old home under scenarios is gone."""
+    import subprocess
+    import sys
+
+    code = ("import sys, soft_gym.sensors.faults; "
+            "assert 'soft_gym.sensors.camera' not in sys.modules; "
+            "import importlib.util as u; assert u.find_spec('soft_gym.scenarios.faults') is None")
+    subprocess.run([sys.executable, "-c", code], check=True)

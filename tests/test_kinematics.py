@@ -22,6 +22,7 @@ from soft_gym.kinematics import (
     curvature_from_lengths,
     lengths_from_curvature,
 )
+from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD, CHAMBER_COS, CHAMBER_SIN
 
 D = 5.1e-3  # chamber distance from the segment axis (m)
 S_RANGE = (0.07, 0.16)  # segment arc lengths (m)
@@ -62,7 +63,7 @@ def arc_transform(s: float, kappa: float, phi: float) -> np.ndarray:
 
 def chamber_lengths(s: float, kappa: float, phi: float, d: float = D) -> np.ndarray:
     """l_i = s (1 - d kappa cos(sigma_i - phi)) with sigma_i = 2 pi i / 3."""
-    sigma = 2.0 * np.pi * np.arange(3) / 3.0
+    sigma = CHAMBER_ANGLES
     return s * (1.0 - d * kappa * np.cos(sigma - phi))
 
 
@@ -110,7 +111,7 @@ def straight_jacobian(segment_lengths: np.ndarray, d: float = D) -> np.ndarray:
     A bend d_theta of segment k (d_theta_x = -2/(3d) sum_i dl_i cos sigma_i) moves its own tip
     by s_k d_theta / 2 and swings the distal length L_d by L_d d_theta.
     """
-    sigma = 2.0 * np.pi * np.arange(3) / 3.0
+    sigma = CHAMBER_ANGLES
     n = len(segment_lengths)
     jac = np.zeros((3, 3 * n))
     for k in range(n):
@@ -129,6 +130,10 @@ def straight_jacobian(segment_lengths: np.ndarray, d: float = D) -> np.ndarray:
 
 def test_chamber_angles() -> None:
     np.testing.assert_allclose(CHAMBER_ANGLES, [0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0])
+    # one copy in the library: the actuation module's, read-only
+    assert CHAMBER_ANGLES is CHAMBER_ANGLES_RAD and not CHAMBER_ANGLES.flags.writeable
+    np.testing.assert_allclose(CHAMBER_COS, np.cos(CHAMBER_ANGLES), atol=1e-15)
+    np.testing.assert_allclose(CHAMBER_SIN, np.sin(CHAMBER_ANGLES), atol=1e-15)
 
 
 @pytest.mark.parametrize("n_segments", [1, 2, 3])

@@ -25,12 +25,13 @@ import pytest
 
 from soft_gym.kinematics import cc_forward
 from soft_gym.robots import get_preset
+from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.pneumatics import chamber_loads
 from soft_gym.sim import ArmSimulator
 
 from arm_variants import linear, variant  # noqa: F401
 
-SIGMA = 2.0 * np.pi * np.arange(3) / 3.0  # chamber angles about the segment axis (rad)
+SIGMA = CHAMBER_ANGLES_RAD  # chamber angles about the segment axis (rad)
 Z = np.array([0.0, 0.0, 1.0])
 
 

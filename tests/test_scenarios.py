@@ -82,3 +82,26 @@ def test_scenarios_selectable_by_name_dict_and_list():
         make_scenario(42)
     with pytest.raises(ValueError, match="end_s"):
         make_scenario({"name": "push", "start_s": 2.0, "end_s": 1.0})
+
+
+def test_loads_and_camera_faults_share_one_time_window():
+    """Loads and visual faults take the same ``start_s`` / ``end_s`` window, checked alike."""
+    from soft_gym._timing import TimeWindow
+    from soft_gym.sensors.faults import LowLight
+
+    push = Push(start_s=1.0, end_s=2.0)
+    dim = LowLight(start_s=1.0, end_s=2.0)
+    assert isinstance(push, TimeWindow) and isinstance(dim, TimeWindow)
+    for element in (push, dim, TimeWindow(1.0, 2.0)):
+        assert [element.active(t) for t in (0.99, 1.0, 1.99, 2.0)] == [False, True, True, False]
+    assert TimeWindow().active(1e9)  # end_s=None: until the episode ends
+    # FillingLoad's container is on the tip before it starts filling
+    assert FillingLoad(start_s=5.0).active(0.0)
+    for build in (lambda: TimeWindow(2.0, 1.0), lambda: Push(start_s=2.0, end_s=1.0),
+                  lambda: LowLight(start_s=2.0, end_s=2.0)):
+        with pytest.raises(ValueError, match="end_s must be None or > start_s=2.0"):
+            build()
+    with pytest.raises(ValueError, match="start_s"):
+        TimeWindow(-1.0)
+    with pytest.raises(ValueError, match="end_s"):
+        LowLight(end_s="soon")

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from soft_gym.robots import get_preset
+from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.pneumatics import chamber_loads
 from soft_gym.scenarios import Push, TipMass
 from soft_gym.sensors.em_tracker import EMTracker
@@ -27,7 +28,7 @@ from soft_gym.sim import ArmSimulator
 
 from arm_variants import linear, variant  # noqa: F401
 
-SIGMA = 2.0 * np.pi * np.arange(3) / 3.0
+SIGMA = CHAMBER_ANGLES_RAD
 NM_PER_STRAIN = 1550.0 * (1.0 - 0.21)
 SETTLE_S = 3.0
 
@@ -61,7 +62,7 @@ def read(sensor, sim, seed: int = 0):
 
 
 def analytic_fbg_nm(spec, pressures, layout: FBGLayout) -> np.ndarray:
-    """wang2023 helix + DESIGN.md section 4 formula for a constant-curvature arc (nm)."""
+    """wang2023 helix + (F1)-(F2) of docs/architecture.md, "FBG fiber", on a CC arc (nm)."""
     segment = spec.segments[0]
     axial, moment = chamber_loads(spec, pressures)
     rigidity = segment.bending_rigidity_nm2

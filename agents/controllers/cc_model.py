@@ -17,6 +17,11 @@ Each control step, with feedback tip position ``p`` and next target ``p*``:
 Pressures cannot go below the pre-pressure or above ``p_max``: the model lengths are kept
 consistent with the saturated pressures (anti-windup), so the integrator of eq. (26) does not
 wind up.
+
+The pressures become actions through the env's own map (:class:`soft_gym.robots.actuation.
+Actuation`), in either action mode: ``"absolute"`` or ``"delta"`` (there the controller keeps the
+command it has sent, which starts at the pre-pressure, so every action it returns must be stepped
+and :meth:`~CCModelController.reset` called after each env reset, as :mod:`eval.runner` does).
 """
 
 from __future__ import annotations
@@ -26,16 +31,18 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.policies import BaselinePolicy, pressures_to_action
+from agents.policies import BaselinePolicy
 from soft_gym._validation import require_non_negative, require_positive
 from soft_gym.kinematics import cc_jacobian
+from soft_gym.robots.actuation import Actuation
 
 
 class CCModelController(BaselinePolicy):
     """CC model-based controller (wang2023 eqs. (19)-(27)).
 
     Args:
-        env: the environment it controls (reads its arm spec and observation layout).
+        env: the environment it controls (reads its arm spec, observation layout and action
+            mode: ``action_mode`` ``"absolute"`` or ``"delta"`` with its ``delta_fraction``).
         kp: proportional gain ``K_p`` of eq. (26) (paper: 0.04-0.10).
         null_space_gain: ``beta`` of eq. (25).
         probe_fraction: probe pressure as a fraction of ``p_max - p_pre``.
@@ -74,8 +81,10 @@ class CCModelController(BaselinePolicy):
             if part not in self.env.obs_parts:
                 raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
                                  f"{self.env.obs_parts!r}")
+        self.actuation = Actuation.of_env(self.env)
         self.d = spec.chamber_offset_m
         self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa
+        self._command = self.actuation.initial_command_pa.copy()
         self.rest_lengths = np.repeat([s.length_m for s in spec.segments], 3).astype(float)
         self.alpha: np.ndarray | None = None
         self.lengths = self.rest_lengths.copy()
@@ -88,21 +97,20 @@ class CCModelController(BaselinePolicy):
         are reproducible.
         """
         env = self.env
-        rest_action = pressures_to_action(self.p_low, self.p_low, self.p_high)
         # the probes map the full tip displacement to chamber lengths
         jacobian_inverse = self._pseudo_inverse(cc_jacobian(self.rest_lengths, self.d))
         alpha = np.empty(len(self.rest_lengths))
         for chamber in range(len(alpha)):
             env.reset(seed=seed if chamber == 0 else None)
+            self._command = self.actuation.initial_command_pa.copy()
             observation = None
             for _ in range(self.probe_steps):
-                observation, *_ = env.step(rest_action)
+                observation, *_ = env.step(self._action_for(self.p_low))
             start = self._pose(observation)
             pressures = self.p_low.copy()
             pressures[chamber] += self.probe_fraction * (self.p_high[chamber] - self.p_low[chamber])
-            action = pressures_to_action(pressures, self.p_low, self.p_high)
             for _ in range(self.probe_steps):
-                observation, *_ = env.step(action)
+                observation, *_ = env.step(self._action_for(pressures))
             length_change = jacobian_inverse @ (self._pose(observation) - start)
             if length_change[chamber] <= 1e-7:
                 raise ValueError(
@@ -110,12 +118,15 @@ class CCModelController(BaselinePolicy):
                     " the feedback pose does not respond to actuation")
             alpha[chamber] = (pressures[chamber] - self.p_low[chamber]) / length_change[chamber]
         env.reset()
+        self.reset()
         self.alpha = alpha
         return alpha
 
     # ------------------------------------------------------------------ control
     def reset(self) -> None:
+        """Start of an episode (after the env's reset): rest lengths, command at pre-pressure."""
         self.lengths = self.rest_lengths.copy()
+        self._command = self.actuation.initial_command_pa.copy()
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         if self.alpha is None:
@@ -127,7 +138,7 @@ class CCModelController(BaselinePolicy):
                             self.p_low, self.p_high)
         # anti-windup: the model lengths follow what the saturated pressures can produce
         self.lengths = self.rest_lengths + (pressures - self.p_low) / self.alpha
-        return pressures_to_action(pressures, self.p_low, self.p_high), state
+        return self._action_for(pressures), state
 
     def compensate(self, position: np.ndarray, desired: np.ndarray) -> np.ndarray:
         """The displacement handed to eq. (25) for the desired one (m); the pure model passes it
@@ -162,6 +173,14 @@ class CCModelController(BaselinePolicy):
         return controller
 
     # ------------------------------------------------------------------ helpers
+    def _action_for(self, pressures_pa: np.ndarray) -> np.ndarray:
+        """The action (float32) commanding ``pressures_pa`` (Pa) in the env's action mode; in
+        delta mode it moves the command as far towards them as one step can, and the command
+        this action gives (the env's own map) is kept for the next step."""
+        action = self.actuation.action(pressures_pa, self._command)
+        self._command = self.actuation.pressure(action, self._command)
+        return action
+
     def _pseudo_inverse(self, jacobian: np.ndarray) -> np.ndarray:
         return jacobian.T @ np.linalg.inv(jacobian @ jacobian.T
                                           + self.damping**2 * np.eye(len(jacobian)))

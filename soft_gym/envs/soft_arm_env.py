@@ -28,14 +28,20 @@ Sensors are simulated only when an observation part or ``sensors=`` asks for the
 own rate (sample and hold) and noise (:mod:`soft_gym.sensors`).
 
 ## Feedback pose
-``feedback=`` chooses what the ``pose`` part holds: ``"fused"`` (default; camera and F-emp fused by
-wang2023 eq. (18)), ``"camera"`` (the vision tracker), ``"fbg"`` (F-emp), ``"em"`` (EM tracker) or
-``"ground_truth"``. The first three run the sensing pipeline (:mod:`soft_gym.sensing.pipeline`):
-it is calibrated when the env is created (vision map at rest, F-emp from ``n_init`` spiral
-exploration steps labelled by the camera; the result is shared by envs of the same configuration
-in one process) and on ``reset(options={"recalibrate": True})``. It keeps learning across
+``feedback=`` names the feedback source (:mod:`soft_gym.sensing.feedback`) that fills the ``pose``
+part: ``"fused"`` (default; camera and F-emp fused by wang2023 eq. (18)), ``"camera"`` (the vision
+tracker), ``"fbg"`` (F-emp), ``"em"`` (EM tracker) or ``"ground_truth"``. The first three run the
+sensing pipeline (:mod:`soft_gym.sensing.pipeline`): it is calibrated when the env is created
+(vision map at rest, F-emp from ``n_init`` spiral exploration steps labelled by the camera; the
+result is cached in memory and on disk, :mod:`soft_gym.sensing.calibration_cache`) and on
+``reset(options={"recalibrate": True})``. It keeps learning across
 ``reset()`` calls; ``reset(seed=...)`` returns it to its calibrated state, so that a seed fixes an
-episode exactly. ``faults=`` puts visual faults on the camera (:mod:`soft_gym.scenarios.faults`).
+episode exactly. ``faults=`` puts visual faults on the eye-in-hand camera; an env that simulates
+no camera (no ``image`` part, no camera-based feedback) refuses them.
+
+Every sensor the env simulates is read once per control step into one
+:class:`~soft_gym.sensing.measurement.Measurement`; the observation, ``info`` and the feedback
+source all read it.
 
 ## Domain randomisation
 ``randomization=True`` (or a dict of ranges, or a YAML path) draws, at every reset and from the
@@ -60,18 +66,21 @@ positions (m), ``em`` when an EM tracker runs, ``reprojection_error_px`` (``e_S`
 
 from __future__ import annotations
 
-import copy
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from soft_gym.robots.actuation import Actuation
 from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.scenarios import make_scenario
-from soft_gym.scenarios.faults import make_faults
+from soft_gym.sensors.faults import make_faults
 from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConfig, nominal_noise
+from soft_gym.sensing.feedback import (FEEDBACK_SOURCES, CalibrationContext, FeedbackEstimate,
+                                       make_feedback_source)
+from soft_gym.sensing.measurement import Measurement, measure
 from soft_gym.sensors import SENSORS, make_sensor
 from soft_gym.sim import ArmSimulator
 from soft_gym.tasks import ReachTask, TrackTask
@@ -79,11 +88,7 @@ from soft_gym.tasks import ReachTask, TrackTask
 STATE_PARTS = ("pose", "target", "pressure")
 OBSERVATION_PARTS = STATE_PARTS + tuple(name for name in SENSORS if name != "stereo")
 OBS_FORMATS = ("flat", "dict")
-FEEDBACKS = ("fused", "camera", "fbg", "em", "ground_truth")
-_PIPELINE_FEEDBACKS = ("fused", "camera", "fbg")
-_CALIBRATIONS: dict = {}
-"""Calibrated sensing state per configuration, shared by the envs of one process."""
-ACTION_MODES = ("absolute", "delta")
+FEEDBACKS = tuple(FEEDBACK_SOURCES)
 TASKS = ("reach", "track")
 
 
@@ -134,8 +139,6 @@ class SoftArmEnv(gym.Env):
         self.spec_arm = preset if isinstance(preset, ArmSpec) else get_preset(preset)
         if task not in TASKS:
             raise ValueError(f"task must be one of {list(TASKS)}, got {task!r}")
-        if action_mode not in ACTION_MODES:
-            raise ValueError(f"action_mode must be one of {list(ACTION_MODES)}, got {action_mode!r}")
         obs = (obs,) if isinstance(obs, str) else tuple(obs)
         unknown = [part for part in obs if part not in OBSERVATION_PARTS]
         if unknown or not obs or len(set(obs)) != len(obs):
@@ -153,12 +156,9 @@ class SoftArmEnv(gym.Env):
         if unknown:
             raise ValueError(f"sensor_config keys must be sensor names from {sorted(SENSORS)}, "
                              f"got {sorted(sensor_config)!r}")
-        if feedback not in FEEDBACKS:
-            raise ValueError(f"feedback must be one of {list(FEEDBACKS)}, got {feedback!r}")
+        self.feedback_source = make_feedback_source(feedback, sensing)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        if not 0 < delta_fraction <= 1:
-            raise ValueError(f"delta_fraction must be in (0, 1], got {delta_fraction!r}")
         if action_rate_weight < 0:
             raise ValueError(f"action_rate_weight must be >= 0, got {action_rate_weight!r}")
         self.loads = make_scenario(scenario)
@@ -175,21 +175,18 @@ class SoftArmEnv(gym.Env):
         self.obs_parts = obs
         self.obs_format = obs_format
         self.feedback = feedback
-        wanted = [part for part in obs if part in SENSORS] + list(sensors)
-        if feedback in _PIPELINE_FEEDBACKS:
-            wanted += ["image", "fbg"]
-        elif feedback == "em":
-            wanted.append("em")
-        elif faults is not None and "image" not in wanted:
-            raise ValueError("faults act on the eye-in-hand camera: use feedback 'fused', "
-                             "'camera' or 'fbg', or ask for the 'image' part")
+        wanted = ([part for part in obs if part in SENSORS] + list(sensors)
+                  + list(self.feedback_source.sensors))
+        if faults is not None and "image" not in wanted:
+            raise ValueError(f"faults act on the eye-in-hand camera, which this env does not "
+                             f"simulate (feedback {feedback!r}, obs {obs!r}): use feedback "
+                             "'fused', 'camera' or 'fbg', or ask for the 'image' part")
+        defaults = self.feedback_source.sensor_options()
         self.sensors = {}
         for name in dict.fromkeys(wanted):
-            options = dict(sensor_config.get(name, {}))
+            options = {**defaults.get(name, {}), **sensor_config.get(name, {})}
             if name == "image" and faults is not None:
                 options["faults"] = faults
-            if name == "fbg" and feedback in _PIPELINE_FEEDBACKS:
-                options.setdefault("rate_hz", None)  # F-emp reads the fiber every control step
             self.sensors[name] = make_sensor(name, **options)
         self._faults = faults
         self._nominal_noise = {name: nominal_noise(sensor) for name, sensor in self.sensors.items()}
@@ -201,17 +198,10 @@ class SoftArmEnv(gym.Env):
             config, n_links=len(self.sim.arm.station_link), with_camera="image" in self.sensors,
             max_load_n=self.spec_arm.max_load_n - fixed_load_n)
         self._draw = None
-        self.pipeline = None
-        self._estimates = None
-        if feedback in _PIPELINE_FEEDBACKS:
-            from soft_gym.sensing.pipeline import SensingPipeline
-
-            self.pipeline = SensingPipeline(self.sensors["image"], self.sensors["fbg"],
-                                            **dict(sensing or {}))
-            self._calibration_key = (self.spec_arm, repr(sensor_config.get("image")),
-                                     repr(sensor_config.get("fbg")), repr(sensing))
-        self.action_mode = action_mode
-        self.delta_fraction = float(delta_fraction)
+        self._sensor_config = sensor_config
+        self.actuation = Actuation(self.spec_arm, action_mode, delta_fraction)
+        self.action_mode = self.actuation.mode
+        self.delta_fraction = self.actuation.delta_fraction
         self.action_rate_weight = float(action_rate_weight)
         self.settle_s = float(settle_s)
         self.render_mode = render_mode
@@ -235,13 +225,13 @@ class SoftArmEnv(gym.Env):
             self.observation_space = spaces.Box(
                 np.concatenate([part_spaces[p].low for p in obs]),
                 np.concatenate([part_spaces[p].high for p in obs]), dtype=np.float32)
-        self._p_low = self.spec_arm.p_pre_pa
         self._p_high = self.spec_arm.p_max_pa
         self._step = 0
         self._last_action = np.zeros(n)
-        self._command = self._p_low.copy()
-        if self.pipeline is not None:
-            self._calibrate(use_cache=True)
+        self._command = self.actuation.initial_command_pa.copy()
+        self._measurement: Measurement | None = None
+        self._estimate: FeedbackEstimate | None = None
+        self._calibrate(use_cache=True)
 
     def observation_part(self, observation, part: str) -> np.ndarray:
         """The ``part`` of an observation from this env, flat or dict (what baselines read)."""
@@ -252,39 +242,28 @@ class SoftArmEnv(gym.Env):
             return np.asarray(observation[part])
         return np.asarray(observation)[self._part_slices[part]]
 
+    @property
+    def pipeline(self):
+        """The camera/F-emp sensing pipeline of a ``fused``/``camera``/``fbg`` env, else None."""
+        return getattr(self.feedback_source, "pipeline", None)
+
     def feedback_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Tip position (m) and quaternion from the chosen feedback source."""
-        if self.feedback == "ground_truth":
-            return self.sim.tip_pose()
-        if self.feedback == "em":
-            reading = np.asarray(self.sensors["em"].reading_at(self.sim, self.sim.time_s),
-                                 dtype=float)
-            return reading[:3], reading[3:]
-        return getattr(self._estimates, self.feedback if self.feedback != "fbg" else "femp")
+        """Tip position (m) and quaternion from the feedback source, as of the last step."""
+        return self._estimate.position_m.copy(), self._estimate.quaternion.copy()
 
     def _calibrate(self, use_cache: bool) -> None:
-        """Calibrate the sensing pipeline (clean camera), or take a cached calibration."""
-        cached = _CALIBRATIONS.get(self._calibration_key) if use_cache else None
-        if cached is None:
-            faults = self.pipeline.camera.faults
-            self.pipeline.camera.set_faults(None)
-            self.sim.reset(settle_s=self.settle_s)
-            self.pipeline.calibrate(self.sim, np.random.default_rng(0))
-            self.pipeline.camera.set_faults(faults)
-            cached = (self.pipeline.vision, self.pipeline.femp, self.pipeline.calibration_samples)
-            _CALIBRATIONS[self._calibration_key] = copy.deepcopy(cached)
-        self._calibrated_state = cached
-        self._restore_calibration()
+        """Calibrate the feedback source at rest, or take its cached calibration."""
+        key = {"arm": repr(self.spec_arm), "scenario": repr(self.loads),
+               "settle_s": self.settle_s,
+               "sensors": repr(sorted((name, repr(self._sensor_config.get(name)))
+                                      for name in self.sensors))}
+        self.feedback_source.calibrate(
+            CalibrationContext(self.sim, self.sensors, self.settle_s, key), use_cache=use_cache)
 
-    def _restore_calibration(self) -> None:
-        """Put the sensing pipeline back to its state right after calibration."""
-        vision, femp, samples = copy.deepcopy(self._calibrated_state)
-        self.pipeline.vision, self.pipeline.femp = vision, femp
-        self.pipeline.calibration_samples = samples
-
-    def _observe_pipeline(self) -> None:
-        if self.pipeline is not None:
-            self._estimates = self.pipeline.observe(self.sim)
+    def _sense(self) -> None:
+        """Read every sensor once and let the feedback source estimate from that measurement."""
+        self._measurement = measure(self.sensors, self.sim)
+        self._estimate = self.feedback_source.estimate(self._measurement, self.sim)
 
     def _part_space(self, part: str) -> spaces.Space:
         if part in self.sensors:
@@ -303,12 +282,13 @@ class SoftArmEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         if options and options.get("recalibrate"):
-            if self.pipeline is None:
-                raise ValueError("options['recalibrate'] needs the sensing pipeline: feedback "
-                                 f"'fused', 'camera' or 'fbg', this env has {self.feedback!r}")
+            if not self.feedback_source.sensors or self.pipeline is None:
+                raise ValueError("options['recalibrate'] needs a feedback source that "
+                                 "calibrates (feedback 'fused', 'camera' or 'fbg'), this env has "
+                                 f"{self.feedback!r}")
             self._calibrate(use_cache=False)
-        elif seed is not None and self.pipeline is not None:
-            self._restore_calibration()
+        elif seed is not None:
+            self.feedback_source.restore()
         if self.randomizer is not None:
             self._apply_draw(self.randomizer.sample(self.np_random))
         self.sim.reset(settle_s=self.settle_s)
@@ -317,10 +297,10 @@ class SoftArmEnv(gym.Env):
         self.task.reset(self.np_random)
         for sensor in self.sensors.values():
             sensor.reset(self.sim, self.np_random)
-        self._observe_pipeline()
+        self._sense()
         self._step = 0
         self._last_action = np.zeros(self.spec_arm.n_chambers)
-        self._command = self._p_low.copy()
+        self._command = self.actuation.initial_command_pa.copy()
         return self._observation(), self._info()
 
     def _apply_draw(self, draw) -> None:
@@ -339,15 +319,11 @@ class SoftArmEnv(gym.Env):
 
     def step(self, action):
         action = self._check_action(action)
-        if self.action_mode == "absolute":
-            self._command = self._p_low + (action + 1.0) / 2.0 * (self._p_high - self._p_low)
-        else:
-            self._command = np.clip(self._command + action * self.delta_fraction * self._p_high,
-                                    self._p_low, self._p_high)
+        self._command = self.actuation.pressure(action, self._command)
         self.sim.set_pressures(self._command)
         self.sim.step_physics(self.spec_arm.control_period_s)
         self._step += 1
-        self._observe_pipeline()
+        self._sense()
         tip, _ = self.sim.tip_pose()
         target, _ = self.task.target(self._step - 1)
         error_m = float(np.linalg.norm(tip - target))
@@ -397,7 +373,7 @@ class SoftArmEnv(gym.Env):
 
     def _part(self, part: str) -> np.ndarray:
         if part in self.sensors:
-            return np.array(self.sensors[part].reading_at(self.sim, self.sim.time_s))
+            return np.array(self._measurement[part])
         if part == "pose":
             position, quaternion = self.feedback_pose()
             value = np.r_[position, quaternion]
@@ -418,21 +394,16 @@ class SoftArmEnv(gym.Env):
             "backbone_m": self.sim.backbone(), "chamber_lengths_m": self.sim.chamber_lengths(),
             "pressures_pa": self.sim.pressures_pa, "time_s": self.sim.time_s,
             "step": self._step,
-            "sensors": {name: self._copy(sensor.reading_at(self.sim, self.sim.time_s))
-                        for name, sensor in self.sensors.items()},
-            **({"estimates": self._estimate_info()} if self.pipeline is not None else {}),
+            "sensors": {name: self._copy(reading)
+                        for name, reading in self._measurement.readings.items()},
+            **({"estimates": self._estimate_info()} if self._estimate.details else {}),
             **({"randomization": self._draw.describe()} if self._draw is not None else {}),
         }
 
     def _estimate_info(self) -> dict:
-        estimates = self._estimates
-        info = {"camera": estimates.camera[0].copy(), "femp": estimates.femp[0].copy(),
-                "fused": estimates.fused[0].copy(),
-                "reprojection_error_px": estimates.reprojection_error_px,
-                "lost": estimates.lost}
-        if "em" in self.sensors:
-            info["em"] = np.asarray(self.sensors["em"].reading_at(self.sim, self.sim.time_s)[:3],
-                                    dtype=float)
+        info = dict(self._estimate.details)
+        if "em" in self._measurement.readings:
+            info["em"] = np.asarray(self._measurement["em"][:3], dtype=float)
         return info
 
     @staticmethod

@@ -80,7 +80,8 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
               = (0.95, 0.55, 0.25, 1.0)) -> ArmBody:
     """Create the multibody for ``spec`` in ``client`` (a BulletClient) with its base at the origin.
 
-    The PyBullet world frame *is* the arm's base frame (DESIGN.md section 2); gravity is set by the
+    The PyBullet world frame *is* the arm's base frame (docs/architecture.md, "Frames and mounts");
+    gravity is set by the
     simulator from the mount.
     """
     link_masses, collision, visual, positions, inertial_positions, parents, joint_types, axes = (

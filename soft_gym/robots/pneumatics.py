@@ -1,6 +1,7 @@
 """Pneumatic actuation: first-order pressure lag and the pressure -> force/moment map.
 
-DESIGN.md section 3: chamber ``i`` at gauge pressure ``p_i`` over area ``A_c`` pushes
+docs/architecture.md, "Pneumatic actuation": chamber ``i`` at gauge pressure ``p_i`` over area
+``A_c`` pushes
 ``F_i = p_i A_c``; its segment receives the axial force ``sum_i F_i`` and the bending moment
 ``sum_i F_i d (sin sigma_i, -cos sigma_i)`` about the local x and y axes. Equal pressures give no
 moment, so pre-pressure only lengthens the arm.
@@ -13,6 +14,7 @@ import math
 import numpy as np
 
 from soft_gym._validation import as_finite_array
+from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.spec import ArmSpec
 
 
@@ -66,12 +68,12 @@ def chamber_loads(spec: ArmSpec, pressure_pa: np.ndarray) -> tuple[np.ndarray, n
 
     Returns:
         ``(axial_force_n, moment_nm)`` with shapes (n_segments,) and (n_segments, 2); the moment
-        is about the segment's local x and y axes (DESIGN.md section 3).
+        is about the segment's local x and y axes (docs/architecture.md, "Pneumatic actuation").
     """
     pressure = np.asarray(pressure_pa, dtype=float).reshape(spec.n_segments, 3)
     area = np.array([segment.chamber_area_m2 for segment in spec.segments])[:, None]
     offset = spec.chamber_offset_m[:, None]
-    sigma = 2.0 * np.pi * np.arange(3) / 3.0
+    sigma = CHAMBER_ANGLES_RAD
     force = pressure * area
     axial = force.sum(axis=1)
     moment = np.stack([(force * offset * np.sin(sigma)).sum(axis=1),

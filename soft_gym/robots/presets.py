@@ -1,6 +1,7 @@
 """The arms of the four papers as :class:`ArmSpec` presets.
 
-Dimensions come from the papers (DESIGN.md section 3 table); values the papers do not state are
+Dimensions come from the papers (docs/architecture.md, "Presets"); values the papers do not
+state are
 chosen here, written down in each preset's ``notes`` and calibrated against what the paper reports
 (``python -m soft_gym.demo`` prints the figures).
 

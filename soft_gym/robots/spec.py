@@ -2,7 +2,7 @@
 
 All quantities are SI (m, kg, s, Pa, rad). The derived section properties follow from a solid
 silicone cylinder with three chamber bores at distance ``chamber_offset_m`` from the axis at angles
-``sigma_i = 2 pi i / 3`` (DESIGN.md section 2):
+``sigma_i = 2 pi i / 3`` (docs/architecture.md, "Chambers"):
 
 * cross-section area ``A = pi R^2 - 3 A_c``
 * second moment of area about any diameter ``I = pi R^4 / 4 - 3 A_c^2 / (4 pi) - 1.5 A_c d^2``
@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from soft_gym._validation import require_in_range, require_non_negative, require_positive
+from soft_gym.robots.chambers import CHAMBER_ANGLES_RAD
 
 MOUNTS = ("hanging", "upright", "horizontal")
 GRAVITY_M_S2 = 9.81
@@ -150,8 +151,9 @@ class SegmentSpec:
 
     @property
     def chamber_angles_rad(self) -> np.ndarray:
-        """Chamber angles ``sigma_i = 2 pi i / 3`` (rad)."""
-        return 2.0 * np.pi * np.arange(3) / 3.0
+        """Chamber angles ``sigma_i = 2 pi i / 3`` (rad), read-only
+        (:data:`soft_gym.robots.actuation.CHAMBER_ANGLES_RAD`)."""
+        return CHAMBER_ANGLES_RAD
 
 
 @dataclass(frozen=True)

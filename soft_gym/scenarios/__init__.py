@@ -1,13 +1,15 @@
 """Loads and disturbances, selectable by name: ``gymnasium.make(..., scenario=...)``.
 
 A scenario is ``None``, an element name (``"tip_mass"``), a dict with ``"name"`` and the element's
-parameters (``{"name": "tip_mass", "mass_kg": 0.05}``), an element instance, or a list of these.
+parameters (``{"name": "tip_mass", "mass_kg": 0.05}``), an element instance, or a list of these
+(parsed by :func:`soft_gym._registry.parse_spec`).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from soft_gym._registry import FORMS, Spec, build, parse_spec
 from soft_gym.scenarios.loads import (FillingLoad, Flick, ObstacleRod, Push, SwayingMass,
                                       TipMass)
 
@@ -23,27 +25,12 @@ SCENARIO_ELEMENTS: dict[str, type] = {
 
 
 def make_scenario(scenario: Any) -> list:
-    """Turn a scenario description into a list of fresh load elements (see module docstring)."""
-    if scenario is None:
-        return []
-    if isinstance(scenario, (list, tuple)):
-        return [element for item in scenario for element in make_scenario(item)]
-    if isinstance(scenario, tuple(SCENARIO_ELEMENTS.values())):
-        return [scenario]
-    if isinstance(scenario, str):
-        scenario = {"name": scenario}
-    if not isinstance(scenario, dict) or "name" not in scenario:
-        raise ValueError(
-            "scenario must be None, a name, a dict with 'name', an element or a list of these, "
-            f"got {scenario!r}")
-    params = dict(scenario)
-    name = params.pop("name")
-    if name not in SCENARIO_ELEMENTS:
-        raise ValueError(f"scenario name must be one of {sorted(SCENARIO_ELEMENTS)}, got {name!r}")
-    try:
-        return [SCENARIO_ELEMENTS[name](**params)]
-    except TypeError as error:
-        raise ValueError(f"scenario {name!r} got invalid parameters {params}: {error}") from error
+    """Turn a scenario description into a list of load elements (see module docstring): fresh
+    ones for names and dicts, given instances as they are."""
+    items = parse_spec(scenario, "scenario", SCENARIO_ELEMENTS, forms=FORMS,
+                       instance_types=tuple(SCENARIO_ELEMENTS.values()))
+    return [build("scenario", item.name, SCENARIO_ELEMENTS[item.name], item.params)
+            if isinstance(item, Spec) else item for item in items]
 
 
 __all__ = ["SCENARIO_ELEMENTS", "make_scenario", "TipMass", "FillingLoad", "SwayingMass", "Push",

@@ -15,23 +15,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pybullet
 
+from soft_gym._timing import TimeWindow
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 
 
 @dataclass
-class _Timed:
-    """Time window shared by all scenario elements (s)."""
-
-    start_s: float = 0.0
-    end_s: float | None = None
-
-    def _check_window(self) -> None:
-        require_non_negative("start_s", self.start_s)
-        if self.end_s is not None and (not np.isfinite(self.end_s) or self.end_s <= self.start_s):
-            raise ValueError(f"end_s must be None or > start_s={self.start_s}, got {self.end_s!r}")
-
-    def active(self, time_s: float) -> bool:
-        return time_s >= self.start_s and (self.end_s is None or time_s < self.end_s)
+class _Timed(TimeWindow):
+    """Base of all scenario elements: a time window (:class:`~soft_gym._timing.TimeWindow`, s)."""
 
     def peak_load_n(self, gravity_m_s2: float) -> float:
         """Largest weight or force (N) the element puts on the arm (checked against
@@ -84,7 +74,7 @@ class TipMass(_TipMassBase):
 
     def __post_init__(self) -> None:
         require_non_negative("mass_kg", self.mass_kg)
-        self._check_window()
+        self.check_window()
 
     def extra_mass_kg(self, time_s: float) -> float:
         return self.mass_kg
@@ -110,7 +100,7 @@ class FillingLoad(_TipMassBase):
         require_non_negative("initial_mass_kg", self.initial_mass_kg)
         require_non_negative("added_mass_kg", self.added_mass_kg)
         require_positive("rate_kg_s", self.rate_kg_s)
-        self._check_window()
+        self.check_window()
 
     def active(self, time_s: float) -> bool:
         return self.end_s is None or time_s < self.end_s
@@ -137,7 +127,7 @@ class SwayingMass(_Timed):
         require_positive("mass_kg", self.mass_kg)
         require_positive("length_m", self.length_m)
         require_positive("radius_m", self.radius_m)
-        self._check_window()
+        self.check_window()
 
     def peak_load_n(self, gravity_m_s2: float) -> float:
         return self.mass_kg * gravity_m_s2
@@ -206,7 +196,7 @@ class Push(_Timed):
     def __post_init__(self) -> None:
         self.force_n = tuple(as_finite_array("force_n", self.force_n, shape=(3,)).tolist())
         require_non_negative("ramp_s", self.ramp_s)
-        self._check_window()
+        self.check_window()
 
     def _link_index(self, sim) -> int:
         n = len(sim.arm.station_link)
@@ -256,7 +246,7 @@ class Flick(Push):
         require_positive("duration_s", self.duration_s)
         self.force_n = tuple((impulse / self.duration_s).tolist())
         self.end_s = self.start_s + self.duration_s
-        self._check_window()
+        self.check_window()
 
 
 @dataclass
@@ -279,7 +269,7 @@ class ObstacleRod(_Timed):
             raise ValueError("axis must be a non-zero vector, got (0, 0, 0)")
         require_positive("radius_m", self.radius_m)
         require_positive("length_m", self.length_m)
-        self._check_window()
+        self.check_window()
 
     def attach(self, sim) -> None:
         axis = np.asarray(self.axis, dtype=float)

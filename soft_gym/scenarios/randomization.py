@@ -181,7 +181,7 @@ class DomainRandomizer:
 
     def sample(self, rng: np.random.Generator) -> EpisodeDraw:
         from soft_gym.scenarios import Push, SwayingMass, TipMass
-        from soft_gym.scenarios.faults import make_faults
+        from soft_gym.sensors.faults import make_faults
 
         c = self.config
         uniform = lambda bounds: float(rng.uniform(*bounds))  # noqa: E731

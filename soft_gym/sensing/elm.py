@@ -7,7 +7,7 @@ Wang et al. 2023 (wang2023), Section II-C:
 * batch initialisation ``beta = (Phi^T Phi)^-1 Phi^T Z`` (eqs. (5)-(9)), ridge-regularised here:
   ``beta = (Phi^T Phi + lambda I)^-1 Phi^T Z``;
 * recursive update per sample with forgetting factor ``w`` on old data (eqs. (10)-(17)); the
-  paper's eq. (17) recursion is of ``H = K^-1`` (papers/README.md notes the slip).
+  paper's eq. (17) recursion is of ``H = K^-1`` (docs/architecture.md, "Errata").
 
 Exactly, after ``k`` updates the weights minimise
 

@@ -25,6 +25,7 @@ from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym.sensing.exploration import spiral_fractions
 from soft_gym.sensing.femp import FEmpEstimator
 from soft_gym.sensing.fusion import PoseFusion
+from soft_gym.sensing.measurement import Measurement, measure
 from soft_gym.sensing.vision_pose import VisionEstimate, VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber
@@ -63,14 +64,20 @@ class SensingPipeline:
             samples are collected.
         femp_prior: give the vision tracker F-emp's pose (from this step's FBG reading) as the
             prediction for its search by projection, instead of the constant-velocity model.
-            F-emp follows the arm within ~1 mm whatever the actuation, so with a random action
-            every step the tracker rarely falls back to matching the whole local map.
+            Off by default: the camera estimate is then independent of F-emp, as the paper's
+            SLAM is, and F-emp learns from labels it did not shape. On, F-emp follows the arm
+            within ~1 mm whatever the actuation, so with a random action every step the tracker
+            rarely falls back to matching the whole local map (faster under jerky actuation;
+            ``bench/sensor_speed.py`` measures both).
     """
+
+    OPTIONS = ("n_init", "femp", "fusion", "vision", "exploration", "map_steps", "femp_prior")
+    """Keyword options of the pipeline (the env's ``sensing=`` dict)."""
 
     def __init__(self, camera: EyeInHandCamera, fbg: FBGFiber, n_init: int = 450,
                  femp: dict | None = None, fusion: PoseFusion | None = None,
                  vision: dict | None = None, exploration: dict | None = None,
-                 map_steps: int = 0, femp_prior: bool = True) -> None:
+                 map_steps: int = 0, femp_prior: bool = False) -> None:
         if not isinstance(n_init, int) or n_init < 10:
             raise ValueError(f"n_init must be an integer >= 10, got {n_init!r}")
         if isinstance(map_steps, bool) or not isinstance(map_steps, int) or map_steps < 0:
@@ -82,8 +89,15 @@ class SensingPipeline:
         self.camera = camera
         self.fbg = fbg
         self.n_init = n_init
-        self.femp_options = dict(femp or {})
+        if isinstance(fusion, dict):
+            fusion = PoseFusion(**fusion)
         self.fusion = fusion or PoseFusion()
+        if not isinstance(self.fusion, PoseFusion):
+            raise ValueError("fusion must be None, a PoseFusion or a dict of its bounds "
+                             f"(lower_px, upper_px), got {self.fusion!r}")
+        # F-emp learns from the frames the fusion trusts (one e_S scale for both rules)
+        self.femp_options = {"update_threshold_px": self.fusion.trust_threshold_px,
+                             **dict(femp or {})}
         self.vision_options = dict(vision or {})
         self.exploration = {"turn_s": 8.0, "breath_s": 45.0, "low": 0.05, "high": 0.6,
                             "common": 0.3, "common_s": 11.0,
@@ -115,20 +129,20 @@ class SensingPipeline:
         image, depth = self.camera.render_clean(sim)
         self.vision.calibrate(image, depth, self.camera.pose_matrix(sim))
         spec = sim.spec
+        sensors = {"image": self.camera, "fbg": self.fbg}
         shifts, positions, quaternions = [], [], []
-        threshold = self.femp_options.get("update_threshold_px", 1.4)
+        threshold = self.femp_options["update_threshold_px"]
         for k in range(self.map_steps + self.n_init):
             fraction = spiral_fractions(k * spec.control_period_s, spec.n_segments,
                                         **self.exploration)
             sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
             sim.step_physics(spec.control_period_s)
-            estimate = self.vision.update(self.camera.reading_at(sim, sim.time_s),
-                                          self.camera.last_depth)
+            measurement = measure(sensors, sim)
+            estimate = self.vision.update(measurement["image"], measurement.depth_m["image"])
             if k < self.map_steps:
                 continue
-            reading = self.fbg.reading_at(sim, sim.time_s)
             if not estimate.lost and estimate.reprojection_error_px < threshold:
-                shifts.append(np.asarray(reading, dtype=float))
+                shifts.append(np.asarray(measurement["fbg"], dtype=float))
                 positions.append(estimate.position_m)
                 quaternions.append(estimate.quaternion)
         if len(shifts) < 10:
@@ -140,19 +154,20 @@ class SensingPipeline:
         self.calibration_samples = len(shifts)
         return len(shifts)
 
-    def observe(self, sim) -> PoseEstimates:
-        """Read the camera and the FBG now, update F-emp selectively, fuse (wang2023 eq. (18))."""
+    def observe(self, measurement: Measurement) -> PoseEstimates:
+        """Estimate from one step's camera frame and FBG reading: F-emp predicts, the vision
+        tracker solves the camera pose, F-emp is updated selectively, eq. (18) fuses (wang2023)."""
         if not self.is_calibrated:
             raise ValueError("the sensing pipeline is not calibrated: call calibrate() first")
-        reading = np.asarray(self.fbg.reading_at(sim, sim.time_s), dtype=float)
+        reading = np.asarray(measurement["fbg"], dtype=float)
         femp_pose = self.femp.predict(reading)
-        frame = self.camera.reading_at(sim, sim.time_s)
         prior = None
         if self.femp_prior:
             prior = np.eye(4)
             prior[:3, :3] = quaternion_to_matrix(femp_pose[1])
             prior[:3, 3] = femp_pose[0]
-        vision: VisionEstimate = self.vision.update(frame, self.camera.last_depth, prior)
+        vision: VisionEstimate = self.vision.update(measurement["image"],
+                                                    measurement.depth_m["image"], prior)
         updated = self.femp.update(reading, vision.position_m, vision.quaternion,
                                    vision.reprojection_error_px, vision.lost)
         fused = self.fusion.fuse(vision.position_m, vision.quaternion, *femp_pose,

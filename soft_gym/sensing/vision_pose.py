@@ -1,7 +1,7 @@
 """Eye-in-hand vision pose: ORB features against a keyframe map, RANSAC PnP and LM refinement.
 
 A stand-in for the ORB-SLAM2 tracking of Wang et al. 2023 (wang2023, Section II-B, IV), see
-DESIGN.md section 5:
+docs/architecture.md, "Vision pose":
 
 * the first keyframe is built at calibration from the known camera pose and the depth buffer,
   which fixes the metric scale (the paper calibrates scale with the EM tracker);
@@ -77,7 +77,7 @@ class VisionPoseEstimator:
         tip_from_camera: pose of the camera in the tip frame (4x4), so that
             ``world_from_tip = world_from_camera @ inv(tip_from_camera)``.
         n_features: ORB features per frame.
-        min_inliers: fewer PnP inliers than this means tracking is lost (DESIGN.md: ~30).
+        min_inliers: fewer PnP inliers than this means tracking is lost (30: ORB-SLAM2's bound).
         ratio: Lowe ratio for descriptor matching.
         ransac_threshold_px: RANSAC reprojection threshold (px).
         ransac_iterations: RANSAC iterations (the last pose seeds the solver, so few are needed).
@@ -162,6 +162,16 @@ class VisionPoseEstimator:
         twin.last = copy.deepcopy(self.last, memo)
         twin.previous = copy.deepcopy(self.previous, memo)
         return twin
+
+    def __getstate__(self) -> dict:
+        """Pickled state: the settings and the map (OpenCV's objects are rebuilt on load)."""
+        return {name: value for name, value in self.__dict__.items()
+                if name not in ("_orb", "_matcher")}
+
+    def __setstate__(self, state: dict) -> None:
+        settings = {f.name: state[f.name] for f in dataclasses.fields(self) if f.init}
+        self.__init__(**settings)
+        self.__dict__.update(state)
 
     # ------------------------------------------------------------------ map
     def calibrate(self, image: np.ndarray, depth_m: np.ndarray,

@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from soft_gym._registry import build, parse_spec
 from soft_gym.sensors.base import Sensor
 
 SENSORS: dict[str, str] = {
@@ -29,15 +30,14 @@ SENSORS: dict[str, str] = {
 
 
 def make_sensor(name: str, **kwargs: Any) -> Sensor:
-    """Build the sensor called ``name`` (see :data:`SENSORS`) with its keyword arguments."""
-    if name not in SENSORS:
-        raise ValueError(f"sensor must be one of {sorted(SENSORS)}, got {name!r}")
-    module_name, class_name = SENSORS[name].split(":")
-    cls = getattr(importlib.import_module(module_name), class_name)
-    try:
-        return cls(**kwargs)
-    except TypeError as error:
-        raise ValueError(f"sensor {name!r} got invalid parameters {kwargs}: {error}") from error
+    """Build the sensor called ``name`` (see :data:`SENSORS`) with its keyword arguments.
+
+    ``name`` is parsed by :func:`soft_gym._registry.parse_spec` (a name string only).
+    """
+    (spec,) = parse_spec(name, "sensor", SENSORS, forms=("name",))
+    module_name, class_name = SENSORS[spec.name].split(":")
+    return build("sensor", spec.name, getattr(importlib.import_module(module_name), class_name),
+                 kwargs)
 
 
 __all__ = ["Sensor", "SENSORS", "make_sensor"]

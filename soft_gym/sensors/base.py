@@ -1,7 +1,8 @@
 """What every sensor shares: its own sample rate (sample and hold), seeded noise, and a space.
 
-A sensor is read once per control step with :meth:`Sensor.read`; it takes a fresh sample when
-one is due at its ``rate_hz`` and otherwise repeats the last one, as a slower real sensor would.
+The env reads every sensor once per control step with :meth:`Sensor.read` (into one
+:class:`~soft_gym.sensing.measurement.Measurement`); a sensor takes a fresh sample when one is due
+at its ``rate_hz`` and otherwise repeats the last one, as a slower real sensor would.
 All randomness comes from the generator given to :meth:`Sensor.reset` (the env's ``np_random``),
 so a seed fixes every reading.
 """
@@ -31,35 +32,21 @@ class Sensor:
         self.rate_hz = rate_hz
         self.rng = np.random.default_rng(0)
         self._last: Any = None
-        self._last_sample_s: float | None = None
         self._next_sample_s = 0.0
 
     def reset(self, sim, rng: np.random.Generator) -> None:
         """Start an episode: take the noise generator and forget the held sample."""
         self.rng = rng
         self._last = None
-        self._last_sample_s = None
         self._next_sample_s = 0.0
 
     def read(self, sim, time_s: float) -> Any:
         """The current reading: a fresh sample if one is due at ``time_s`` (s), else the last."""
         if self._last is None or self.rate_hz is None or time_s + 1e-9 >= self._next_sample_s:
             self._last = self.sample(sim)
-            self._last_sample_s = time_s
             if self.rate_hz is not None:
                 self._next_sample_s = time_s + 1.0 / self.rate_hz
         return self._last
-
-    def reading_at(self, sim, time_s: float) -> Any:
-        """The reading at ``time_s`` (s), reusing a sample already taken at that time.
-
-        :meth:`read` at an ``rate_hz=None`` sensor samples afresh on every call; the env asks
-        for each sensor several times per step (observation, info, pose estimation), and one
-        step is one measurement (a camera frame is rendered once).
-        """
-        if self._last is not None and self._last_sample_s == time_s:
-            return self._last
-        return self.read(sim, time_s)
 
     def sample(self, sim) -> Any:
         """Measure now from the simulator ``sim`` (an ``ArmSimulator``), noise included."""

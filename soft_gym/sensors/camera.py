@@ -5,22 +5,19 @@ run monocular ORB-SLAM2 on its frames at 20 Hz (one per 0.05 s control step) whi
 over a LEGO-constructed scene. Here the frame is rendered by PyBullet's TinyRenderer (CPU, works
 in DIRECT mode) from the tip pose composed with a fixed camera offset, looking along the tip's
 +z axis, at the feature-rich scene of :func:`soft_gym.sensors.scene.build_scene`; the visual
-faults of :mod:`soft_gym.scenarios.faults` (occluder, low light, LED glare, motion blur, noise)
+faults of :mod:`soft_gym.sensors.faults` (occluder, low light, LED glare, motion blur, noise)
 are applied to every frame.
 
 Conventions (OpenCV): camera axes x right, y down, z forward; the pose is world-from-camera
 ``(R, t)`` (a camera point ``p_c`` is at ``R p_c + t`` in the world = arm base frame). The camera
 axes are the tip's axes (x_cam = x_tip, y_cam = y_tip, z_cam = z_tip), the centre is
-``offset_m`` from the tip in the tip frame. :meth:`CameraIntrinsics.K` is the pinhole matrix
-that matches TinyRenderer's sampling exactly (pixel (u, v) samples the image plane at
-``u = cx + fx x/z``, ``v = cy + fy y/z`` with ``cx = W / 2``, ``cy = H / 2 - 1``; measured by
-sweeping a straight edge through the image, 0.01 px).
+``offset_m`` from the tip in the tip frame. The pinhole model is
+:class:`soft_gym.sensors.intrinsics.CameraIntrinsics`, whose ``K`` matches TinyRenderer's
+sampling exactly.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -28,84 +25,11 @@ import pybullet
 from gymnasium import spaces
 
 from soft_gym._quaternion import quaternion_to_matrix
-from soft_gym._validation import as_finite_array, require_positive
-from soft_gym.scenarios.faults import FrameContext, VisualFault, make_faults
+from soft_gym._validation import as_finite_array
 from soft_gym.sensors.base import Sensor
+from soft_gym.sensors.faults import FrameContext, VisualFault, make_faults
+from soft_gym.sensors.intrinsics import CameraIntrinsics, as_intrinsics
 from soft_gym.sensors.scene import build_scene
-
-
-@dataclass(frozen=True)
-class CameraIntrinsics:
-    """A pinhole camera with square pixels as PyBullet renders it.
-
-    Args:
-        width: image width (px).
-        height: image height (px).
-        hfov_deg: horizontal field of view (deg); endoscope cameras are wide, 90-120 deg.
-        near_m: near clipping distance (m), before anything the camera must see (wang2023's
-            camera is sharp from 8 mm).
-        far_m: far clipping distance (m).
-    """
-
-    width: int = 160
-    height: int = 120
-    hfov_deg: float = 95.0
-    near_m: float = 0.004
-    far_m: float = 2.0
-
-    def __post_init__(self) -> None:
-        for name in ("width", "height"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not (
-                    8 <= value <= 4096):
-                raise ValueError(f"{name} must be an integer in [8, 4096], got {value!r}")
-        if not (np.isfinite(self.hfov_deg) and 1.0 <= self.hfov_deg <= 170.0):
-            raise ValueError(f"hfov_deg must be within [1, 170], got {self.hfov_deg!r}")
-        require_positive("near_m", self.near_m)
-        require_positive("far_m", self.far_m)
-        if self.far_m <= self.near_m:
-            raise ValueError(f"far_m must be > near_m={self.near_m}, got {self.far_m!r}")
-
-    @property
-    def fx(self) -> float:
-        """Focal length in pixels along x."""
-        return 0.5 * self.width / math.tan(0.5 * math.radians(self.hfov_deg))
-
-    @property
-    def fy(self) -> float:
-        """Focal length in pixels along y (square pixels)."""
-        return self.fx
-
-    @property
-    def vfov_deg(self) -> float:
-        """Vertical field of view (deg)."""
-        return math.degrees(2.0 * math.atan(0.5 * self.height / self.fy))
-
-    def K(self) -> np.ndarray:
-        """OpenCV camera matrix (3, 3) consistent with TinyRenderer's images.
-
-        ``cx = W / 2``, ``cy = H / 2 - 1``: TinyRenderer samples pixel column ``j`` at the
-        left edge of the OpenGL pixel and stores rows bottom-up, so row ``i`` samples one
-        pixel below the usual centre convention.
-        """
-        return np.array([[self.fx, 0.0, 0.5 * self.width],
-                         [0.0, self.fy, 0.5 * self.height - 1.0],
-                         [0.0, 0.0, 1.0]])
-
-    def projection_matrix(self) -> list[float]:
-        """OpenGL projection matrix for ``getCameraImage`` (16 floats, column-major)."""
-        n, f = self.near_m, self.far_m
-        matrix = np.array([[2.0 * self.fx / self.width, 0.0, 0.0, 0.0],
-                           [0.0, 2.0 * self.fy / self.height, 0.0, 0.0],
-                           [0.0, 0.0, -(f + n) / (f - n), -2.0 * f * n / (f - n)],
-                           [0.0, 0.0, -1.0, 0.0]])
-        return matrix.T.reshape(-1).tolist()
-
-    def depth_from_buffer(self, buffer: np.ndarray) -> np.ndarray:
-        """Metric depth along the optical axis (m) from PyBullet's [0, 1] depth buffer."""
-        n, f = self.near_m, self.far_m
-        buffer = np.asarray(buffer, dtype=np.float64)
-        return f * n / (f - (f - n) * buffer)
 
 
 def view_matrix(rotation: np.ndarray, position: np.ndarray) -> list[float]:
@@ -131,19 +55,6 @@ def render(client, intrinsics: CameraIntrinsics, rotation: np.ndarray, position:
     return np.ascontiguousarray(rgb), depth
 
 
-def _as_intrinsics(intrinsics: Any, default: CameraIntrinsics) -> CameraIntrinsics:
-    if intrinsics is None:
-        return default
-    if isinstance(intrinsics, CameraIntrinsics):
-        return intrinsics
-    if isinstance(intrinsics, dict):
-        try:
-            return CameraIntrinsics(**intrinsics)
-        except TypeError as error:
-            raise ValueError(f"intrinsics got invalid parameters {intrinsics}: {error}") from error
-    raise ValueError(f"intrinsics must be None, a CameraIntrinsics or a dict, got {intrinsics!r}")
-
-
 class EyeInHandCamera(Sensor):
     """The tip camera of wang2023: a uint8 RGB frame (H, W, 3) per reading, faults applied.
 
@@ -151,7 +62,7 @@ class EyeInHandCamera(Sensor):
         intrinsics: a :class:`CameraIntrinsics`, or a dict of its fields (default 160 x 120,
             95 deg horizontal field of view, near 4 mm, far 2 m).
         offset_m: camera centre in the tip frame (m); default 3 mm along the tip's +z (the cap).
-        faults: visual faults, anything :func:`soft_gym.scenarios.faults.make_faults` accepts
+        faults: visual faults, anything :func:`soft_gym.sensors.faults.make_faults` accepts
             (default none: clean frames). See :meth:`set_faults`.
         rate_hz: frames per second; ``None`` renders at every read (wang2023 runs ORB-SLAM2 at
             the 20 Hz control rate).
@@ -166,7 +77,7 @@ class EyeInHandCamera(Sensor):
     Attributes:
         last_pose: world-from-camera ``(R, t)`` of the last frame (OpenCV axes).
         last_depth: metric depth (m) of the last frame, occluder included (for calibration).
-        faults: the active list of :class:`~soft_gym.scenarios.faults.VisualFault`.
+        faults: the active list of :class:`~soft_gym.sensors.faults.VisualFault`.
     """
 
     def __init__(self, intrinsics: CameraIntrinsics | dict | None = None,
@@ -175,7 +86,7 @@ class EyeInHandCamera(Sensor):
                  scene_options: dict | None = None,
                  light_direction: tuple[float, float, float] = (0.3, -0.2, -1.0)) -> None:
         super().__init__("image", rate_hz)
-        self.intrinsics = _as_intrinsics(intrinsics, CameraIntrinsics())
+        self.intrinsics = as_intrinsics(intrinsics, CameraIntrinsics())
         self.offset_m = as_finite_array("offset_m", offset_m, shape=(3,))
         light = as_finite_array("light_direction", light_direction, shape=(3,))
         if np.linalg.norm(light) == 0:
@@ -306,4 +217,4 @@ class EyeInHandCamera(Sensor):
         return spaces.Box(0, 255, (self.intrinsics.height, self.intrinsics.width, 3), np.uint8)
 
 
-__all__ = ["CameraIntrinsics", "EyeInHandCamera", "view_matrix", "render"]
+__all__ = ["EyeInHandCamera", "view_matrix", "render"]

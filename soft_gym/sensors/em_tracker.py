@@ -21,28 +21,10 @@ import math
 import numpy as np
 from gymnasium import spaces
 
+from soft_gym._quaternion import quaternion_multiply, rotation_vector_to_quaternion
 from soft_gym._validation import require_non_negative
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensors.base import Sensor
-
-
-def _rotation_vector_to_quaternion(vector: np.ndarray) -> np.ndarray:
-    """Quaternion (x, y, z, w) of the rotation with rotation vector ``vector`` (rad)."""
-    angle = float(np.linalg.norm(vector))
-    half = 0.5 * angle
-    # sin(half) / angle, smooth at 0
-    scale = 0.5 - angle * angle / 48.0 if angle < 1e-4 else math.sin(half) / angle
-    return np.array([vector[0] * scale, vector[1] * scale, vector[2] * scale, math.cos(half)])
-
-
-def _quaternion_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product ``a * b`` of (x, y, z, w) quaternions."""
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return np.array([aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw,
-                     aw * bw - ax * bx - ay * by - az * bz])
 
 
 class EMTracker(Sensor):
@@ -79,7 +61,7 @@ class EMTracker(Sensor):
             position = position + self.position_noise_m * self.rng.standard_normal(3)
         if self.orientation_noise_deg > 0.0:
             vector = math.radians(self.orientation_noise_deg) * self.rng.standard_normal(3)
-            quaternion = _quaternion_multiply(_rotation_vector_to_quaternion(vector), quaternion)
+            quaternion = quaternion_multiply(rotation_vector_to_quaternion(vector), quaternion)
         quaternion = quaternion / np.linalg.norm(quaternion)
         if quaternion[3] < 0.0:
             quaternion = -quaternion

@@ -6,7 +6,8 @@ about 16.5 mm apart along the arm) at radius ``r`` (the 10 mm outer radius) on t
 The helix angle ``a`` between the fiber and the arm axis obeys ``tan a = 2 pi r / P`` (75.3 deg for
 the default), so a step ``dl`` along the fiber advances the arc position by ``dl cos a``.
 
-Strain model (DESIGN.md section 4, after Xu et al. 2016 as cited by wang2023 [24]). At a surface
+Strain model (docs/architecture.md, "FBG fiber"; after Xu et al. 2016, wang2023 ref. [24]). At a
+surface
 point at arc position ``s`` and angle ``psi`` (a material angle, measured in the cross-section's
 own frame from its local ``+x`` axis) the axial surface strain of a bent and stretched rod is
 
@@ -41,7 +42,8 @@ Wavelength (Wang et al. 2023, Section II-A, the wavelength-shift vector ``lambda
     dl_j = l0 (1 - p_e) t eps_j + k_T dT + noise                                          (F2)
 
 with ``l0 = 1550 nm``, ``p_e = 0.21`` (1.22 pm per microstrain), ``t`` a strain-transfer factor
-(default 1: the fiber follows the surface, as in DESIGN.md), ``dT`` a common temperature change and
+(``t = 1``: the fiber follows the surface; :class:`FBGFiber` defaults to 2e-3), ``dT`` a common
+temperature change and
 white Gaussian noise (default 1 pm; wang2023 Appendix reports a mean static noise of 0.9 pm and at
 most 4 pm).
 
@@ -72,7 +74,7 @@ from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensors.base import Sensor
 
 LAMBDA0_NM = 1550.0
-"""Bragg wavelength ``l0`` of the gratings (nm), DESIGN.md section 4 (C-band)."""
+"""Bragg wavelength ``l0`` of the gratings (nm), C-band (docs/architecture.md, "FBG fiber")."""
 
 PHOTOELASTIC = 0.21
 """Effective photo-elastic coefficient ``p_e`` of silica fiber."""
@@ -335,7 +337,7 @@ def fbg_strain(vertex_arc_m: np.ndarray, curvatures: np.ndarray, axial_strains: 
                twist_rates: np.ndarray, geometry: FBGGeometry) -> np.ndarray:
     """Fiber strain of every grating, eq. (F1) of this module averaged over the grating length.
 
-    Implements DESIGN.md section 4 for the helically wound fiber of Wang et al. 2023 (Section IV-A,
+    Implements docs/architecture.md, "FBG fiber", for the helical fiber of wang2023 (Section IV-A,
     Fig. 3: the strain pattern's amplitude follows the curvature, its phase the bending
     direction).
 

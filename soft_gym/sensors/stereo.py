@@ -25,7 +25,8 @@ from gymnasium import spaces
 
 from soft_gym._validation import as_finite_array, require_positive
 from soft_gym.sensors.base import Sensor
-from soft_gym.sensors.camera import CameraIntrinsics, _as_intrinsics, render
+from soft_gym.sensors.camera import render
+from soft_gym.sensors.intrinsics import CameraIntrinsics, as_intrinsics
 
 
 class StereoCamera(Sensor):
@@ -35,7 +36,7 @@ class StereoCamera(Sensor):
     "P_left": float64 (3, 4), "P_right": float64 (3, 4)}``.
 
     Args:
-        intrinsics: :class:`~soft_gym.sensors.camera.CameraIntrinsics` or a dict of its fields;
+        intrinsics: :class:`~soft_gym.sensors.intrinsics.CameraIntrinsics` or a dict of its fields;
             default 320 x 240, 70 deg horizontal field of view, near 5 cm, far 5 m (zou2022 uses a
             ZED at 1280 x 720; a smaller frame keeps the simulation fast).
         baseline_m: distance between the optical centres (m); 0.12 m is the ZED's.
@@ -63,7 +64,7 @@ class StereoCamera(Sensor):
                  light_direction: tuple[float, float, float] = (0.2, -1.0, -0.6),
                  noise_std_dn: float = 0.0, rate_hz: float | None = None) -> None:
         super().__init__("stereo", rate_hz)
-        self.intrinsics = _as_intrinsics(intrinsics, CameraIntrinsics(
+        self.intrinsics = as_intrinsics(intrinsics, CameraIntrinsics(
             width=320, height=240, hfov_deg=70.0, near_m=0.05, far_m=5.0))
         self.baseline_m = require_positive("baseline_m", baseline_m)
         self.distance_m = None if distance_m is None else require_positive("distance_m", distance_m)

@@ -3,7 +3,8 @@
 Zhao et al. 2021 set three strain gauges into grooves along each 150 mm segment (Section II-A,
 Fig. 1(b)) and show in Fig. 3 that their readings follow the chamber pressures *and* change with a
 tip load at the same pressures: a gauge reads the local deformation, whatever causes it. Here each
-gauge reads the axial surface strain of the rod at its place (DESIGN.md section 4),
+gauge reads the axial surface strain of the rod at its place (docs/architecture.md,
+"Strain gauges"),
 
     eps(s, psi) = eps_axial(s) - r (kx(s) cos psi + ky(s) sin psi)                         (G1)
 
@@ -29,6 +30,7 @@ import numpy as np
 from gymnasium import spaces
 
 from soft_gym._validation import require_non_negative, require_positive
+from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensors.base import Sensor
 from soft_gym.sensors.fbg import (gauss_points, link_matrix, rest_vertex_arcs, segment_bounds,
@@ -118,7 +120,7 @@ class StrainGauges(Sensor):
         nodes, weights = gauss_points(self.n_points)
         center_arc = np.repeat(centers, 3)
         arc = center_arc[:, None] + half * nodes[None, :]
-        angles = (2.0 * np.pi * np.arange(3) / 3.0 + self.angle_offset_rad)
+        angles = CHAMBER_ANGLES_RAD + self.angle_offset_rad
         psi = np.broadcast_to(np.tile(angles, n_seg)[:, None], arc.shape)
         radii = np.array([self.radius_m if self.radius_m is not None else s.outer_radius_m
                           for s in spec.segments])

@@ -2,7 +2,7 @@
 
 * :class:`ReachTask` draws a random target from the preset's reachable set each episode.
 * :class:`TrackTask` moves the target along a path at constant speed (Wang et al. 2023 track
-  pentagram and circle paths; DESIGN.md section 7), for a number of cycles.
+  pentagram and circle paths; docs/architecture.md, "Tasks and metrics"), for a number of cycles.
 """
 
 from __future__ import annotations

@@ -35,16 +35,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, Sequence
+from typing import Any, Callable, ClassVar, Sequence
 
 import cv2
 import numpy as np
 import pybullet
 
+from soft_gym._quaternion import matrix_to_quaternion
+from soft_gym._registry import FORMS, Spec, build, parse_spec
+from soft_gym._timing import TimeWindow
 from soft_gym._validation import require_in_range, require_non_negative, require_positive
-
-if TYPE_CHECKING:  # pragma: no cover
-    from soft_gym.sensors.camera import CameraIntrinsics
+from soft_gym.sensors.intrinsics import CameraIntrinsics
 
 StrengthLike = float | Sequence[tuple[float, float]]
 """A strength in [0, 1] or a schedule list of ``(time_s, strength)`` knots."""
@@ -63,7 +64,7 @@ class FrameContext:
         position: camera centre in the world frame (m).
         previous_rotation, previous_position, previous_time_s: the same for the camera's
             previous frame, ``None`` for the first frame after a reset.
-        intrinsics: the camera's :class:`~soft_gym.sensors.camera.CameraIntrinsics`.
+        intrinsics: the camera's :class:`~soft_gym.sensors.intrinsics.CameraIntrinsics`.
         rng: the generator for per-frame noise.
         depth: metric depth of the rendered frame (m, (H, W)), ``None`` before rendering.
     """
@@ -71,7 +72,7 @@ class FrameContext:
     time_s: float
     rotation: np.ndarray
     position: np.ndarray
-    intrinsics: "CameraIntrinsics"
+    intrinsics: CameraIntrinsics
     rng: np.random.Generator
     previous_rotation: np.ndarray | None = None
     previous_position: np.ndarray | None = None
@@ -104,31 +105,24 @@ def _check_strength(strength: Any) -> float | tuple[tuple[float, float], ...]:
 
 
 @dataclass
-class VisualFault:
-    """Base of all visual faults: a time window and a strength (number or schedule).
+class VisualFault(TimeWindow):
+    """Base of all visual faults: a time window (:class:`~soft_gym._timing.TimeWindow`) and a
+    strength (number or schedule).
 
     Subclasses set ``stage`` (order of application) and implement :meth:`apply` (image faults)
     or :meth:`attach` / :meth:`place` / :meth:`detach` (geometry faults).
     """
 
-    start_s: float = 0.0
-    end_s: float | None = None
     strength: StrengthLike = 1.0
 
     stage: ClassVar[int] = 0
     geometric: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
-        require_non_negative("start_s", self.start_s)
-        if self.end_s is not None and (not np.isfinite(self.end_s) or self.end_s <= self.start_s):
-            raise ValueError(f"end_s must be None or > start_s={self.start_s}, got {self.end_s!r}")
+        self.check_window()
         self.strength = _check_strength(self.strength)
 
     # ------------------------------------------------------------------ schedule
-    def active(self, time_s: float) -> bool:
-        """Whether ``time_s`` (s) lies in the window ``[start_s, end_s)``."""
-        return time_s >= self.start_s and (self.end_s is None or time_s < self.end_s)
-
     def strength_at(self, time_s: float) -> float:
         """Strength in [0, 1] at ``time_s`` (s): 0 outside the window, else the schedule."""
         if not self.active(time_s):
@@ -149,7 +143,7 @@ class VisualFault:
     def reset(self, rng: np.random.Generator) -> None:
         """Start an episode: draw this fault's random parameters from ``rng``."""
 
-    def attach(self, client, intrinsics: "CameraIntrinsics") -> None:
+    def attach(self, client, intrinsics: CameraIntrinsics) -> None:
         """Create this fault's bodies in ``client`` (geometry faults only)."""
 
     def detach(self, client) -> None:
@@ -164,26 +158,6 @@ class VisualFault:
     def apply(self, image: np.ndarray, context: FrameContext) -> np.ndarray:
         """Return the frame (float32 (H, W, 3), 0-255 scale, may leave that range) faulted."""
         return image
-
-
-def _rotation_to_quaternion(rotation: np.ndarray) -> list[float]:
-    """Unit quaternion (x, y, z, w) of a rotation matrix (Shepperd's method)."""
-    m = rotation
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0:
-        s = 2.0 * math.sqrt(trace + 1.0)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s, (m[1, 0] - m[0, 1]) / s]
-    norm = math.sqrt(sum(v * v for v in q))
-    return [v / norm for v in q]
 
 
 _SIDES = ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0))
@@ -265,7 +239,7 @@ class MovingOccluder(VisualFault):
         self._sides = rng.integers(0, len(_SIDES), size=256)
         self._delays = rng.uniform(0.0, self.jitter_s, size=256)
 
-    def attach(self, client, intrinsics: "CameraIntrinsics") -> None:
+    def attach(self, client, intrinsics: CameraIntrinsics) -> None:
         if intrinsics.near_m >= self.distance_m:
             raise ValueError(f"distance_m must be > the camera's near_m={intrinsics.near_m}, "
                              f"got {self.distance_m!r}")
@@ -327,7 +301,7 @@ class MovingOccluder(VisualFault):
         local = np.array([centre[0], centre[1], self.distance_m])
         position = context.position + context.rotation @ local
         client.resetBasePositionAndOrientation(self._body, position.tolist(),
-                                               _rotation_to_quaternion(context.rotation))
+                                               matrix_to_quaternion(context.rotation).tolist())
 
 
 def _add_sensor_noise(image: np.ndarray, shot_gain: float, read_noise_dn: float,
@@ -616,30 +590,18 @@ def make_faults(faults: Any) -> list[VisualFault]:
     ``faults`` is ``None``, a fault or preset name (``"low_light"``, ``"wang2023_lighting"``), a
     dict with ``"name"`` and parameters (``{"name": "low_light", "strength": 0.5}``,
     ``{"name": "wang2023_occlusion", "time_scale": 0.1}``), a :class:`VisualFault`, or a list or
-    tuple of these.
+    tuple of these (parsed by :func:`soft_gym._registry.parse_spec`).
     """
-    if faults is None:
-        return []
-    if isinstance(faults, VisualFault):
-        return [faults]
-    if isinstance(faults, (list, tuple)):
-        return [fault for item in faults for fault in make_faults(item)]
-    allowed = sorted(FAULTS) + sorted(FAULT_PRESETS)
-    if isinstance(faults, str):
-        faults = {"name": faults}
-    if not isinstance(faults, dict) or "name" not in faults:
-        raise ValueError("faults must be None, a name, a dict with 'name', a VisualFault or a "
-                         f"list of these, got {faults!r}")
-    params = dict(faults)
-    name = params.pop("name")
-    if name not in FAULTS and name not in FAULT_PRESETS:
-        raise ValueError(f"faults name must be one of {allowed}, got {name!r}")
-    build = FAULTS.get(name) or FAULT_PRESETS[name]
-    try:
-        made = build(**params)
-    except TypeError as error:
-        raise ValueError(f"faults {name!r} got invalid parameters {params}: {error}") from error
-    return list(made) if isinstance(made, list) else [made]
+    made: list[VisualFault] = []
+    for item in parse_spec(faults, "faults", list(FAULTS) + list(FAULT_PRESETS), forms=FORMS,
+                           instance_types=(VisualFault,)):
+        if not isinstance(item, Spec):
+            made.append(item)
+            continue
+        built = build("faults", item.name, FAULTS.get(item.name) or FAULT_PRESETS[item.name],
+                      item.params)
+        made.extend(built if isinstance(built, list) else [built])
+    return made
 
 
 __all__ = ["FrameContext", "VisualFault", "MovingOccluder", "LowLight", "LEDGlare", "MotionBlur",

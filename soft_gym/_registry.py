@@ -1,0 +1,126 @@
+"""One parser for the package's "name plus parameters" descriptions.
+
+The factories :func:`soft_gym.scenarios.make_scenario`, :func:`soft_gym.sensors.faults.make_faults`,
+:func:`soft_gym.sensors.make_sensor` and :func:`agents.policies.make_policy` take something by
+name. Each accepts some of these forms (its ``forms``):
+
+* ``"none"``: ``None`` (nothing);
+* ``"name"``: a name string, ``"tip_mass"``;
+* ``"dict"``: a dict with ``"name"`` and keyword parameters, ``{"name": "tip_mass", "mass_kg": 0.05}``;
+* ``"instance"``: an already built object of one of ``instance_types``;
+* ``"list"``: a list or tuple of the other accepted forms (nested lists are flattened).
+
+:func:`parse_spec` turns any of them into a flat list of :class:`Spec` (name and parameters, in
+order) and instances, and raises one clear ``ValueError`` for every malformed input, naming the
+parameter (``kind``, with the list index where there is one), the value and what is allowed.
+:func:`build` then calls the named class or function, turning a bad keyword into a
+``ValueError`` too.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Iterable, NamedTuple, Sequence
+
+FORMS = ("none", "name", "dict", "instance", "list")
+"""Every form a description may take (see the module docstring)."""
+
+
+class Spec(NamedTuple):
+    """A described element: its registered ``name`` and keyword ``params``."""
+
+    name: str
+    params: dict[str, Any]
+
+
+def _allowed(forms: Sequence[str], names: Sequence[str], instance_types: tuple[type, ...],
+             also: Sequence[str]) -> str:
+    """What a description may be, in words, for the error messages."""
+    parts = []
+    if "none" in forms:
+        parts.append("None")
+    if "name" in forms:
+        parts.append(f"a name from {list(names) + list(also)}")
+    if "dict" in forms:
+        parts.append("a dict {'name': NAME, **parameters}")
+    if "instance" in forms and instance_types:
+        parts.append("a " + " / ".join(t.__name__ for t in instance_types) + " instance")
+    text = ", ".join(parts[:-1]) + (" or " if len(parts) > 1 else "") + parts[-1]
+    return text + (", or a list of these" if "list" in forms else "")
+
+
+def _check_name(label: str, name: Any, names: Sequence[str], also: Sequence[str]) -> str:
+    if not isinstance(name, str) or name not in names:
+        raise ValueError(f"{label} name must be one of {list(names) + list(also)}, "
+                         f"got {name!r}")
+    return name
+
+
+def parse_spec(value: Any, kind: str, known_names: Iterable[str], *,
+               forms: Sequence[str] = ("none", "name", "dict", "list"),
+               instance_types: Sequence[type] = (), also: Sequence[str] = ()) -> list:
+    """Parse a name-plus-parameters description (see the module docstring).
+
+    Args:
+        value: the description.
+        kind: the parameter's name, used in error messages (``"scenario"``, ``"faults"``, ...).
+        known_names: the registered names.
+        forms: the accepted forms, a subset of :data:`FORMS`.
+        instance_types: the classes passed through as built objects (form ``"instance"``).
+        also: further allowed values described in the name list of error messages (e.g.
+            ``"sb3:PATH"``, which the caller handles before parsing).
+
+    Returns:
+        A flat list, in order, of :class:`Spec` for names and dicts and of the instances
+        passed through; ``None`` (also inside lists) contributes nothing.
+
+    Raises:
+        ValueError: naming ``kind`` (and the list index), the value and what is allowed, for a
+            form not accepted, a dict without a string ``"name"``, an unknown name or parameter
+            names that are not strings.
+    """
+    unknown_forms = [form for form in forms if form not in FORMS]
+    if unknown_forms or not forms:
+        raise ValueError(f"forms must be a non-empty subset of {list(FORMS)}, got {forms!r}")
+    names = sorted(known_names)
+    types = tuple(instance_types) if "instance" in forms else ()
+    allowed = _allowed(forms, names, types, also)
+    result: list = []
+
+    def parse(item: Any, label: str) -> None:
+        if item is None and "none" in forms:
+            return
+        if types and isinstance(item, types):
+            result.append(item)
+            return
+        if isinstance(item, (list, tuple)) and "list" in forms:
+            for index, element in enumerate(item):
+                parse(element, f"{label}[{index}]")
+            return
+        if isinstance(item, str) and "name" in forms:
+            result.append(Spec(_check_name(label, item, names, also), {}))
+            return
+        if isinstance(item, dict) and "dict" in forms:
+            if "name" not in item:
+                raise ValueError(f"{label} must have a 'name' key (one of {names}), got "
+                                 f"{item!r}")
+            params = dict(item)
+            name = _check_name(label, params.pop("name"), names, ())
+            bad = [key for key in params if not isinstance(key, str)]
+            if bad:
+                raise ValueError(f"{label} {name!r} parameter names must be strings, got "
+                                 f"{bad!r} in {item!r}")
+            result.append(Spec(name, params))
+            return
+        raise ValueError(f"{label} must be {allowed}, got {item!r}")
+
+    parse(value, kind)
+    return result
+
+
+def build(kind: str, name: str, factory: Callable[..., Any], params: dict[str, Any]) -> Any:
+    """``factory(**params)``, with a wrong or missing keyword raised as ``ValueError`` naming
+    ``kind``, ``name`` and the parameters given."""
+    try:
+        return factory(**params)
+    except TypeError as error:
+        raise ValueError(f"{kind} {name!r} got invalid parameters {params}: {error}") from error

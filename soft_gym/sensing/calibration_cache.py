@@ -1,0 +1,143 @@
+"""Calibrated sensing state, reused within a process and across processes from a disk cache.
+
+Calibrating the wang2023 sensing (vision map plus F-emp from the spiral exploration) takes about
+10 s. The result depends only on what is in its key (arm, fixed scenario, settle time, sensor
+configurations, sensing options, the package's source and the numerical libraries' versions), so it is
+computed once and then reused: from memory in the same process, and from a file in the user's
+cache directory (``platformdirs.user_cache_dir("soft-arm-gym")``) in any other, e.g. a
+``SubprocVecEnv`` worker. ``SOFT_GYM_CACHE=off`` turns the disk cache off (the in-process one
+stays). A file whose header does not match the key, or whose payload digest does not match, is
+ignored with a warning and rebuilt.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import hashlib
+import io
+import json
+import os
+import pickle
+import warnings
+from pathlib import Path
+from typing import Any, Callable
+
+CACHE_ENV_VARIABLE = "SOFT_GYM_CACHE"
+_FORMAT = 1
+_memory: dict[str, Any] = {}
+
+
+def library_versions() -> dict[str, str]:
+    """Versions whose change can change a calibration (package and numerical libraries)."""
+    from importlib import metadata
+
+    import cv2
+    import numpy
+
+    versions = {"numpy": numpy.__version__, "opencv": cv2.__version__,
+                "soft_gym source": _source_digest()}
+    for name in ("soft-arm-gym", "pybullet"):
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = "unknown"
+    return versions
+
+
+@functools.lru_cache(maxsize=1)
+def _source_digest() -> str:
+    """SHA-256 of the soft_gym package's source files (an edited checkout gets new keys)."""
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        digest.update(str(path.relative_to(root)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def cache_directory() -> Path:
+    """Where calibration files live (``<user cache dir>/soft-arm-gym/calibration``)."""
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("soft-arm-gym")) / "calibration"
+
+
+def disk_cache_enabled() -> bool:
+    value = os.environ.get(CACHE_ENV_VARIABLE, "on").strip().lower()
+    if value not in ("on", "off", "1", "0", "true", "false"):
+        raise ValueError(f"{CACHE_ENV_VARIABLE} must be 'on' or 'off', got {value!r}")
+    return value in ("on", "1", "true")
+
+
+def cache_key(parts: dict[str, Any]) -> tuple[str, str]:
+    """``(digest, description)`` of a key: ``parts`` as canonical text and its SHA-256."""
+    description = json.dumps({**parts, "versions": library_versions()}, sort_keys=True,
+                             default=repr)
+    return hashlib.sha256(description.encode()).hexdigest(), description
+
+
+def cached(parts: dict[str, Any], compute: Callable[[], Any], use_cache: bool = True) -> Any:
+    """The value for the key ``parts``: from memory, from disk, or ``compute()`` (then stored).
+
+    ``use_cache=False`` computes afresh and stores nothing (a recalibration in the moment's
+    conditions is not a function of the key). Returns a deep copy each time, so callers may
+    change what they get.
+    """
+    if not use_cache:
+        return compute()
+    digest, description = cache_key(parts)
+    if digest in _memory:
+        return copy.deepcopy(_memory[digest])
+    value = _load(digest, description) if disk_cache_enabled() else None
+    if value is None:
+        value = compute()
+        if disk_cache_enabled():
+            _store(digest, description, value)
+    _memory[digest] = copy.deepcopy(value)
+    return value
+
+
+def clear_memory() -> None:
+    """Forget the in-process entries (the disk files stay)."""
+    _memory.clear()
+
+
+def _path(digest: str) -> Path:
+    return cache_directory() / f"{digest}.pkl"
+
+
+def _load(digest: str, description: str) -> Any:
+    path = _path(digest)
+    if not path.is_file():
+        return None
+    try:
+        with path.open("rb") as handle:
+            header = json.loads(handle.readline().decode())
+            payload = handle.read()
+        if (header.get("format") != _FORMAT or header.get("key") != description
+                or header.get("sha256") != hashlib.sha256(payload).hexdigest()):
+            raise ValueError("its header does not match this calibration")
+        return pickle.loads(payload)
+    except Exception as error:  # noqa: BLE001 - any unreadable file is rebuilt, never trusted
+        warnings.warn(f"ignoring calibration cache file {str(path)!r} ({error}); "
+                      "calibrating afresh", RuntimeWarning, stacklevel=3)
+        return None
+
+
+def _store(digest: str, description: str, value: Any) -> None:
+    path = _path(digest)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        payload = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+        header = {"format": _FORMAT, "key": description,
+                  "sha256": hashlib.sha256(payload).hexdigest()}
+        buffer = io.BytesIO()
+        buffer.write(json.dumps(header).encode() + b"\n")
+        buffer.write(payload)
+        temporary = path.with_suffix(f".{os.getpid()}.tmp")
+        temporary.write_bytes(buffer.getvalue())
+        os.replace(temporary, path)
+    except OSError as error:
+        warnings.warn(f"could not write the calibration cache {str(path)!r}: {error}",
+                      RuntimeWarning, stacklevel=3)

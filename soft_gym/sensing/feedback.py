@@ -1,0 +1,220 @@
+"""Feedback sources: where the env's ``pose`` observation comes from, one small class each.
+
+A source declares the sensors it needs (the env simulates them), may calibrate once when the env
+is made, and turns one step's :class:`~soft_gym.sensing.measurement.Measurement` into a
+:class:`FeedbackEstimate` (tip pose, and the backbone where the source has one). ``feedback=`` of
+the env takes a registered name; a new estimator (strain-gauge shape reconstruction, a stereo
+centreline) is one subclass registered with :func:`register_feedback_source`. See
+docs/architecture.md, "Feedback sources".
+
+| name           | sensors         | estimate                                                     |
+|----------------|-----------------|--------------------------------------------------------------|
+| `ground_truth` | none            | the simulator's tip pose and backbone                        |
+| `em`           | `em`            | the EM tracker's noisy tip pose (ho2018)                     |
+| `camera`       | `image`, `fbg`  | the eye-in-hand vision tracker (wang2023 Section III-B)      |
+| `fbg`          | `image`, `fbg`  | F-emp, the online ELM on the FBG shifts (wang2023 eqs. 9-17) |
+| `fused`        | `image`, `fbg`  | camera and F-emp fused by wang2023 eq. (18)                  |
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from soft_gym.sensing.measurement import Measurement
+
+
+@dataclass
+class FeedbackEstimate:
+    """One step's estimate from a feedback source.
+
+    Attributes:
+        position_m: tip position (m, base frame).
+        quaternion: tip orientation (x, y, z, w).
+        shape_m: backbone points (m, base frame, (n, 3)) where the source estimates a shape.
+        details: what ``info["estimates"]`` reports (e.g. camera, F-emp and fused positions).
+    """
+
+    position_m: np.ndarray
+    quaternion: np.ndarray
+    shape_m: np.ndarray | None = None
+    details: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CalibrationContext:
+    """What a source may use to calibrate: the simulator (the arm at rest, loads attached), its
+    sensors, and the cache key of everything else that changes a calibration."""
+
+    sim: Any
+    sensors: dict[str, Any]
+    settle_s: float
+    key: dict[str, Any]
+
+
+class FeedbackSource:
+    """Base class. Subclasses set :attr:`name` and :attr:`sensors` and implement :meth:`estimate`.
+
+    Args:
+        options: the source's own options (the env's ``sensing=`` dict); a source without
+            options refuses any.
+    """
+
+    name: ClassVar[str] = ""
+    sensors: ClassVar[tuple[str, ...]] = ()
+    """Sensor names the source reads (see :data:`soft_gym.sensors.SENSORS`)."""
+
+    def __init__(self, options: dict | None = None) -> None:
+        if options:
+            raise ValueError(f"sensing options are for the camera/F-emp pipeline (feedback "
+                             f"'fused', 'camera' or 'fbg'); feedback {self.name!r} takes none, "
+                             f"got {sorted(options)}")
+
+    def sensor_options(self) -> dict[str, dict]:
+        """Default keyword arguments of the sensors the source needs (the user's override)."""
+        return {}
+
+    def calibrate(self, context: CalibrationContext, use_cache: bool = True) -> None:
+        """Calibrate from the arm at rest (default: nothing to calibrate)."""
+
+    def restore(self) -> None:
+        """Return to the state right after calibration (``reset(seed=...)``)."""
+
+    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+        """The estimate from one step's measurement."""
+        raise NotImplementedError
+
+
+FEEDBACK_SOURCES: dict[str, type[FeedbackSource]] = {}
+"""Registered feedback sources by name."""
+
+
+def register_feedback_source(cls: type[FeedbackSource]) -> type[FeedbackSource]:
+    """Class decorator: make ``cls`` available as ``feedback=cls.name``."""
+    if not cls.name or cls.name in FEEDBACK_SOURCES:
+        raise ValueError(f"feedback source name must be new and non-empty, got {cls.name!r}")
+    FEEDBACK_SOURCES[cls.name] = cls
+    return cls
+
+
+def make_feedback_source(name: str, options: dict | None = None) -> FeedbackSource:
+    """Build the registered source ``name`` with its options."""
+    if not isinstance(name, str) or name not in FEEDBACK_SOURCES:
+        raise ValueError(f"feedback must be one of {sorted(FEEDBACK_SOURCES)}, got {name!r}")
+    if options is not None and not isinstance(options, dict):
+        raise ValueError(f"sensing must be None or a dict of options, got {options!r}")
+    return FEEDBACK_SOURCES[name](options)
+
+
+@register_feedback_source
+class GroundTruthFeedback(FeedbackSource):
+    """The simulator's own tip pose and backbone (no sensor, no noise)."""
+
+    name = "ground_truth"
+
+    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+        position, quaternion = sim.tip_pose()
+        return FeedbackEstimate(position, quaternion, shape_m=sim.backbone())
+
+
+@register_feedback_source
+class EMFeedback(FeedbackSource):
+    """The electromagnetic tracker's tip pose (ho2018's Aurora coil; 0.8 mm / 0.7 deg noise)."""
+
+    name = "em"
+    sensors = ("em",)
+
+    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+        reading = np.asarray(measurement["em"], dtype=float)
+        return FeedbackEstimate(reading[:3], reading[3:])
+
+
+class _PipelineFeedback(FeedbackSource):
+    """The wang2023 robot's own sensing: eye-in-hand camera + FBG, F-emp and eq. (18) fusion.
+
+    The pipeline (:class:`~soft_gym.sensing.pipeline.SensingPipeline`) is calibrated when the env
+    is made (vision map at rest, F-emp from the spiral exploration labelled by the camera) or
+    taken from the calibration cache (:mod:`soft_gym.sensing.calibration_cache`), keeps learning
+    across episodes, and returns to its calibrated state on :meth:`restore`.
+    """
+
+    sensors = ("image", "fbg")
+    output: ClassVar[str] = ""
+
+    def __init__(self, options: dict | None = None) -> None:
+        from soft_gym.sensing.pipeline import SensingPipeline
+
+        self.options = dict(options or {})
+        known = set(SensingPipeline.OPTIONS)
+        unknown = sorted(set(self.options) - known)
+        if unknown:
+            raise ValueError(f"sensing options must be among {sorted(known)}, got {unknown}")
+        self.pipeline: Any = None
+        self._calibrated: tuple | None = None
+
+    def sensor_options(self) -> dict[str, dict]:
+        return {"fbg": {"rate_hz": None}}  # F-emp reads the fiber every control step
+
+    def calibrate(self, context: CalibrationContext, use_cache: bool = True) -> None:
+        from soft_gym.sensing.calibration_cache import cached
+        from soft_gym.sensing.pipeline import SensingPipeline
+
+        self.pipeline = SensingPipeline(context.sensors["image"], context.sensors["fbg"],
+                                        **self.options)
+        sim, camera = context.sim, self.pipeline.camera
+
+        def compute() -> tuple:
+            faults = camera.faults
+            camera.set_faults(None)  # calibration happens in a clear view
+            sim.reset(settle_s=context.settle_s)
+            self.pipeline.calibrate(sim, np.random.default_rng(0))
+            camera.set_faults(faults)
+            return (self.pipeline.vision, self.pipeline.femp, self.pipeline.calibration_samples)
+
+        key = {**context.key, "sensing": repr(sorted(self.options.items()))}
+        self._calibrated = cached(key, compute, use_cache=use_cache)
+        self.restore()
+
+    def restore(self) -> None:
+        vision, femp, samples = copy.deepcopy(self._calibrated)
+        self.pipeline.vision, self.pipeline.femp = vision, femp
+        self.pipeline.calibration_samples = samples
+
+    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+        estimates = self.pipeline.observe(measurement)
+        position, quaternion = getattr(estimates, self.output)
+        details = {"camera": estimates.camera[0].copy(), "femp": estimates.femp[0].copy(),
+                   "fused": estimates.fused[0].copy(),
+                   "reprojection_error_px": estimates.reprojection_error_px,
+                   "lost": estimates.lost,
+                   "femp_weight": self.pipeline.fusion.weight(estimates.reprojection_error_px,
+                                                              estimates.lost),
+                   "femp_updated": estimates.femp_updated}
+        return FeedbackEstimate(np.array(position), np.array(quaternion), details=details)
+
+
+@register_feedback_source
+class CameraFeedback(_PipelineFeedback):
+    """The vision tracker's tip pose alone (wang2023 Section III-B)."""
+
+    name = "camera"
+    output = "camera"
+
+
+@register_feedback_source
+class FEmpFeedback(_PipelineFeedback):
+    """F-emp's tip pose from the FBG fiber (wang2023 eqs. (9)-(17)), trained online by the camera."""
+
+    name = "fbg"
+    output = "femp"
+
+
+@register_feedback_source
+class FusedFeedback(_PipelineFeedback):
+    """Camera and F-emp fused by wang2023 eq. (18)."""
+
+    name = "fused"
+    output = "fused"
