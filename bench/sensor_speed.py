@@ -5,7 +5,10 @@ eye-in-hand camera frame at 160 x 120, the vision pose update on that frame, cam
 together, the OS-ELM update (N = 200) and prediction, and a whole env step with fused feedback
 next to one with ground-truth feedback (their ratio is the cost of the sensing), driven by a
 slow spiral (a turn every 8 s, 5-30 % of the pressure range) and, for fused feedback, by a random
-action per step.
+action per step, with the vision tracker on its own (the default) and with F-emp's pose as its
+prior (``sensing={"femp_prior": True}``). Last, the time to make a fused env in a new process
+with the calibration taken from the disk cache (:mod:`soft_gym.sensing.calibration_cache`),
+beside the calibration itself.
 
     python bench/sensor_speed.py [--steps 300] [--json out.json]
 """
@@ -14,6 +17,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import subprocess
+import sys
 import time
 
 import gymnasium as gym
@@ -82,9 +87,10 @@ def main(argv: list[str] | None = None) -> None:
     # the env steps twice: with the slow spiral (smooth motion, the vision tracker's search by
     # projection holds) and with a random pressure every step (the worst case: the image jumps
     # and each frame is matched against the whole local map)
-    for feedback, actions in (("ground_truth", "spiral"), ("fused", "spiral"),
-                              ("fused", "random")):
-        env = gym.make("SoftArmReach-v0", feedback=feedback, episode_steps=10**6)
+    for feedback, actions, prior in (("ground_truth", "spiral", False), ("fused", "spiral", False),
+                                     ("fused", "random", False), ("fused", "random", True)):
+        options = {"sensing": {"femp_prior": True}} if prior else {}
+        env = gym.make("SoftArmReach-v0", feedback=feedback, episode_steps=10**6, **options)
         env.reset(seed=0)
         env.action_space.seed(0)
         steps = []
@@ -97,10 +103,15 @@ def main(argv: list[str] | None = None) -> None:
             start = time.perf_counter()
             env.step(action)
             steps.append(time.perf_counter() - start)
-        name = f"env_step_{feedback}" + ("_random_actions" if actions == "random" else "")
+        name = (f"env_step_{feedback}" + ("_random_actions" if actions == "random" else "")
+                + ("_femp_prior" if prior else ""))
         timings[name] = steps
         env.close()
     results = {name: stats(values) for name, values in timings.items()}
+    calibrate_s = _make_in_new_process(cache="off")
+    _make_in_new_process(cache="on")  # fills the disk cache if it is cold
+    results["make_fused_env_calibrating_s"] = calibrate_s
+    results["make_fused_env_from_disk_cache_s"] = _make_in_new_process(cache="on")
     results["fused_over_ground_truth"] = (results["env_step_fused"]["mean_us"]
                                           / results["env_step_ground_truth"]["mean_us"])
     print(f"{'measurement':<26} {'mean us':>10} {'p95 us':>10}")
@@ -109,10 +120,31 @@ def main(argv: list[str] | None = None) -> None:
             print(f"{name:<26} {value['mean_us']:10.1f} {value['p95_us']:10.1f}")
     print(f"fused env step / ground-truth env step: {results['fused_over_ground_truth']:.1f}x; "
           f"fused env steps/s: {1e6 / results['env_step_fused']['mean_us']:.0f} (spiral), "
-          f"{1e6 / results['env_step_fused_random_actions']['mean_us']:.0f} (random actions)")
+          f"{1e6 / results['env_step_fused_random_actions']['mean_us']:.0f} (random actions), "
+          f"{1e6 / results['env_step_fused_random_actions_femp_prior']['mean_us']:.0f} "
+          "(random actions, F-emp prior)")
+    print(f"make a fused env in a new process: {results['make_fused_env_calibrating_s']:.2f} s "
+          f"calibrating, {results['make_fused_env_from_disk_cache_s']:.2f} s from the disk cache")
     if args.json:
         with open(args.json, "w") as handle:
             json.dump(results, handle, indent=2)
+
+
+_MAKE = """
+import time, gymnasium as gym, soft_gym
+start = time.perf_counter()
+gym.make("SoftArmReach-v0", feedback="fused")
+print(time.perf_counter() - start)
+"""
+
+
+def _make_in_new_process(cache: str) -> float:
+    """Seconds to make a fused env in a fresh process (imports done) with SOFT_GYM_CACHE=cache."""
+    import os
+
+    result = subprocess.run([sys.executable, "-c", _MAKE], capture_output=True, text=True,
+                            check=True, env={**os.environ, "SOFT_GYM_CACHE": cache})
+    return float(result.stdout.strip().splitlines()[-1])
 
 
 if __name__ == "__main__":
