@@ -8,6 +8,10 @@ models alike (docs/architecture.md, "Baselines"):
 * ``update(obs, action, reward, next_obs, info)`` after each step (online learners learn here);
 * ``save(path)`` / ``load(path)``.
 
+A baseline made by :func:`make_policy` with an env is ready to predict in a plain
+``obs -> predict -> step`` loop: one that needs a calibration runs it on its first ``predict``,
+on a private copy of the env (see :mod:`agents.controllers.cc_model`).
+
 Baselines read only what the real robot gives them: the observation (whose ``pose`` part is the
 env's feedback source) and sensor signals; never privileged simulator state. Baselines that
 decide chamber pressures turn them into actions with the env's own map,
@@ -17,6 +21,7 @@ decide chamber pressures turn them into actions with the env's own map,
 from __future__ import annotations
 
 import importlib
+import re
 from pathlib import Path
 from typing import Any
 
@@ -76,15 +81,61 @@ def resolve_sb3_path(path: str | Path) -> Path:
 SB3_INTERFACE_KEYS = ("obs", "obs_format", "action_mode", "delta_fraction")
 """Env keyword arguments that fix what an SB3 agent reads and writes (kept from its training)."""
 
+_CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<steps>\d+)_steps\.zip$")
+"""A checkpoint of stable-baselines3's ``CheckpointCallback``: ``<prefix>_<N>_steps.zip``."""
+
+
+def normalization_file(model_path: str | Path) -> Path:
+    """The VecNormalize statistics that belong to a model file (whether or not they exist).
+
+    ``best_model.zip`` -> ``best_vecnormalize.pkl``; a checkpoint ``<prefix>_<N>_steps.zip``
+    (``python -m train``'s ``checkpoints/``) -> ``<prefix>_vecnormalize_<N>_steps.pkl``, as
+    ``CheckpointCallback`` saves them; any other model (``model.zip``) -> ``vecnormalize.pkl``;
+    all in the model's directory.
+    """
+    model_path = Path(model_path)
+    checkpoint = _CHECKPOINT.match(model_path.name)
+    if checkpoint is not None:
+        name = f"{checkpoint['prefix']}_vecnormalize_{checkpoint['steps']}_steps.pkl"
+    elif model_path.name.startswith("best_"):
+        name = "best_vecnormalize.pkl"
+    else:
+        name = "vecnormalize.pkl"
+    return model_path.parent / name
+
+
+def _run_config_file(model_path: Path) -> Path | None:
+    """The ``config.yaml`` of a model: beside it, or in the run directory above a
+    ``checkpoints/`` directory; ``None`` when there is none."""
+    candidates = [model_path.parent / "config.yaml"]
+    if model_path.parent.name == "checkpoints":
+        candidates.append(model_path.parent.parent / "config.yaml")
+    return next((path for path in candidates if path.is_file()), None)
+
+
+def _trained_with_normalization(model_path: Path, config: dict) -> bool:
+    """Whether the model was trained on normalised observations: its config's ``normalize``
+    hyperparameter is set (as ``train.config`` reads it), or, without a config, statistics of
+    other models lie beside it or in its run directory."""
+    hyperparameters = config.get("hyperparameters")
+    if isinstance(hyperparameters, dict):
+        return hyperparameters.get("normalize", False) not in (False, None, "False", "false")
+    directories = [model_path.parent]
+    if model_path.parent.name == "checkpoints":
+        directories.append(model_path.parent.parent)
+    return any(any(directory.glob("*vecnormalize*.pkl")) for directory in directories)
+
 
 class SB3Policy(BaselinePolicy):
     """A stable-baselines3 model behind the baseline face (loaded from ``sb3:PATH``).
 
     ``PATH`` is a run directory of ``python -m train`` (its ``model.zip``), a shipped agent's
-    directory, or a model ``.zip``. Observation normalisation saved beside the model
-    (``vecnormalize.pkl``, or ``best_vecnormalize.pkl`` for ``best_model.zip``) is applied
-    before the network, and ``config.yaml`` gives the env interface the agent was trained with
-    (:data:`SB3_INTERFACE_KEYS`).
+    directory, or a model ``.zip`` (``best_model.zip``, a checkpoint
+    ``checkpoints/<algo>_<N>_steps.zip``, ...). The observation normalisation that belongs to
+    the model (:func:`normalization_file`) is applied before the network; a model trained with
+    normalisation whose statistics are missing is refused with a ``ValueError`` naming the file.
+    The run's ``config.yaml`` (beside the model, or above ``checkpoints/``) gives the env
+    interface the agent was trained with (:data:`SB3_INTERFACE_KEYS`).
     """
 
     name = "sb3"
@@ -131,14 +182,17 @@ class SB3Policy(BaselinePolicy):
         if not model_path.is_file():
             raise ValueError(f"sb3 path {str(path)!r} is neither a model .zip, a directory "
                              f"holding model.zip, nor a shipped agent {sorted(shipped_agents())}")
-        config_path = model_path.parent / "config.yaml"
-        config = yaml.safe_load(config_path.read_text()) if config_path.is_file() else {}
+        config_path = _run_config_file(model_path)
+        config = (yaml.safe_load(config_path.read_text()) or {}) if config_path else {}
+        normalization_path = normalization_file(model_path)
+        if not normalization_path.is_file() and _trained_with_normalization(model_path, config):
+            raise ValueError(
+                f"sb3 path {str(path)!r}: the model was trained on normalised observations but "
+                f"its VecNormalize statistics {str(normalization_path)!r} are missing")
         algorithm = str(config.get("algo") or _guess_algorithm(model_path)).upper()
         module = importlib.import_module("stable_baselines3")
         model = getattr(module, algorithm).load(model_path, device="cpu")
-        prefix = "best_" if model_path.name.startswith("best_") else ""
         normalization = None
-        normalization_path = model_path.parent / f"{prefix}vecnormalize.pkl"
         if normalization_path.is_file():
             with open(normalization_path, "rb") as handle:
                 normalization = pickle.load(handle)

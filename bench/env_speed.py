@@ -68,6 +68,7 @@ import numpy as np
 import pybullet
 
 import soft_gym  # noqa: F401  (registers the environment ids)
+from soft_gym._cli import HelpFormatter
 from soft_gym.envs.soft_arm_env import TASKS
 from soft_gym.envs.registration import TASK_IDS
 from soft_gym.robots import PRESETS, get_preset
@@ -287,12 +288,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         description="Benchmark soft_gym environments: env step rate, physics-only bound, reset "
                     "time, simulated time per wall second and tip accuracy against a 4x finer "
                     "physics step. Prints a table, then JSON (or writes it to --json).",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        formatter_class=HelpFormatter)
     parser.add_argument("--presets", nargs="+", choices=list(PRESETS), default=list(PRESETS),
                         metavar="NAME", help=f"arm presets to measure, from {list(PRESETS)}")
     parser.add_argument("--feedback", default="ground_truth",
                         choices=["ground_truth", "em", "fused", "camera", "fbg"],
-                        help="feedback pose source; 'ground_truth' (default) runs no camera, "
+                        help="feedback pose source; 'ground_truth' runs no camera, "
                              "'fused' the whole sensing pipeline (camera + vision + F-emp)")
     parser.add_argument("--task", choices=TASKS, default="reach",
                         help="environment task (reach: SoftArmReach-v0, track: SoftArmTrack-v0)")
@@ -301,7 +302,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--resets", type=int, default=5, help="timed resets per preset")
     parser.add_argument("--hold-steps", type=int, default=10,
                         help="control periods each random command is held in the accuracy test "
-                             "(default 10 = 0.5 s)")
+                             "(10 = 0.5 s)")
     parser.add_argument("--accuracy-steps", type=int, default=60,
                         help="control steps of random pressure commands in the accuracy test "
                              "(0 skips it)")

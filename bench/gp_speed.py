@@ -43,6 +43,7 @@ from scipy.spatial.distance import cdist
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from agents.learners import SlidingWindowGP  # noqa: E402
+from soft_gym._cli import HelpFormatter  # noqa: E402
 
 
 def make_stream(steps: int, input_dim: int, output_dim: int, seed: int
@@ -86,20 +87,23 @@ def scratch_step(X: np.ndarray, Y: np.ndarray, xq: np.ndarray, scales: np.ndarra
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(
         description="Time add + predict per control step of SlidingWindowGP against a "
-                    "from-scratch GP refit on the same window.")
-    parser.add_argument("--window", type=int, default=300, help="window size N_r^max (300)")
-    parser.add_argument("--input-dim", type=int, default=5, help="input size: u(k-1) + dz (5)")
-    parser.add_argument("--output-dim", type=int, default=3, help="output size: dp_e (3)")
+                    "from-scratch GP refit on the same window.",
+        formatter_class=HelpFormatter)
+    parser.add_argument("--window", type=int, default=300, help="window size N_r^max")
+    parser.add_argument("--input-dim", type=int, default=5, help="input size: u(k-1) + dz")
+    parser.add_argument("--output-dim", type=int, default=3, help="output size: dp_e")
     parser.add_argument("--steps", type=int, default=2000,
-                        help="timed incremental steps after the window is full (2000)")
+                        help="timed incremental steps after the window is full")
     parser.add_argument("--scratch-steps", type=int, default=300,
-                        help="timed from-scratch steps, the first of the same stream (300)")
+                        help="timed from-scratch steps, the first of the same stream")
     parser.add_argument("--refactor-every", type=int, default=200,
-                        help="steps between full refactorisations (200)")
-    parser.add_argument("--noise-variance", type=float, default=1e-4, help="(1e-4)")
-    parser.add_argument("--length-scale", type=float, default=0.5, help="(0.5)")
+                        help="steps between full refactorisations")
+    parser.add_argument("--noise-variance", type=float, default=1e-4,
+                        help="GP noise variance (output units squared)")
+    parser.add_argument("--length-scale", type=float, default=0.5,
+                        help="GP length scale (input units)")
     parser.add_argument("--std", action="store_true", help="also predict the std every step")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="seed of the sample stream")
     parser.add_argument("--json", type=Path, default=None, help="write the results here")
     args = parser.parse_args(argv)
     if args.window < 2 or args.steps < 1 or args.scratch_steps < 1 or args.input_dim < 1 \

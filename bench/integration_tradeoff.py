@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 
+from soft_gym._cli import HelpFormatter
 from soft_gym.robots.pneumatics import chamber_loads
 from soft_gym.robots.presets import PRESETS
 from soft_gym.robots.spec import ArmSpec
@@ -93,9 +94,9 @@ def beam_error_percent(spec: ArmSpec) -> float:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--preset", default="wang2023", choices=sorted(PRESETS))
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser.add_argument("--preset", default="wang2023", choices=sorted(PRESETS),
+                        help="arm preset to vary")
     parser.add_argument("--links", type=int, nargs="+", default=[3, 4, 6, 8],
                         help="links per segment to compare")
     parser.add_argument("--dt-ms", type=float, nargs="+", default=[1.25, 2.5, 5.0],
@@ -103,7 +104,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--steps", type=int, default=80, help="control steps per dynamic run")
     parser.add_argument("--hold-steps", type=int, default=10,
                         help="control steps each random command is held")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random commands")
     parser.add_argument("--json", default=None, help="also write the rows to this JSON file")
     args = parser.parse_args(argv)
     base = PRESETS[args.preset]

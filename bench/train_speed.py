@@ -23,6 +23,7 @@ import time
 import numpy as np
 import torch
 
+from soft_gym._cli import HelpFormatter
 from train.config import read_hyperparameters, split_hyperparameters
 from train.trainer import make_vec_env, new_model
 
@@ -57,13 +58,12 @@ def learning(algo: str, env_id: str, n_envs: int, steps: int) -> float:
     return steps / elapsed
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--algo", default="sac", help="algorithm (its train/configs entry)")
     parser.add_argument("--env", default="SoftArmTrackWang2023-v0", help="Gymnasium id")
     parser.add_argument("--steps", type=int, default=3000, help="timed env steps per run")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     torch.set_num_threads(1)
     settings = split_hyperparameters(args.algo, read_hyperparameters(args.algo, args.env))
     base = env_only(args.env, settings.env_kwargs, args.steps)

@@ -15,6 +15,9 @@ JSON and plots (under 3 minutes on 2 cores, the runs spread over two processes).
 Figs. 6-7, Tables III, IV, VI). ``track``: baselines tracking a path on an arm preset, with loads,
 visual faults and a feedback source, several gains and seeds; a Markdown table with mean +- std,
 max, per cycle and the improvement over ``cc_model``, per-step CSVs and plots.
+
+Every command ends by printing the output directory it wrote to (``--out``); its JSON summary
+records the soft-arm-gym version that made it (``soft_arm_gym_version``).
 """
 
 from __future__ import annotations
@@ -26,7 +29,9 @@ import os
 from pathlib import Path
 
 from eval import compare as compare_module
+from eval import estimation as estimation_module
 from eval.estimation import EXPERIMENTS, run_experiments
+from soft_gym._cli import HelpFormatter
 
 
 DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
@@ -34,8 +39,8 @@ DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
 
 def _track(args: argparse.Namespace) -> None:
     from eval.metrics import add_improvement, summarize, summary_table
-    from eval.report import markdown_table, plot_error_time, plot_trajectory, write_json, \
-        write_records_csv
+    from eval.report import markdown_table, plot_error_time, plot_trajectory, \
+        write_records_csv, write_results_json
     from eval.runner import RunConfig, run_many
 
     out = Path(args.out)
@@ -72,7 +77,7 @@ def _track(args: argparse.Namespace) -> None:
                             column="dev_improvement_last_%")
     _agents_against_first_gain(table, args.kp[0])
     plot_error_time(out / "error_time.png", records, f"{args.preset} {args.path}")
-    write_json(out / "track.json", table)
+    write_results_json(out / "track.json", table)
     columns = ["policy", "kp", "seed", "track_mean_mm", "track_max_mm", "dev_mean_mm",
                "improvement_%", "track_last_cycle_mm", "dev_last_cycle_mm", "improvement_last_%",
                "dev_improvement_last_%"]
@@ -99,21 +104,25 @@ def _agents_against_first_gain(table: list[dict], kp: float) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m eval", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+                                     formatter_class=HelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
-    benchmark = sub.add_parser("benchmark", help="the small embedded default comparison")
+    benchmark = sub.add_parser("benchmark", help="the small embedded default comparison",
+                               formatter_class=HelpFormatter)
     benchmark.add_argument("--out", default="results/benchmark", help="output directory")
     benchmark.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
-                           help="runs in parallel processes (default: up to 2 cores)")
-    estimation = sub.add_parser("estimation", help="wang2023 estimation experiments")
+                           help="runs in parallel processes (up to 2, one per core)")
+    estimation = sub.add_parser("estimation", help="wang2023 estimation experiments",
+                                description=estimation_module.__doc__,
+                                formatter_class=HelpFormatter)
     estimation.add_argument("--experiments", nargs="+", default=["clean"],
                             choices=list(EXPERIMENTS) + ["all"],
-                            help="which runs (default clean; 'all' for every one)")
+                            help="which runs ('all' for every one)")
     estimation.add_argument("--steps", type=int, default=4000,
                             help="control steps of 0.05 s per run (paper: ~4000)")
     estimation.add_argument("--seed", type=int, default=0, help="episode seed")
     estimation.add_argument("--out", default="results/estimation", help="output directory")
-    track = sub.add_parser("track", help="baselines tracking a path")
+    track = sub.add_parser("track", help="baselines tracking a path",
+                           formatter_class=HelpFormatter)
     track.add_argument("--policies", nargs="+", default=["cc_model", "hybrid_gpr"],
                        help="baseline names or sb3:PATH")
     track.add_argument("--kp", type=float, nargs="+", default=[0.06],
@@ -130,10 +139,10 @@ def main(argv: list[str] | None = None) -> None:
     track.add_argument("--seeds", type=int, nargs="+", default=[0], help="episode seeds")
     track.add_argument("--out", default="results/track", help="output directory")
     track.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
-                       help="runs in parallel processes (default: up to 2 cores)")
+                       help="runs in parallel processes (up to 2, one per core)")
     compare = sub.add_parser(
         "compare", help="SB3 agents against the baselines, nominal and out of distribution",
-        description=compare_module.__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+        description=compare_module.__doc__, formatter_class=HelpFormatter)
     compare.add_argument("--policies", nargs="+", default=None,
                          help="baselines, sb3:PATH or shipped agent names as sb3:<name> "
                               "(default: cc_model, hybrid_gpr and every shipped agent)")
@@ -148,7 +157,7 @@ def main(argv: list[str] | None = None) -> None:
     compare.add_argument("--kp", type=float, default=0.06, help="K_p of the CC baselines")
     compare.add_argument("--out", default="results/compare", help="output directory")
     compare.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
-                         help="runs in parallel processes (default: up to 2 cores)")
+                         help="runs in parallel processes (up to 2, one per core)")
     args = parser.parse_args(argv)
     if args.command == "compare":
         from agents.policies import shipped_agents
@@ -164,6 +173,7 @@ def main(argv: list[str] | None = None) -> None:
         from eval.report import markdown_table
 
         print(markdown_table(rows, float_format="{:.2f}"))
+        print(f"output directory: {args.out}")
         return
     if args.command == "benchmark":
         from agents.policies import shipped_agents
@@ -187,6 +197,7 @@ def main(argv: list[str] | None = None) -> None:
         print(markdown_table(rows, float_format="{:.2f}"))
     else:
         _track(args)
+    print(f"output directory: {args.out}")
 
 
 if __name__ == "__main__":

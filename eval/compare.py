@@ -11,8 +11,8 @@ condition for every seed, with the same feedback source. The conditions:
 
 Outputs: ``compare.md`` (seed mean +- std of the tracking error over all cycles and over the last
 cycle, path deviation, max, and the improvement over ``cc_model``), ``compare.csv`` /
-``compare.json`` (every run), ``compare_<path>.png`` (bars per condition), and error-against-time
-plots of the first seed.
+``compare.json`` (every run, with the soft-arm-gym version), ``compare_<path>.png`` (bars per
+condition), and error-against-time plots of the first seed.
 """
 
 from __future__ import annotations
@@ -43,8 +43,8 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
                    progress: bool = True, workers: int = 1) -> list[dict[str, Any]]:
     """Run the comparison grid and write its outputs; returns the seed-aggregated rows."""
     from eval.metrics import add_improvement, aggregate_seeds, summarize, summary_table
-    from eval.report import (markdown_table, plot_error_time, with_mean_std, write_json,
-                             write_records_csv)
+    from eval.report import (markdown_table, plot_error_time, with_mean_std, write_records_csv,
+                             write_results_json)
     from eval.runner import RunConfig, run_many
 
     unknown = [c for c in conditions if c not in CONDITIONS]
@@ -76,7 +76,7 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
         row["track_last_cycle_mm"] = row.get(last, np.nan)
     table = add_improvement(table, baseline={"policy": "cc_model"},
                             match=["path", "condition", "seed"])
-    write_json(out / "compare.json", table)
+    write_results_json(out / "compare.json", table)
     _write_csv(out / "compare.csv", table)
     aggregated = aggregate_seeds(table, by=["policy", "path", "condition"])
     for (path, condition), records in first_seed_records.items():

@@ -22,7 +22,8 @@ them, and F-emp does not guide the vision tracker, so the three share the same c
 and differ only in F-emp's initialisation.
 
 Each run writes a per-step CSV and an error-vs-time PNG; the Markdown table lists mean, max, std
-and RMSE (mm) of each estimator per phase.
+and RMSE (mm) of each estimator per phase; ``estimation.json`` holds the same rows with the
+soft-arm-gym version that made them.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from tqdm import tqdm
 
 import soft_gym  # noqa: F401
 from eval.metrics import estimation_errors
-from eval.report import markdown_table, plot_estimation, write_json, write_records_csv
+from eval.report import markdown_table, plot_estimation, write_records_csv, write_results_json
 from soft_gym.robots.actuation import Actuation, pressure_at_fraction
 from soft_gym.sensing.exploration import spiral_fractions
 
@@ -181,6 +182,6 @@ def run_experiments(experiments: list[str], out_dir: str | Path, steps: int = 40
                         row[f"{estimator}_{key}"] = stats[key]
                 row.update(fusion_weights(record, start_s, end_s))
                 rows.append(row)
-    write_json(out / "estimation.json", rows)
+    write_results_json(out / "estimation.json", rows)
     (out / "estimation.md").write_text(markdown_table(rows) + "\n")
     return rows

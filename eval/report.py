@@ -3,7 +3,8 @@
 * :func:`write_records_csv` writes one episode record as a per-step CSV with
   named columns (``time_s, cycle, target_x_m, target_y_m, ...``) that
   ``numpy.genfromtxt(path, delimiter=",", names=True)`` reads back.
-* :func:`write_json` writes summaries and configs, converting numpy types.
+* :func:`write_json` writes summaries and configs, converting numpy types;
+  :func:`write_results_json` writes an eval run's rows with the package version that made them.
 * :func:`markdown_table` renders flat rows (from
   :func:`eval.metrics.summary_table`) as a GitHub-flavoured Markdown table;
   :func:`with_mean_std` adds "mean ± std" text columns as in Wang et al.
@@ -49,8 +50,10 @@ __all__ = [
     "plot_trajectory",
     "to_jsonable",
     "with_mean_std",
+    "package_version",
     "write_json",
     "write_records_csv",
+    "write_results_json",
 ]
 
 PathLike = Union[str, Path]
@@ -211,6 +214,30 @@ def write_json(path: PathLike, obj: Any) -> Path:
     text = json.dumps(to_jsonable(obj), indent=2, allow_nan=False)
     out.write_text(text + "\n", encoding="utf-8")
     return out
+
+
+def package_version() -> str:
+    """The installed version of soft-arm-gym (``importlib.metadata``), or ``"unknown"`` when
+    the package is not installed (run from a bare checkout)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("soft-arm-gym")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def write_results_json(path: PathLike, rows: Sequence[Mapping[str, Any]]) -> Path:
+    """Write an eval run's result rows as ``{"soft_arm_gym_version": ..., "rows": [...]}``.
+
+    Args:
+        path: Output file; its directory is created.
+        rows: The run's table, one dict per row (numpy values allowed).
+
+    Returns:
+        The path written.
+    """
+    return write_json(path, {"soft_arm_gym_version": package_version(), "rows": list(rows)})
 
 
 # ---------------------------------------------------------------------------

@@ -20,8 +20,6 @@ import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import BaselinePolicy, SB3Policy, make_policy
 from soft_gym.tasks.paths import cycle_index
 
-ESTIMATE_KEYS = ("camera", "femp", "fused", "em")
-
 
 @dataclass
 class RunConfig:

@@ -7,5 +7,5 @@ from soft_gym.envs.registration import register_envs, registered_ids
 
 register_envs()
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 __all__ = ["register_envs", "registered_ids", "__version__"]

@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from soft_gym._cli import HelpFormatter
 from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.robots.presets import PRESETS
 from soft_gym.sim import ArmSimulator
@@ -56,12 +57,12 @@ def run(presets: list[str], hold_s: float) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(prog="python -m soft_gym.demo", description=__doc__,
+                                     formatter_class=HelpFormatter)
     parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS),
-                        help="arm presets to roll out (default: all)")
+                        help="arm presets to roll out")
     parser.add_argument("--hold-s", type=float, default=2.0,
-                        help="simulated seconds each pattern is held before reading (default 2)")
+                        help="simulated seconds each pattern is held before reading")
     args = parser.parse_args(argv)
     if not args.hold_s > 0:
         parser.error(f"--hold-s must be > 0, got {args.hold_s}")

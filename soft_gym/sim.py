@@ -20,6 +20,7 @@ from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
 from soft_gym.robots.pneumatics import PneumaticSupply, chamber_loads
 from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
 from soft_gym.robots.stops import STOP_STIFFNESS_FACTOR, EndStops
+from soft_gym.scenarios.loads import heaviest_total_load_n
 
 
 _IMPLICIT_FRACTION = 0.25
@@ -349,8 +350,7 @@ class ArmSimulator:
             ValueError: if the loads together would weigh or push more than the arm bears
                 (:attr:`~soft_gym.robots.spec.ArmSpec.max_load_n`).
         """
-        g = float(np.linalg.norm(self.spec.gravity_base))
-        total = sum(other.peak_load_n(g) for other in self.loads) + load.peak_load_n(g)
+        total = heaviest_total_load_n(self.loads + [load], float(np.linalg.norm(self.gravity)))
         if total > self.spec.max_load_n * (1 + 1e-9):
             raise ValueError(
                 f"scenario loads must total at most {self.spec.max_load_n:.3g} N on the "

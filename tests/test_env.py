@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -29,6 +31,29 @@ def test_every_preset_passes_checker_through_generic_ids(task, preset):
     gym_check_env(env.unwrapped, skip_render_check=True)
     assert env.action_space.shape == (PRESETS[preset].n_chambers,)
     env.close()
+
+
+@pytest.mark.parametrize("task", ["reach", "track"])
+def test_alias_ids_refuse_another_preset_and_accept_their_own(task):
+    """An alias id names its arm: another preset is a contradiction (ValueError naming preset,
+    the value and the alias's preset); the alias's own preset, by name or as the equal
+    ArmSpec, builds the same arm."""
+    from soft_gym.envs.registration import preset_env_id
+
+    alias = preset_env_id(task, "wang2023")
+    with pytest.raises(ValueError, match=r"preset must be 'wang2023'.*got 'ho2018'"):
+        gym.make(alias, preset="ho2018", feedback="ground_truth")
+    variant = dataclasses.replace(PRESETS["wang2023"], name="wang2023_soft")
+    with pytest.raises(ValueError, match="preset.*'wang2023_soft'"):
+        gym.make(alias, preset=variant, feedback="ground_truth")
+    for preset in (None, "wang2023", PRESETS["wang2023"]):
+        kwargs = {} if preset is None else {"preset": preset}
+        env = gym.make(alias, feedback="ground_truth", **kwargs)
+        assert env.unwrapped.spec_arm == PRESETS["wang2023"]
+        remade = gym.make(env.spec)  # a spec remakes the same env (SubprocVecEnv, copies)
+        assert remade.unwrapped.spec_arm == PRESETS["wang2023"]
+        env.close()
+        remade.close()
 
 
 def _rollout(seed: int, steps: int = 15, **kwargs) -> np.ndarray:

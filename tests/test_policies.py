@@ -12,6 +12,7 @@ import pytest
 import soft_gym  # noqa: F401
 from agents.policies import make_policy
 from eval.runner import RunConfig, run, run_episode
+from soft_gym.envs import SoftArmEnv
 
 
 def _mean_error_last_cycle(policy: str, kp: float, path: str = "circle") -> float:
@@ -42,6 +43,28 @@ def test_probe_calibration_estimates_a_positive_linear_gain_per_chamber():
     assert np.ptp(alpha) / alpha.mean() < 0.01
 
 
+@pytest.mark.parametrize("name", ["cc_model", "hybrid_gpr"])
+def test_a_baseline_calibrates_on_first_predict_without_touching_the_env(name):
+    """make_policy(name, env=env) predicts in a plain loop: the first predict() calibrates on a
+    private copy of the env, leaving the env's episode as it was, with the alpha that
+    calibrate() finds on a fresh env."""
+    env = gym.make("SoftArmTrack-v0", feedback="ground_truth")
+    policy = make_policy(name, env=env)
+    observation, _ = env.reset(seed=0)
+    sim = env.unwrapped.sim
+    before = (sim.time_s, np.array(sim.tip_pose()[0]), env.unwrapped.np_random.bit_generator.state)
+    action, _ = policy.predict(observation)
+    assert sim.time_s == before[0]
+    np.testing.assert_array_equal(sim.tip_pose()[0], before[1])
+    assert env.unwrapped.np_random.bit_generator.state == before[2]
+    assert env.action_space.contains(action)
+    observation, *_ = env.step(action)  # the loop goes on from where it was
+
+    explicit = make_policy(name, env=gym.make("SoftArmTrack-v0", feedback="ground_truth"))
+    np.testing.assert_array_equal(policy.alpha, explicit.calibrate())
+    env.close()
+
+
 def test_hybrid_save_and_load_keep_the_learned_window(tmp_path):
     env = gym.make("SoftArmTrack-v0", feedback="ground_truth")
     policy = make_policy("hybrid_gpr", env=env, kp=0.06)
@@ -62,8 +85,9 @@ def test_bad_policy_requests_raise():
         make_policy("pid", env=env)
     with pytest.raises(ValueError, match="kp"):
         make_policy("cc_model", env=env, kp=-1.0)
-    with pytest.raises(ValueError, match="calibrate"):
-        make_policy("cc_model", env=env).predict(env.reset(seed=0)[0])
+    with pytest.raises(ValueError, match="calibrate"):  # no spec: nothing to calibrate on
+        make_policy("cc_model", env=SoftArmEnv(feedback="ground_truth")).predict(
+            env.reset(seed=0)[0])
     with pytest.raises(ValueError, match="obs"):
         make_policy("cc_model", env=gym.make("SoftArmTrack-v0", feedback="ground_truth",
                                              obs=("pressure",)))

@@ -220,3 +220,16 @@ def test_a_diverged_simulation_raises_instead_of_reporting_states():
     with pytest.raises(PhysicsDivergedError, match="times its limit"):
         sim.step_physics(sim.physics_dt_s)
     sim.close()
+
+
+def test_loads_count_together_only_while_they_act():
+    """Twenty 0.15 N flicks, one every 10 s, never add up; two held pushes at once do."""
+    from soft_gym.scenarios import Flick
+
+    sim = ArmSimulator(get_preset("wang2023"))
+    for k in range(20):
+        sim.add_load(Flick(impulse_ns=(0.003, 0.0, 0.0), start_s=10.0 * k + 1.0))
+    sim.add_load(Push(force_n=(1.0, 0.0, 0.0), start_s=0.0, end_s=None))
+    with pytest.raises(ValueError, match="at most 1.24 N"):
+        sim.add_load(Push(force_n=(0.0, 0.2, 0.0), start_s=50.0, end_s=60.0))
+    sim.close()

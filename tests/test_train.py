@@ -106,6 +106,34 @@ def test_resume_continues_the_step_count(tmp_path):
     assert [entry["timesteps"] for entry in history] == [400, 700]
 
 
+def test_checkpoints_load_with_their_own_normalization_or_are_refused(tmp_path):
+    """sb3:<checkpoint zip> applies the VecNormalize statistics saved with that checkpoint and
+    the run's env interface; with the statistics gone it refuses, naming the missing file."""
+    import pickle
+
+    run_dir = train(TrainRequest(algo="sac", env_kwargs=FAST_ENV, timesteps=300,
+                                 hyperparameters={"learning_starts": 100}, out_dir=str(tmp_path),
+                                 eval_freq=0, checkpoint_freq=200, progress=False))
+    checkpoint = run_dir / "checkpoints" / "sac_200_steps.zip"
+    statistics = run_dir / "checkpoints" / "sac_vecnormalize_200_steps.pkl"
+    assert checkpoint.is_file() and statistics.is_file()
+    env = gym.make("SoftArmTrackWang2023-v0", **FAST_ENV)
+    policy = make_policy(f"sb3:{checkpoint}", env=env)
+    with open(statistics, "rb") as handle:
+        saved = pickle.load(handle)
+    final = make_policy(f"sb3:{run_dir}", env=env).normalization
+    np.testing.assert_array_equal(policy.normalization.obs_rms.mean, saved.obs_rms.mean)
+    assert not np.array_equal(policy.normalization.obs_rms.mean, final.obs_rms.mean)
+    assert policy.config["algo"] == "sac"  # the run's config.yaml, above checkpoints/
+    statistics.unlink()
+    with pytest.raises(ValueError, match="sac_vecnormalize_200_steps.pkl"):
+        make_policy(f"sb3:{checkpoint}", env=env)
+    (run_dir / "vecnormalize.pkl").unlink()
+    with pytest.raises(ValueError, match="vecnormalize.pkl"):
+        make_policy(f"sb3:{run_dir}", env=env)
+    env.close()
+
+
 def test_cli_help_and_bad_input(capsys):
     with pytest.raises(SystemExit) as exit_info:
         train_main(["--help"])

@@ -1,15 +1,16 @@
 """Train a stable-baselines3 agent on a soft-arm env.
 
     python -m train --algo sac --env SoftArmTrackWang2023-v0 --timesteps 200000 --seed 0
-    python -m train --algo td3 --preset wang2023 --env-kwargs feedback=em path=[circle,pentagram] --randomize
+    python -m train --algo td3 --preset wang2023 --env-kwargs feedback=em 'path=[circle,pentagram]' --randomize
     python -m train --resume results/train/sac_SoftArmTrackWang2023-v0_seed0 --timesteps 50000
 
 Hyperparameters come from train/configs/<algo>.yml (rl-baselines3-zoo's format: the same file
 works with ``python -m rl_zoo3.train --conf-file ...``); ``-hp KEY=VALUE`` overrides single
 entries and ``--env-kwargs KEY=VALUE`` the env's keyword arguments (values are YAML: numbers,
-true/false, [lists], {dicts}). The run directory (``--out``/``--name``) gets the model, its
-VecNormalize statistics, checkpoints, the best evaluated model, TensorBoard and CSV logs, the
-resolved config, versions and git revision, and learning_curve.png.
+true/false, [lists], {dicts}; quote those from the shell, where brackets are file patterns). The
+run directory (``--out``/``--name``) gets the model, its VecNormalize statistics, checkpoints,
+the best evaluated model, TensorBoard and CSV logs, the resolved config, versions and git
+revision, and learning_curve.png; its path is printed at the end.
 """
 
 from __future__ import annotations
@@ -17,12 +18,13 @@ from __future__ import annotations
 import argparse
 import sys
 
+from soft_gym._cli import HelpFormatter
 from train.config import ALGORITHMS, parse_key_values
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m train", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+                                     formatter_class=HelpFormatter)
     parser.add_argument("--algo", default="sac", choices=ALGORITHMS, help="SB3 algorithm")
     parser.add_argument("--env", default=None,
                         help="Gymnasium id (default SoftArmTrack<Preset>-v0, e.g. "

@@ -14,6 +14,7 @@ import shutil
 from pathlib import Path
 
 from agents.policies import SHIPPED_DIR
+from soft_gym._cli import HelpFormatter
 from train.trainer import (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE, MODEL_FILE,
                            NORMALIZATION_FILE)
 
@@ -42,7 +43,7 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m train.ship", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+                                     formatter_class=HelpFormatter)
     parser.add_argument("run_dir", help="a run directory of python -m train")
     parser.add_argument("name", help="the shipped agent's name (sb3:<name> loads it)")
     parser.add_argument("--model", choices=("final", "best"), default="final",

@@ -2,8 +2,11 @@
 
 A run directory holds:
 
-* ``model.zip`` (final), ``best_model.zip`` (best evaluation), ``checkpoints/``;
-* ``vecnormalize.pkl`` / ``best_vecnormalize.pkl`` beside them when observations are normalised;
+* ``model.zip`` (final), ``best_model.zip`` (best evaluation), and checkpoints
+  ``checkpoints/<algo>_<N>_steps.zip``;
+* ``vecnormalize.pkl``, ``best_vecnormalize.pkl`` and
+  ``checkpoints/<algo>_vecnormalize_<N>_steps.pkl`` beside them when observations are normalised
+  (``sb3:PATH`` loads each model with its own);
 * ``config.yaml``: the resolved algorithm, env id, env kwargs, hyperparameters, seed and envs;
 * ``versions.yaml``: Python and package versions and the git revision;
 * ``logs/`` (``progress.csv`` and TensorBoard events), ``monitor/`` (per-episode CSVs),

@@ -14,6 +14,13 @@ Each control step, with feedback tip position ``p`` and next target ``p*``:
   pressurised a little, the tip displacement is read from the feedback pose, mapped to chamber
   lengths through ``J^+`` at the rest pose, and ``alpha_i = dp / du_i``.
 
+Calibration happens on the first :meth:`~CCModelController.predict` unless
+:meth:`~CCModelController.calibrate` was called before: the probes then run on a private copy of
+the env (``gymnasium.make(env.spec)``: the same id and keyword arguments, closed afterwards), so
+the controlled env, its episode and its random state are left as they were, and a plain
+``obs -> predict -> step`` loop works as with an SB3 model. :meth:`~CCModelController.calibrate`
+called directly probes the controlled env itself and leaves it reset.
+
 Pressures cannot go below the pre-pressure or above ``p_max``: the model lengths are kept
 consistent with the saturated pressures (anti-windup), so the integrator of eq. (26) does not
 wind up.
@@ -90,13 +97,21 @@ class CCModelController(BaselinePolicy):
         self.lengths = self.rest_lengths.copy()
 
     # ------------------------------------------------------------------ calibration
-    def calibrate(self, seed: int = 0) -> np.ndarray:
-        """Estimate ``alpha`` (Pa/m) with one small probe per chamber (eq. (27)); resets the env.
+    def calibrate(self, seed: int = 0, env=None) -> np.ndarray:
+        """Estimate ``alpha`` (Pa/m) with one small probe per chamber (eq. (27)).
 
-        ``seed`` seeds the env's first reset, so the probes' sensor noise, and hence ``alpha``,
-        are reproducible.
+        Args:
+            seed: seed of the probed env's first reset, so that the probes' sensor noise, and
+                hence ``alpha``, are reproducible.
+            env: the env to probe: ``None`` for the controlled env, which is stepped
+                (``2 probe_steps`` control steps per chamber) and left reset (``env.reset()``,
+                unseeded); or a copy of it, with the same observation layout and action mode
+                (what :meth:`predict` does on first use, see the module docstring).
+
+        Returns:
+            ``alpha`` (Pa/m), one gain per chamber; the controller's episode state is reset.
         """
-        env = self.env
+        env = self.env if env is None else env
         # the probes map the full tip displacement to chamber lengths
         jacobian_inverse = self._pseudo_inverse(cc_jacobian(self.rest_lengths, self.d))
         alpha = np.empty(len(self.rest_lengths))
@@ -122,6 +137,28 @@ class CCModelController(BaselinePolicy):
         self.alpha = alpha
         return alpha
 
+    def calibrate_on_copy(self, seed: int = 0) -> np.ndarray:
+        """:meth:`calibrate` on a private copy of the controlled env, made with
+        ``gymnasium.make(env.spec)`` (same id and keyword arguments) and closed afterwards; the
+        controlled env is not touched.
+
+        Raises:
+            ValueError: the controlled env was not made by ``gymnasium.make`` (it has no
+                ``spec`` to copy); call :meth:`calibrate` on it before :meth:`predict`.
+        """
+        import gymnasium as gym
+
+        if self.env.spec is None:
+            raise ValueError(
+                "env has no spec (it was not made by gymnasium.make), so the controller cannot "
+                "calibrate on a copy of it: call calibrate() before predict() (it probes this "
+                "env and resets it)")
+        copy = gym.make(self.env.spec)
+        try:
+            return self.calibrate(seed=seed, env=copy)
+        finally:
+            copy.close()
+
     # ------------------------------------------------------------------ control
     def reset(self) -> None:
         """Start of an episode (after the env's reset): rest lengths, command at pre-pressure."""
@@ -129,8 +166,10 @@ class CCModelController(BaselinePolicy):
         self._command = self.actuation.initial_command_pa.copy()
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        """The action for ``observation`` (SB3's signature); calibrates first if it has not
+        been (on a private copy of the env, see :meth:`calibrate_on_copy`)."""
         if self.alpha is None:
-            raise ValueError("call calibrate() before predict(): alpha of eq. (27) is unknown")
+            self.calibrate_on_copy()
         position = self._pose(observation)
         command = self.compensate(position, self._next_target(observation) - position)
         self.lengths = self.lengths + self.kp * self.length_step(position, position + command)

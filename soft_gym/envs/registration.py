@@ -1,14 +1,22 @@
 """Gymnasium ids: ``SoftArmReach-v0`` and ``SoftArmTrack-v0`` (taking ``preset=...``) and one
 shorter alias per preset, e.g. ``SoftArmReachWang2023-v0``.
+
+An alias fixes its preset: ``gym.make("SoftArmReachWang2023-v0", preset="ho2018")`` raises
+``ValueError`` (the same preset passed again is accepted); the generic ids take any preset.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 from gymnasium.envs.registration import register, registry
 
-from soft_gym.robots.presets import PRESETS
+from soft_gym.envs.soft_arm_env import SoftArmEnv
+from soft_gym.robots.presets import PRESETS, get_preset
+from soft_gym.robots.spec import ArmSpec
 
 ENTRY_POINT = "soft_gym.envs.soft_arm_env:SoftArmEnv"
+ALIAS_ENTRY_POINT = "soft_gym.envs.registration:make_alias_env"
 TASK_IDS = {"reach": "SoftArmReach-v0", "track": "SoftArmTrack-v0"}
 
 
@@ -22,6 +30,32 @@ def registered_ids() -> list[str]:
     return list(TASK_IDS.values()) + [preset_env_id(t, p) for t in TASK_IDS for p in PRESETS]
 
 
+def make_alias_env(alias_preset: str, **kwargs: Any) -> SoftArmEnv:
+    """The entry point of the alias ids: a :class:`SoftArmEnv` on the alias's preset.
+
+    Args:
+        alias_preset: the preset the alias id names (set at registration, e.g. ``"wang2023"``).
+        **kwargs: the env's keyword arguments; a ``preset`` among them must be the alias's
+            preset (its name, or an ``ArmSpec`` equal to it).
+
+    Raises:
+        ValueError: ``preset`` names another arm than the alias.
+    """
+    preset = kwargs.pop("preset", alias_preset)
+    if not (preset == alias_preset or preset == get_preset(alias_preset)):
+        task = kwargs.get("task", "reach")
+        shown = (f"an ArmSpec named {preset.name!r}" if isinstance(preset, ArmSpec)
+                 else repr(preset))
+        raise ValueError(
+            f"preset must be {alias_preset!r} on {preset_env_id(task, alias_preset)} (the id "
+            f"names its arm), got {shown}: use {TASK_IDS.get(task, 'SoftArmReach-v0')} with "
+            f"preset= for another arm")
+    return SoftArmEnv(preset=preset, **kwargs)
+
+
+make_alias_env.metadata = SoftArmEnv.metadata  # what gymnasium.make reads of an entry point
+
+
 def register_envs() -> None:
     """Register all ids (idempotent)."""
     for task, env_id in TASK_IDS.items():
@@ -30,4 +64,5 @@ def register_envs() -> None:
         for preset in PRESETS:
             alias = preset_env_id(task, preset)
             if alias not in registry:
-                register(id=alias, entry_point=ENTRY_POINT, kwargs={"task": task, "preset": preset})
+                register(id=alias, entry_point=ALIAS_ENTRY_POINT,
+                         kwargs={"task": task, "alias_preset": preset})

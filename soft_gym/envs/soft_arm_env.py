@@ -77,8 +77,9 @@ from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.scenarios import make_scenario
 from soft_gym.sensors.faults import make_faults
-from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConfig, nominal_noise
-from soft_gym.sensing.feedback import (FEEDBACK_SOURCES, CalibrationContext, FeedbackEstimate,
+from soft_gym.scenarios.loads import heaviest_total_load_n
+from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConfig
+from soft_gym.sensing.feedback import (CalibrationContext, FeedbackEstimate,
                                        make_feedback_source)
 from soft_gym.sensing.measurement import Measurement, measure
 from soft_gym.sensors import SENSORS, make_sensor
@@ -88,7 +89,6 @@ from soft_gym.tasks import ReachTask, TrackTask
 STATE_PARTS = ("pose", "target", "pressure")
 OBSERVATION_PARTS = STATE_PARTS + tuple(name for name in SENSORS if name != "stereo")
 OBS_FORMATS = ("flat", "dict")
-FEEDBACKS = tuple(FEEDBACK_SOURCES)
 TASKS = ("reach", "track")
 
 
@@ -189,11 +189,9 @@ class SoftArmEnv(gym.Env):
                 options["faults"] = faults
             self.sensors[name] = make_sensor(name, **options)
         self._faults = faults
-        self._nominal_noise = {name: nominal_noise(sensor) for name, sensor in self.sensors.items()}
-        self._nominal_time_constant_s = self.sim.supply.time_constant_s
         config = RandomizationConfig.from_any(randomization)
         gravity = float(np.linalg.norm(self.spec_arm.gravity_base))
-        fixed_load_n = sum(load.peak_load_n(gravity) for load in self.loads)
+        fixed_load_n = heaviest_total_load_n(self.loads, gravity)
         self.randomizer = None if config is None else DomainRandomizer(
             config, n_links=len(self.sim.arm.station_link), with_camera="image" in self.sensors,
             max_load_n=self.spec_arm.max_load_n - fixed_load_n)
@@ -310,10 +308,9 @@ class SoftArmEnv(gym.Env):
         for load in self.loads + draw.scenario:
             self.sim.add_load(load)
         self.sim.set_stiffness_scale(draw.stiffness_scale)
-        self.sim.supply.time_constant_s = self._nominal_time_constant_s * draw.time_constant_scale
-        for name, sensor in self.sensors.items():
-            for attribute, value in self._nominal_noise[name].items():
-                setattr(sensor, attribute, value * draw.sensor_noise_scale)
+        self.sim.supply.set_time_constant_scale(draw.time_constant_scale)
+        for sensor in self.sensors.values():
+            sensor.set_noise_scale(draw.sensor_noise_scale)
         if "image" in self.sensors:
             self.sensors["image"].set_faults(make_faults(self._faults) + draw.faults)
 

@@ -59,7 +59,6 @@ class ArmBody:
     station_y_first: np.ndarray     # (n_stations,) True where the station bends about y first
     station_axial_joint: np.ndarray  # (n_stations,)
     station_torsion_joint: np.ndarray  # (n_stations,) -1 where no torsion joint
-    link_masses_kg: np.ndarray      # (n_joints,) mass of every multibody link as built
 
     @property
     def n_joints(self) -> int:
@@ -225,5 +224,4 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         station_link=np.array(station_link), station_segment=np.array(station_segment),
         station_rest_length=np.array(station_length), station_bend_joints=np.array(bend_joints),
         station_y_first=np.array(y_first),
-        station_axial_joint=np.array(axial_joints), station_torsion_joint=np.array(torsion_joints),
-        link_masses_kg=np.array(link_masses))
+        station_axial_joint=np.array(axial_joints), station_torsion_joint=np.array(torsion_joints))

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from soft_gym._validation import as_finite_array
+from soft_gym._validation import as_finite_array, require_positive
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.spec import ArmSpec
 
@@ -47,6 +47,10 @@ class PneumaticSupply:
                 f"pressures_pa must lie within [0, p_max_pa={self.p_max_pa.tolist()}], "
                 f"got {command.tolist()}")
         return np.minimum(command, self.p_max_pa)
+
+    def set_time_constant_scale(self, scale: float) -> None:
+        """Make the lag ``scale`` times the arm's nominal time constant (domain randomisation)."""
+        self.time_constant_s = self.spec.pneumatic_time_constant_s * require_positive("scale", scale)
 
     def command(self, pressure_pa: np.ndarray) -> None:
         """Set the commanded pressures (Pa)."""

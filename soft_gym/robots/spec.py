@@ -233,10 +233,6 @@ class ArmSpec:
         return int(round(self.control_period_s / self.physics_dt_s))
 
     @property
-    def substeps_per_actuation(self) -> int:
-        return int(round(self.actuation_update_s / self.physics_dt_s))
-
-    @property
     def first_bending_mode_rad_s(self) -> float:
         """First bending mode of the whole arm as one cantilever (rad/s):
         ``3.516 sqrt(E I / (mu L^4))`` with ``E I`` the series (length-weighted harmonic) mean and

@@ -294,3 +294,14 @@ class ObstacleRod(_Timed):
         if self._body >= 0:
             sim.client.removeBody(self._body)
             self._body = -1
+
+
+def heaviest_total_load_n(loads: list, gravity_m_s2: float) -> float:
+    """The most the ``loads`` weigh or push together at any moment (N).
+
+    Each acts in its time window, so the heaviest moment is where one of them starts (a flick
+    every 10 s never adds up with the next one)."""
+    moments = {0.0, *(float(getattr(load, "start_s", 0.0)) for load in loads)}
+    return max(sum(load.peak_load_n(gravity_m_s2) for load in loads
+                   if not hasattr(load, "active") or load.active(time_s))
+               for time_s in moments)

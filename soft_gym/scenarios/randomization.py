@@ -39,9 +39,6 @@ from soft_gym.scenarios.loads import FillingLoad
 
 LOAD_KINDS = ("none", "tip_mass", "filling_load", "swaying_mass", "push")
 FAULT_KINDS = ("none", "moving_occluder", "low_light", "led_glare", "motion_blur")
-NOISE_ATTRIBUTES = ("noise_std_nm", "noise_std_m", "position_noise_m", "orientation_noise_deg",
-                    "noise_std_dn", "noise_std")
-"""Sensor attributes holding a noise standard deviation (scaled by ``sensor_noise_scale``)."""
 
 
 @dataclass(frozen=True)
@@ -220,9 +217,3 @@ def _choose(rng: np.random.Generator, weights: dict) -> str:
     names = list(weights)
     odds = np.array([float(weights[name]) for name in names])
     return names[int(rng.choice(len(names), p=odds / odds.sum()))]
-
-
-def nominal_noise(sensor) -> dict[str, float]:
-    """The noise standard deviations a sensor was built with (attribute name -> value)."""
-    return {name: float(getattr(sensor, name)) for name in NOISE_ATTRIBUTES
-            if isinstance(getattr(sensor, name, None), (int, float))}

@@ -16,6 +16,10 @@ from gymnasium import spaces
 
 from soft_gym._validation import require_positive
 
+NOISE_ATTRIBUTES = ("noise_std_nm", "noise_std_m", "position_noise_m", "orientation_noise_deg",
+                    "noise_std_dn", "noise_std")
+"""Sensor attributes holding a noise standard deviation (scaled by :meth:`Sensor.set_noise_scale`)."""
+
 
 class Sensor:
     """Base class: subclasses implement :meth:`sample` and :meth:`space`.
@@ -47,6 +51,16 @@ class Sensor:
             if self.rate_hz is not None:
                 self._next_sample_s = time_s + 1.0 / self.rate_hz
         return self._last
+
+    def set_noise_scale(self, scale: float) -> None:
+        """Make every noise standard deviation of the sensor ``scale`` times the one it was built
+        with (domain randomisation's sensor-noise factor)."""
+        scale = require_positive("scale", scale)
+        if not hasattr(self, "_nominal_noise"):
+            self._nominal_noise = {name: float(getattr(self, name)) for name in NOISE_ATTRIBUTES
+                                   if isinstance(getattr(self, name, None), (int, float))}
+        for name, value in self._nominal_noise.items():
+            setattr(self, name, value * scale)
 
     def sample(self, sim) -> Any:
         """Measure now from the simulator ``sim`` (an ``ArmSimulator``), noise included."""
