@@ -4,8 +4,9 @@ Every policy (baseline names or ``sb3:PATH``/shipped agent names) runs every pat
 condition for every seed, with the same feedback source. The conditions:
 
 * ``nominal``: no load, no visual fault;
-* ``heavy_load``: a 20 g tip mass, twice the heaviest load of the shipped agents' training
-  randomisation (``soft_gym.scenarios.randomization``);
+* ``heavy_load``: a 40 g tip mass, 1.7 times the heaviest load of the shipped agents' training
+  randomisation (a 14 g container filled with up to 10 g; its static tip masses reach 10 g,
+  ``soft_gym.scenarios.randomization``): out of the training distribution;
 * ``occlusion``: a hand covering the whole camera view for 2 s out of every 6 s from 5 s on
   (wang2023 Fig. 6 ④), never seen in training (the agents trained with EM feedback).
 
@@ -25,7 +26,7 @@ import numpy as np
 
 CONDITIONS: dict[str, dict[str, Any]] = {
     "nominal": {},
-    "heavy_load": {"scenario": {"name": "tip_mass", "mass_kg": 0.02}},
+    "heavy_load": {"scenario": {"name": "tip_mass", "mass_kg": 0.04}},
     "occlusion": {"faults": {"name": "moving_occluder", "mode": "full", "start_s": 5.0,
                              "cover_s": 2.0, "period_s": 6.0}},
 }

@@ -467,3 +467,17 @@ def test_agents_are_compared_with_the_model_at_the_first_gain():
     assert table[2]["improvement_last_%"] == pytest.approx(25.0)
     assert table[2]["dev_improvement_last_%"] == pytest.approx(-50.0)
     assert "improvement_%" not in table[0]
+
+
+def test_compare_heavy_load_lies_outside_the_training_randomisation() -> None:
+    """``eval compare``'s out-of-distribution load must weigh more than anything the shipped
+    agents' training randomisation draws (static tip masses and filled containers)."""
+    from eval.compare import CONDITIONS
+    from soft_gym.scenarios import make_scenario
+    from soft_gym.scenarios.loads import heaviest_total_load_n
+    from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConfig
+
+    heaviest_trained = max(DomainRandomizer(RandomizationConfig(), n_links=4,
+                                            with_camera=False).heaviest_loads_n(9.81).values())
+    heavy = heaviest_total_load_n(make_scenario(CONDITIONS["heavy_load"]["scenario"]), 9.81)
+    assert heavy > 1.5 * heaviest_trained, (heavy, heaviest_trained)

@@ -1,9 +1,8 @@
 """The arms of the four papers as :class:`ArmSpec` presets.
 
-Dimensions come from the papers (docs/architecture.md, "Presets"); values the papers do not
-state are
-chosen here, written down in each preset's ``notes`` and calibrated against what the paper reports
-(``python -m soft_gym.demo`` prints the figures).
+Dimensions come from the papers (docs/architecture.md, "Presets"); values the papers do not state
+are chosen here, written down in each preset's ``notes`` and calibrated against what the paper
+reports (``python -m soft_gym.demo`` prints the figures).
 
 Integration trade-off (``bench/integration_tradeoff.py``, ``bench/env_speed.py``). The joint
 springs are integrated semi-implicitly in joint space (``ArmSimulator._update_implicit_gains``),
@@ -12,12 +11,15 @@ commands held 0.5 s, deviation from the same run at a 4x smaller step; static er
 and stiffening off):
 
     links  dt ms  control steps/s  dyn. dev. mm  arc err % L  F L^3/3EI err %
-      3    2.5         1500           0.30          0.24           8.1
-      4    1.25         850           0.15          0.13           5.8
-      4    2.5         1350-1600      0.30          0.13           5.8
-      4    5.0         2300           0.59          0.13           5.8
-      6    2.5          930           0.30          0.06           4.2
-      8    2.5          730           0.30          0.03           3.7
+      3    2.5         1578           0.30          0.24           5.6
+      4    1.25         847           0.15          0.13           3.1
+      4    2.5         1392           0.30          0.13           3.1
+      4    5.0         2256           0.59          0.13           3.1
+      6    2.5         1091           0.31          0.06           1.4
+      8    2.5          862           0.31          0.03           0.8
+
+(``python bench/integration_tradeoff.py``, version 0.2.0 with the end stops, on the 2-core
+development machine while another process ran: steps per second are a lower bound.)
 
 Four links per segment at 2.5 ms meet the 0.5 mm accuracy bound with margin, keep the beam
 errors well inside the 2 % (arc) and 15 % (deflection) tolerances, and leave time for the env.
