@@ -91,6 +91,8 @@ class ArmSimulator:
         self._chamber_weights = self._segment_bend_weights()
         self._stiffness0 = 1.0 / self.arm.compliance
         self._damping = self.arm.damping_time_s * self._stiffness0
+        self._inverse_upper = 1.0 / self.arm.upper_limit
+        self._inverse_lower = 1.0 / self.arm.lower_limit
         self._stops = EndStops(self.arm.lower_limit, self.arm.upper_limit,
                                stiffness=STOP_STIFFNESS_FACTOR / self.arm.compliance)
         self._station_links = self.arm.station_link.tolist()
@@ -492,8 +494,8 @@ class ArmSimulator:
         """Raise if a joint has gone far past its end stop: the simulation has diverged, and
         its states must not reach an observation or a training batch."""
         states = self.client.getJointStates(self.arm.body_id, self._joints)
-        q = np.array([state[0] for state in states])
-        past = np.maximum(q / self.arm.upper_limit, q / self.arm.lower_limit)
+        q = np.fromiter((state[0] for state in states), dtype=float, count=len(states))
+        past = np.maximum(q * self._inverse_upper, q * self._inverse_lower)
         worst = int(np.argmax(past))
         if past[worst] > _DIVERGED_PAST_LIMIT:
             raise PhysicsDivergedError(

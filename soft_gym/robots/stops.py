@@ -44,15 +44,24 @@ class EndStops:
         self._band_low = STOP_BAND * -self.lower
         self._start_high = self.upper - self._band_high
         self._start_low = self.lower + self._band_low
+        # the free range [start_low, start_high] as centre +- half width: one test per call
+        self._free_centre = 0.5 * (self._start_high + self._start_low)
+        self._free_half_width = 0.5 * (self._start_high - self._start_low)
+        self._zeros = np.zeros_like(self.lower)
+        self._zeros.flags.writeable = False
 
     def force(self, q: np.ndarray) -> np.ndarray:
         """Restoring force of the stops at ``q`` (N m or N), positive along ``q``'s sign."""
+        if not np.any(np.abs(q - self._free_centre) > self._free_half_width):
+            return self._zeros  # every joint in its free range: no stop acts
         high = self._locking(q - self._start_high, self._band_high)
         low = self._locking(self._start_low - q, self._band_low)
         return self.stiffness * (high - low)
 
     def stiffness_at(self, q: np.ndarray) -> np.ndarray:
         """Tangent stiffness ``d force / d q`` at ``q``."""
+        if not np.any(np.abs(q - self._free_centre) > self._free_half_width):
+            return self._zeros
         high = np.clip((q - self._start_high) / self._band_high, 0.0, 1.0)
         low = np.clip((self._start_low - q) / self._band_low, 0.0, 1.0)
         return self.stiffness * (high + low)
