@@ -20,7 +20,7 @@ def test_the_readme_baseline_loop_runs_and_tracks():
     """The README's ``obs -> predict -> step`` loop with a baseline made by make_policy: it runs
     to the end of the episode without an explicit calibrate() and tracks the circle."""
     (block,) = [block for block in _python_blocks(ROOT / "README.md")
-                if "make_policy(" in block and ".predict(" in block]
+                if "make_policy(" in block and ".predict(" in block and "make_vec(" not in block]
     printed = io.StringIO()
     namespace: dict = {}
     with contextlib.redirect_stdout(printed):
@@ -39,3 +39,17 @@ def test_the_package_reports_the_version_of_pyproject_and_the_changelog():
     changelog = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
     assert re.search(rf"^## \[{re.escape(version)}\] - \d{{4}}-\d{{2}}-\d{{2}}$", changelog,
                      flags=re.M)
+
+
+def test_the_readme_gymnasium_and_sb3_recipes_run(tmp_path, monkeypatch):
+    """The recipes block: async vector envs step, both env checkers pass, RecordVideo writes an
+    MP4 of the episode, and the shipped SAC agent tracks the circle in a plain loop."""
+    (block,) = [block for block in _python_blocks(ROOT / "README.md") if "make_vec(" in block]
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    with contextlib.redirect_stdout(io.StringIO()):
+        exec(compile(block, "README.md", "exec"), namespace)
+    assert namespace["observations"].shape == (2, 16)
+    videos = list((tmp_path / "videos").glob("*.mp4"))
+    assert videos and videos[0].stat().st_size > 1000
+    assert namespace["info"]["error_mm"] < 3.0

@@ -50,7 +50,8 @@ class PneumaticSupply:
 
     def set_time_constant_scale(self, scale: float) -> None:
         """Make the lag ``scale`` times the arm's nominal time constant (domain randomisation)."""
-        self.time_constant_s = self.spec.pneumatic_time_constant_s * require_positive("scale", scale)
+        scale = require_positive("scale", scale)
+        self.time_constant_s = self.spec.pneumatic_time_constant_s * scale
 
     def command(self, pressure_pa: np.ndarray) -> None:
         """Set the commanded pressures (Pa)."""
