@@ -6,7 +6,8 @@ name. Each accepts some of these forms (its ``forms``):
 
 * ``"none"``: ``None`` (nothing);
 * ``"name"``: a name string, ``"tip_mass"``;
-* ``"dict"``: a dict with ``"name"`` and keyword parameters, ``{"name": "tip_mass", "mass_kg": 0.05}``;
+* ``"dict"``: a dict with ``"name"`` and keyword parameters,
+  ``{"name": "tip_mass", "mass_kg": 0.05}``;
 * ``"instance"``: an already built object of one of ``instance_types``;
 * ``"list"``: a list or tuple of the other accepted forms (nested lists are flattened).
 

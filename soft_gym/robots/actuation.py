@@ -32,8 +32,8 @@ from soft_gym.robots.chambers import CHAMBER_ANGLES_RAD, CHAMBER_COS, CHAMBER_SI
 from soft_gym.robots.spec import ArmSpec
 
 __all__ = ["CHAMBER_ANGLES_RAD", "CHAMBER_COS", "CHAMBER_SIN", "ACTION_MODES",
-           "chamber_angles", "pressure_at_fraction", "absolute_pressure", "absolute_action", "delta_pressure",
-           "delta_action", "Actuation"]
+           "chamber_angles", "pressure_at_fraction", "absolute_pressure", "absolute_action",
+           "delta_pressure", "delta_action", "Actuation"]
 
 
 ACTION_MODES = ("absolute", "delta")
