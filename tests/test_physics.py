@@ -26,10 +26,9 @@ import pytest
 from soft_gym.kinematics import cc_forward
 from soft_gym.robots import get_preset
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
-from soft_gym.robots.pneumatics import chamber_loads
 from soft_gym.sim import ArmSimulator
 
-from arm_variants import linear, variant  # noqa: F401
+from arm_variants import linear, pneumatic_loads_reference, variant  # noqa: F401
 
 SIGMA = CHAMBER_ANGLES_RAD  # chamber angles about the segment axis (rad)
 Z = np.array([0.0, 0.0, 1.0])
@@ -156,7 +155,7 @@ def test_pure_moment_gives_constant_curvature_arc(make_sim, preset, fractions):
     ramp_pressures(sim, pressure, ramp_s=3.0 if spec.n_segments == 1 else 10.0)
     backbone = time_average(sim, 2.0 if spec.n_segments == 1 else 4.0, lambda s: s.backbone())
 
-    axial, moment = chamber_loads(spec, pressure)
+    axial, moment = pneumatic_loads_reference(spec, pressure)
     origin, frame = np.zeros(3), np.eye(3)
     expected = [origin]
     for k, segment in enumerate(spec.segments):
@@ -437,3 +436,18 @@ def test_equilibrium_does_not_depend_on_first_step_length(make_sim):
     elongation_single = single.tip_pose()[0][2] - segment.length_m
     assert elongation_chunked == pytest.approx(reference, rel=0.10)
     assert elongation_single == pytest.approx(reference, rel=0.10)
+
+
+def test_library_load_map_matches_the_cross_product_reference():
+    """``chamber_loads`` (the simulator's pressure -> force/moment map) against the chamber forces'
+    cross products, for random pressures on every preset."""
+    from soft_gym.robots.pneumatics import chamber_loads
+
+    rng = np.random.default_rng(0)
+    for name in ("wang2023", "zhao2021", "zou2022", "ho2018"):
+        spec = get_preset(name)
+        pressures = rng.uniform(0.0, 1.0, spec.n_chambers) * spec.p_max_pa
+        axial, moment = chamber_loads(spec, pressures)
+        reference_axial, reference_moment = pneumatic_loads_reference(spec, pressures)
+        np.testing.assert_allclose(axial, reference_axial, rtol=1e-12)
+        np.testing.assert_allclose(moment, reference_moment, rtol=1e-9, atol=1e-15)

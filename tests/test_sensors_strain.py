@@ -18,7 +18,6 @@ import pytest
 
 from soft_gym.robots import get_preset
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
-from soft_gym.robots.pneumatics import chamber_loads
 from soft_gym.scenarios import Push, TipMass
 from soft_gym.sensors.em_tracker import EMTracker
 from soft_gym.sensors.encoder import ChamberEncoders
@@ -26,7 +25,7 @@ from soft_gym.sensors.fbg import FBGFiber, FBGLayout, fbg_strain, rest_vertex_ar
 from soft_gym.sensors.strain_gauge import StrainGauges
 from soft_gym.sim import ArmSimulator
 
-from arm_variants import linear, variant  # noqa: F401
+from arm_variants import linear, pneumatic_loads_reference, variant  # noqa: F401
 
 SIGMA = CHAMBER_ANGLES_RAD
 NM_PER_STRAIN = 1550.0 * (1.0 - 0.21)
@@ -64,7 +63,7 @@ def read(sensor, sim, seed: int = 0):
 def analytic_fbg_nm(spec, pressures, layout: FBGLayout) -> np.ndarray:
     """wang2023 helix + (F1)-(F2) of docs/architecture.md, "FBG fiber", on a CC arc (nm)."""
     segment = spec.segments[0]
-    axial, moment = chamber_loads(spec, pressures)
+    axial, moment = pneumatic_loads_reference(spec, pressures)
     rigidity = segment.bending_rigidity_nm2
     kx, ky = moment[0, 1] / rigidity, -moment[0, 0] / rigidity
     kappa, phi = math.hypot(kx, ky), math.atan2(ky, kx)
@@ -181,7 +180,7 @@ def test_fbg_amplitude_linear_in_curvature_and_phase_follows_direction(make_sim)
         settle(sim, pressures)
         amplitude, theta, r2 = sinusoid_fit(psi, read(fiber, sim).astype(float))
         assert r2 > 0.999
-        _, moment = chamber_loads(spec, pressures)
+        _, moment = pneumatic_loads_reference(spec, pressures)
         kappas.append(np.linalg.norm(moment[0]) / spec.segments[0].bending_rigidity_nm2)
         amplitudes.append(amplitude)
         phases[pressure] = theta
@@ -251,7 +250,7 @@ def test_strain_gauges_match_surface_strain(make_sim):
     settle(sim, pressures)
     gauges = StrainGauges(noise_std=0.0, rate_hz=None)
     segment = spec.segments[0]
-    axial, moment = chamber_loads(spec, pressures)
+    axial, moment = pneumatic_loads_reference(spec, pressures)
     kappa = np.linalg.norm(moment[0]) / segment.bending_rigidity_nm2
     expected = axial[0] / segment.axial_rigidity_n - kappa * segment.outer_radius_m * np.cos(
         SIGMA - np.pi)
