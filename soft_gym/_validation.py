@@ -11,8 +11,26 @@ from typing import Any, Iterable
 import numpy as np
 
 
+def require_number(name: str, value: Any) -> float:
+    """Return ``value`` as float if it is a real number (not a bool, string or complex)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer,
+                                                                     np.floating)):
+        raise ValueError(f"{name} must be a real number, got {value!r} "
+                         f"({type(value).__name__})")
+    return float(value)
+
+
+def require_integer(name: str, value: Any, minimum: int) -> int:
+    """Return ``value`` as int if it is an integer (not a bool) and at least ``minimum``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+            or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
 def require_positive(name: str, value: float) -> float:
     """Return ``value`` as float if it is finite and > 0, else raise ``ValueError``."""
+    value = require_number(name, value)
     if not np.isfinite(value) or value <= 0:
         raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
     return float(value)
@@ -20,6 +38,7 @@ def require_positive(name: str, value: float) -> float:
 
 def require_non_negative(name: str, value: float) -> float:
     """Return ``value`` as float if it is finite and >= 0, else raise ``ValueError``."""
+    value = require_number(name, value)
     if not np.isfinite(value) or value < 0:
         raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
     return float(value)
@@ -27,6 +46,7 @@ def require_non_negative(name: str, value: float) -> float:
 
 def require_in_range(name: str, value: float, low: float, high: float) -> float:
     """Return ``value`` as float if it is finite and within [low, high]."""
+    value = require_number(name, value)
     if not np.isfinite(value) or not (low <= value <= high):
         raise ValueError(f"{name} must be within [{low}, {high}], got {value!r}")
     return float(value)
@@ -42,6 +62,8 @@ def require_choice(name: str, value: Any, allowed: Iterable[Any]) -> Any:
 
 def as_finite_array(name: str, value: Any, shape: tuple[int, ...] | None = None) -> np.ndarray:
     """Convert to a float64 array, checking shape (if given) and that every entry is finite."""
+    if np.iscomplexobj(value):
+        raise ValueError(f"{name} must be real, got complex values {value!r}")
     try:
         array = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as error:

@@ -72,6 +72,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from soft_gym._validation import require_integer, require_non_negative
 from soft_gym.robots.actuation import Actuation
 from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import ArmSpec
@@ -136,9 +137,14 @@ class SoftArmEnv(gym.Env):
                  delta_fraction: float = 0.1, action_rate_weight: float = 0.001,
                  episode_steps: int = 100, settle_s: float = 0.5,
                  render_mode: str | None = None, render_size: tuple[int, int] = (320, 240)) -> None:
+        if not isinstance(preset, (str, ArmSpec)):
+            raise ValueError(f"preset must be a preset name or an ArmSpec, got {preset!r}")
         self.spec_arm = preset if isinstance(preset, ArmSpec) else get_preset(preset)
         if task not in TASKS:
             raise ValueError(f"task must be one of {list(TASKS)}, got {task!r}")
+        if not isinstance(obs, (str, list, tuple)) or not all(isinstance(p, str) for p in obs):
+            raise ValueError(f"obs must be a part name or a sequence of them from "
+                             f"{list(OBSERVATION_PARTS)}, got {obs!r}")
         obs = (obs,) if isinstance(obs, str) else tuple(obs)
         unknown = [part for part in obs if part not in OBSERVATION_PARTS]
         if unknown or not obs or len(set(obs)) != len(obs):
@@ -159,11 +165,18 @@ class SoftArmEnv(gym.Env):
         self.feedback_source = make_feedback_source(feedback, sensing)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        if action_rate_weight < 0:
-            raise ValueError(f"action_rate_weight must be >= 0, got {action_rate_weight!r}")
+        action_rate_weight = require_non_negative("action_rate_weight", action_rate_weight)
+        episode_steps = require_integer("episode_steps", episode_steps, 1)
+        settle_s = require_non_negative("settle_s", settle_s)
+        if (not isinstance(render_size, (tuple, list)) or len(render_size) != 2
+                or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                           and 1 <= v <= 4096 for v in render_size)):
+            raise ValueError("render_size must be (width, height) in pixels, each an integer in "
+                             f"[1, 4096], got {render_size!r}")
         self.loads = make_scenario(scenario)
-        paths = [path] if isinstance(path, str) or task == "reach" else list(path)
-        if not paths:
+        paths = [path] if isinstance(path, str) or task == "reach" else path
+        if (not isinstance(paths, (list, tuple)) or not paths
+                or not all(isinstance(name, str) for name in paths)):
             raise ValueError(f"path must be a path name or a non-empty list of them, got {path!r}")
         self.tasks = [ReachTask(self.spec_arm, episode_steps) if task == "reach" else
                       TrackTask(self.spec_arm, path=name, cycles=cycles, speed_m_s=speed_m_s,
@@ -350,6 +363,8 @@ class SoftArmEnv(gym.Env):
 
     # ------------------------------------------------------------------ helpers
     def _check_action(self, action) -> np.ndarray:
+        if np.iscomplexobj(action):
+            raise ValueError(f"action must be real, got complex values {action!r}")
         try:
             array = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError) as error:

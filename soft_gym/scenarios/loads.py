@@ -200,7 +200,8 @@ class Push(_Timed):
 
     def _link_index(self, sim) -> int:
         n = len(sim.arm.station_link)
-        if not -n <= self.link < n:
+        if isinstance(self.link, (bool, np.bool_)) or not isinstance(self.link, (int, np.integer)) \
+                or not -n <= self.link < n:
             raise ValueError(f"link must be in [{-n}, {n - 1}] for this arm, got {self.link!r}")
         return int(sim.arm.station_link[self.link])
 

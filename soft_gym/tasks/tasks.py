@@ -9,10 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from soft_gym._validation import require_positive
+from soft_gym._validation import as_finite_array, require_positive
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.tasks.paths import PATH_SHAPES, PathSpec, make_reference_trajectory, path_polyline
 from soft_gym.tasks.workspace import reachable_tips
+
+MAX_TRACK_STEPS = 72_000
+"""Longest track episode (control steps): an hour of simulated time at 20 Hz."""
 
 
 class ReachTask:
@@ -66,12 +69,32 @@ class TrackTask:
         center = (0.0, 0.0, float(np.median(tips[:, 2])))
         if speed_m_s is None:
             speed_m_s = 2 * np.pi * radius / 20.0
+        if waypoints_m is not None:
+            waypoints_m = as_finite_array("waypoints_m", waypoints_m)
+            if waypoints_m.ndim != 2 or waypoints_m.shape[1] != 3 or len(waypoints_m) < 2:
+                raise ValueError("waypoints_m must be at least 2 points (x, y, z) in metres, "
+                                 f"shape (n, 3), got shape {waypoints_m.shape}")
+            farthest = float(np.linalg.norm(waypoints_m, axis=1).max())
+            if farthest > spec.max_reach_m:
+                raise ValueError(
+                    f"waypoints_m must lie within the {spec.name} arm's reach of "
+                    f"{spec.max_reach_m * 1e3:.0f} mm from its base, got a point "
+                    f"{farthest * 1e3:.0f} mm away")
         self.spec = spec
         self.path_spec = PathSpec(
             shape=path, center_m=center, radius_m=radius, speed_m_s=speed_m_s, cycles=cycles,
-            waypoints_m=None if waypoints_m is None else tuple(map(tuple, np.asarray(waypoints_m))))
-        self.trajectory_m = make_reference_trajectory(self.path_spec, spec.control_period_s)
+            waypoints_m=None if waypoints_m is None else tuple(map(tuple, waypoints_m)))
         self.polyline_m = path_polyline(self.path_spec)
+        length_m = float(np.linalg.norm(np.diff(self.polyline_m, axis=0), axis=1).sum())
+        steps = self.path_spec.cycles * length_m / (self.path_spec.speed_m_s
+                                                    * spec.control_period_s)
+        if steps > MAX_TRACK_STEPS:
+            slowest = self.path_spec.cycles * length_m / (MAX_TRACK_STEPS * spec.control_period_s)
+            raise ValueError(
+                f"speed_m_s={speed_m_s!r} makes a {steps:.3g}-step episode; at most "
+                f"{MAX_TRACK_STEPS} steps are allowed, so speed_m_s must be >= {slowest:.3g} "
+                f"for this path ({length_m * 1e3:.0f} mm x {self.path_spec.cycles} cycles)")
+        self.trajectory_m = make_reference_trajectory(self.path_spec, spec.control_period_s)
         self.episode_steps = len(self.trajectory_m)
 
     def reset(self, rng: np.random.Generator) -> None:
