@@ -83,6 +83,10 @@ class ArmSimulator:
         # masses, and add every change on top (:meth:`mass_matrix`)
         self.client.calculateMassMatrix(self.arm.body_id, [0.0] * self.arm.n_joints)
         self._inertia_changes: dict[int, tuple[float, np.ndarray]] = {}
+        # every link's centre of mass in its own frame (m): PyBullet never moves it
+        self._centre_of_mass = {
+            link: np.asarray(self.client.getDynamicsInfo(self.arm.body_id, link)[3])
+            for link in range(self.arm.n_joints)}
         self._tip_payloads: dict[str, float] = {}
         self.supply = PneumaticSupply(spec)
         self._joints = list(range(self.arm.n_joints))
@@ -565,9 +569,8 @@ class ArmSimulator:
             zeros = [0.0] * len(positions)
             for link, (added_mass, added_inertia) in self._inertia_changes.items():
                 # the point is given in the link frame (not about the centre of mass)
-                com = list(self.client.getDynamicsInfo(body, link)[3])
-                linear, angular = self.client.calculateJacobian(body, link, com, positions,
-                                                                zeros, zeros)
+                linear, angular = self.client.calculateJacobian(
+                    body, link, self._centre_of_mass[link].tolist(), positions, zeros, zeros)
                 jv, jw = np.asarray(linear), np.asarray(angular)
                 rotation = quaternion_to_matrix(np.asarray(
                     self.client.getLinkState(body, link, computeForwardKinematics=1)[1]))
@@ -577,12 +580,9 @@ class ArmSimulator:
 
     def _read_link_inertia(self) -> dict[int, tuple[float, np.ndarray]]:
         """Mass (kg) and principal inertia (kg m^2) of every link, as PyBullet holds them."""
-        info = [self.client.getDynamicsInfo(self.arm.body_id, link) for link in self._all_links()]
-        return {link: (float(i[0]), np.array(i[2], dtype=float))
-                for link, i in zip(self._all_links(), info)}
-
-    def _all_links(self) -> range:
-        return range(self.arm.n_joints)
+        info = {link: self.client.getDynamicsInfo(self.arm.body_id, link)
+                for link in range(self.arm.n_joints)}
+        return {link: (float(i[0]), np.array(i[2], dtype=float)) for link, i in info.items()}
 
     def _set_link_inertia(self, link: int, mass_kg: float, inertia_kg_m2: np.ndarray) -> None:
         """Give ``link`` a mass and principal inertia (its centre of mass stays where it is)."""
@@ -607,7 +607,7 @@ class ArmSimulator:
         link = self.arm.tip_link
         payload = sum(self._tip_payloads.values())
         nominal_mass, nominal_inertia = self._nominal_inertia[link]
-        com = np.asarray(self.client.getDynamicsInfo(self.arm.body_id, link)[3])
+        com = self._centre_of_mass[link]
         tip_point = np.array([0.0, 0.0, self.arm.station_rest_length[-1]])
         lever_m = np.linalg.norm(tip_point - com)
         inertia = nominal_inertia + payload * lever_m**2 * np.array([1.0, 1.0, 0.0])
@@ -627,13 +627,14 @@ class ArmSimulator:
         """
         body, positions = self.arm.body_id, q.tolist()
         zeros = [0.0] * len(positions)
-        per_link: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        per_link: dict[int, list] = {}
         for link, force, local_point in self._forces.values():
-            total, moment_about_origin = per_link.get(link, (np.zeros(3), np.zeros(3)))
-            per_link[link] = (total + force, moment_about_origin + np.cross(
-                self._link_rotation(link) @ local_point, force))
+            per_link.setdefault(link, []).append((force, local_point))
         torque = np.zeros(len(positions))
-        for link, (force, moment) in per_link.items():
+        for link, held in per_link.items():
+            rotation = self._link_rotation(link)
+            force = sum(f for f, _ in held)
+            moment = sum(np.cross(rotation @ point, f) for f, point in held)
             linear, angular = self.client.calculateJacobian(body, link, [0.0, 0.0, 0.0],
                                                             positions, zeros, zeros)
             torque += np.asarray(linear).T @ force + np.asarray(angular).T @ moment

@@ -293,7 +293,7 @@ class SoftArmEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         if options and options.get("recalibrate"):
-            if not self.feedback_source.sensors or self.pipeline is None:
+            if not self.feedback_source.calibrates:
                 raise ValueError("options['recalibrate'] needs a feedback source that "
                                  "calibrates (feedback 'fused', 'camera' or 'fbg'), this env has "
                                  f"{self.feedback!r}")

@@ -35,7 +35,6 @@ from typing import Any
 import numpy as np
 
 from soft_gym.robots.spec import GRAVITY_M_S2
-from soft_gym.scenarios.loads import FillingLoad
 
 LOAD_KINDS = ("none", "tip_mass", "filling_load", "swaying_mass", "push")
 FAULT_KINDS = ("none", "moving_occluder", "low_light", "led_glare", "motion_blur")
@@ -167,17 +166,20 @@ class DomainRandomizer:
 
     def heaviest_loads_n(self, gravity_m_s2: float = GRAVITY_M_S2) -> dict[str, float]:
         """Heaviest weight or force (N) each load kind with non-zero odds can draw, by range."""
+        from soft_gym.scenarios import FillingLoad, Push, SwayingMass, TipMass
+
         c, odds = self.config, self.config.load_weights
-        heaviest = {"tip_mass_kg": c.tip_mass_kg[1] * gravity_m_s2 * (odds.get("tip_mass", 0) > 0),
-                    "filling_added_kg": (FillingLoad.initial_mass_kg + c.filling_added_kg[1])
-                    * gravity_m_s2 * (odds.get("filling_load", 0) > 0),
-                    "swaying_mass_kg": c.swaying_mass_kg[1] * gravity_m_s2
-                    * (odds.get("swaying_mass", 0) > 0),
-                    "push_force_n": c.push_force_n[1] * (odds.get("push", 0) > 0)}
-        return {name: float(value) for name, value in heaviest.items() if value > 0}
+        heaviest = {("tip_mass", "tip_mass_kg"): TipMass(mass_kg=c.tip_mass_kg[1]),
+                    ("filling_load", "filling_added_kg"):
+                        FillingLoad(added_mass_kg=c.filling_added_kg[1]),
+                    ("swaying_mass", "swaying_mass_kg"): SwayingMass(mass_kg=c.swaying_mass_kg[1]),
+                    ("push", "push_force_n"): Push(force_n=(c.push_force_n[1], 0.0, 0.0))}
+        loads_n = {name: load.peak_load_n(gravity_m_s2)
+                   for (kind, name), load in heaviest.items() if odds.get(kind, 0) > 0}
+        return {name: value for name, value in loads_n.items() if value > 0}
 
     def sample(self, rng: np.random.Generator) -> EpisodeDraw:
-        from soft_gym.scenarios import Push, SwayingMass, TipMass
+        from soft_gym.scenarios import FillingLoad, Push, SwayingMass, TipMass
         from soft_gym.sensors.faults import make_faults
 
         c = self.config

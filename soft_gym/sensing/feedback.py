@@ -66,6 +66,8 @@ class FeedbackSource:
     name: ClassVar[str] = ""
     sensors: ClassVar[tuple[str, ...]] = ()
     """Sensor names the source reads (see :data:`soft_gym.sensors.SENSORS`)."""
+    calibrates: ClassVar[bool] = False
+    """Whether :meth:`calibrate` does anything (``reset(options={"recalibrate": True})``)."""
 
     def __init__(self, options: dict | None = None) -> None:
         if options:
@@ -142,6 +144,7 @@ class _PipelineFeedback(FeedbackSource):
     """
 
     sensors = ("image", "fbg")
+    calibrates = True
     output: ClassVar[str] = ""
 
     def __init__(self, options: dict | None = None) -> None:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from soft_gym._quaternion import quaternion_to_matrix
+from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.sensing.exploration import spiral_fractions
 from soft_gym.sensing.femp import FEmpEstimator
 from soft_gym.sensing.fusion import PoseFusion
@@ -135,7 +136,7 @@ class SensingPipeline:
         for k in range(self.map_steps + self.n_init):
             fraction = spiral_fractions(k * spec.control_period_s, spec.n_segments,
                                         **self.exploration)
-            sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
+            sim.set_pressures(pressure_at_fraction(spec, fraction))
             sim.step_physics(spec.control_period_s)
             measurement = measure(sensors, sim)
             estimate = self.vision.update(measurement["image"], measurement.depth_m["image"])
