@@ -360,7 +360,7 @@ class ArmSimulator:
         if total > self.spec.max_load_n * (1 + 1e-9):
             raise ValueError(
                 f"scenario loads must total at most {self.spec.max_load_n:.3g} N on the "
-                f"{self.spec.name} arm (max_load_n: {MAX_LOAD_TO_WEIGHT:g}x its "
+                f"{self.spec.name} arm (max_load_n: {MAX_LOAD_TO_WEIGHT[self.spec.mount]:g}x its "
                 f"{self.spec.mass_kg * 1e3:.0f} g weight), got {total:.3g} N with {load!r}")
         load.attach(self)
         self.loads.append(load)

@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from soft_gym.kinematics import cc_forward
 from soft_gym.robots import get_preset
@@ -338,27 +339,69 @@ def test_hanging_arm_rests_along_gravity(make_sim, preset):
 
 @pytest.mark.parametrize("preset, fraction", [("wang2023", 0.7), ("ho2018", 0.6)])
 def test_tip_mass_pulls_bent_tip_along_gravity(make_sim, preset, fraction):
-    """Hanging mount, chamber 0 bends the arm towards -x (less than 90 degrees); a tip mass adds a
-    weight along +z (gravity) at the tip, whose moment about every section straightens the arm:
-    the tip's z grows and its lateral offset |x| shrinks, monotonically for 0, 10, 20, 40 g.
+    """Chamber 0 bends the arm towards -x; a tip mass adds a weight ``m g`` along gravity at the
+    tip, so for 0, 10, 20 and 40 g the tip moves monotonically along gravity. Its moment about
+    every section turns the tip's tangent towards gravity: a hanging arm (wang2023, gravity +z,
+    bent less than 90 degrees) straightens, so its lateral offset |x| shrinks; an upright arm
+    (ho2018, gravity -z) bends further, so the angle between its tip tangent and the base axis
+    grows.
     """
     from soft_gym.scenarios import TipMass
 
     spec = get_preset(preset)
+    down = spec.gravity_base / np.linalg.norm(spec.gravity_base)
     pressure = single_chamber_pressures(spec, {0: fraction})
-    tips = []
+    tips, bends = [], []
     for mass in (0.0, 0.010, 0.020, 0.040):
         sim = make_sim(spec, gravity=True)
         if mass > 0:
             sim.add_load(TipMass(mass_kg=mass))
         ramp_pressures(sim, pressure, ramp_s=4.0 if spec.n_segments == 1 else 8.0)
         tips.append(time_average(sim, 4.0, tip_position, dt=0.02))
+        tangent = Rotation.from_quat(sim.tip_pose()[1]).apply(Z)
+        bends.append(math.degrees(math.acos(np.clip(tangent @ Z, -1.0, 1.0))))
         sim.clear_loads()
     tips = np.array(tips)
     assert tips[0, 0] < -0.01  # bent towards -x, away from chamber 0
     assert np.abs(tips[:, 1]).max() < 1e-6
-    assert np.all(np.diff(tips[:, 2]) > 1e-4), f"tip z (mm): {tips[:, 2] * 1e3}"
-    assert np.all(np.diff(np.abs(tips[:, 0])) < -1e-4), f"tip x (mm): {tips[:, 0] * 1e3}"
+    along_gravity = tips @ down
+    assert np.all(np.diff(along_gravity) > 1e-4), f"tip along gravity (mm): {along_gravity * 1e3}"
+    if spec.mount == "hanging":
+        assert np.all(np.diff(np.abs(tips[:, 0])) < -1e-4), f"tip x (mm): {tips[:, 0] * 1e3}"
+    else:
+        assert spec.mount == "upright"
+        assert np.all(np.diff(bends) > 0.5), f"tip bend (deg): {np.round(bends, 1)}"
+
+
+def test_upright_arm_stands_straight_and_gravity_compresses_it(make_sim):
+    """ho2018 stands upright (gravity -z in the base frame). At pre-pressure, by symmetry it stays
+    straight (tip lateral offset < 1e-6 m) and its own weight shortens it: the tip is lower than
+    with gravity off, by about the axial-spring estimate ``sum_j W_above_j ds / (E_a A)`` (each
+    link joint carries the weight above it; within 30 %, the pre-pressure's strain stiffening
+    makes it smaller), and it stays there (tip moves < 1e-5 m from t = 5 s to 20 s)."""
+    spec = get_preset("ho2018")
+    assert spec.mount == "upright"
+    tips = {}
+    for gravity in (False, True):
+        sim = make_sim(spec, gravity=gravity)
+        sim.reset(spec.p_pre_pa, settle_s=0.0)
+        advance(sim, 5.0)
+        tip_5s = sim.tip_pose()[0]
+        advance(sim, 15.0)
+        tips[gravity] = sim.tip_pose()[0]
+        assert np.abs(tips[gravity][:2]).max() < 1e-6
+        assert np.linalg.norm(tips[gravity] - tip_5s) < 1e-5
+    np.testing.assert_allclose(spec.gravity_base, [0.0, 0.0, -9.81])
+    shortening = tips[False][2] - tips[True][2]
+    weights = []
+    for segment in spec.segments:
+        weights += [segment.mass_kg / segment.n_links] * segment.n_links
+        weights[-1] += segment.extra_tip_mass_kg
+    weight_above = np.cumsum(np.array(weights)[::-1])[::-1] * 9.81
+    link_compliance = [s.link_length_m / s.axial_rigidity_n for s in spec.segments for _ in range(s.n_links)]
+    reference = float(weight_above @ np.array(link_compliance))
+    assert 0.0 < shortening
+    assert shortening == pytest.approx(reference, rel=0.3)
 
 
 def test_tip_mass_equals_its_weight_at_the_tip(make_sim):

@@ -80,21 +80,41 @@ ZOU2022 = ArmSpec(
            "density_kg_m3": "braided sleeves + latex tubes are mostly air; 400 kg/m^3 effective"})
 
 _HO_SEGMENT = SegmentSpec(
-    length_m=0.0775, outer_radius_m=0.0135, chamber_offset_m=7.0e-3, chamber_area_m2=1.0e-4,
-    youngs_modulus_pa=80e3, axial_modulus_pa=400e3, density_kg_m3=1070.0, n_links=4,
-    p_max_pa=110e3, p_pre_pa=40e3,
+    length_m=0.0775, outer_radius_m=0.0135, chamber_offset_m=7.0e-3, chamber_area_m2=1.07e-4,
+    youngs_modulus_pa=300e3, axial_modulus_pa=1.2e6, density_kg_m3=1070.0, n_links=4,
+    p_max_pa=230e3, p_pre_pa=40e3,
     bending_stiffening=0.5, axial_stiffening=2.0, damping_ratio=0.3, extra_tip_mass_kg=0.0)
 
 HO2018 = ArmSpec(
-    name="ho2018", segments=(_HO_SEGMENT, _HO_SEGMENT), mount="hanging",
-    pneumatic_time_constant_s=0.3, control_period_s=0.05, physics_dt_s=2.5e-3,
+    name="ho2018", segments=(_HO_SEGMENT, _HO_SEGMENT), mount="upright",
+    pneumatic_time_constant_s=0.1, control_period_s=0.05, physics_dt_s=2.5e-3,
     actuation_update_s=0.01,
-    description=("Ho et al. 2018: two segments, 155 mm total, OD 27 mm, Dragon Skin 10, body mass "
-                 "41.7 g, ~100 deg bending per segment, 0.04 MPa pre-pressure, EM tracker."),
-    notes={"chamber_area_m2": "100 mm^2 crescent chambers; with 1070 kg/m^3 the body weighs ~42 g",
-           "youngs_modulus_pa": "Dragon Skin 10 ~150 kPa solid; 80 kPa effective for the thin walls",
-           "axial_modulus_pa": "400 kPa effective (the chamber walls carry the axial load): the 0.04 MPa pre-pressure lengthens the arm ~10 %",
-           "p_max_pa": "chosen so one chamber at p_max bends a segment ~100 deg"})
+    description=("Ho et al. 2018: two segments standing upright (base below, EM coil on the tip), "
+                 "155 mm total, OD 27 mm, Dragon Skin 10, body mass 41.7 g, ~100 deg bending per "
+                 "segment in any direction, 0.04 MPa pre-pressure, EM tracker."),
+    notes={"mount": "upright as in the paper's Figs. 1(d) and 3: gravity compresses the arm and "
+                    "tips it further as it bends",
+           "chamber_area_m2": "107 mm^2 per chamber, so that with 1070 kg/m^3 the body weighs "
+                              "41.7 g as the paper states",
+           "youngs_modulus_pa": "300 kPa effective bending modulus (Dragon Skin 10 ~150-180 kPa "
+                                "solid, stiffened by the fibre-wound, pre-pressurised chambers): "
+                                "upright, the arm's own weight is then 0.27 of its self-weight "
+                                "buckling load and the full 30 g fluid tip about 0.6 of the "
+                                "tip buckling load, so the loads deform a bent arm strongly "
+                                "without collapsing a straight one (80 kPa let a straight arm "
+                                "fall over under the 14.2 g tip)",
+           "axial_modulus_pa": "1.2 MPa effective (the helical fibres carry the axial load): the "
+                               "0.04 MPa pre-pressure lengthens the 155 mm arm to ~161 mm",
+           "p_max_pa": "chosen so one chamber at p_max bends its segment 96-105 deg upright (the "
+                       "paper: 'up to 100 deg' per segment)",
+           "pneumatic_time_constant_s": "0.1 s: stepper-driven cylinders displace the chamber "
+                                        "volume directly, so the chamber follows the command "
+                                        "within a few control steps",
+           "action": "the paper drives chamber volumes with stepper-driven cylinders; here the "
+                     "action is the chamber pressure. A closed volume makes the chamber stiffer "
+                     "against loads (a load that bends the arm raises the pressure on one side), "
+                     "so the simulated arm yields more to a tip load at the same command than "
+                     "the paper's; the learners see pressures where the paper's saw volumes"})
 
 PRESETS: dict[str, ArmSpec] = {spec.name: spec for spec in (WANG2023, ZHAO2021, ZOU2022, HO2018)}
 
