@@ -32,6 +32,7 @@ from soft_gym._registry import build, parse_spec
 BASELINES: dict[str, str] = {
     "cc_model": "agents.controllers.cc_model:CCModelController",
     "hybrid_gpr": "agents.controllers.hybrid_gpr:HybridGPRController",
+    "lwpr_rwr": "agents.controllers.lwpr_rwr:LWPRRWRController",
 }
 """Baseline names and the classes implementing them."""
 

@@ -140,6 +140,23 @@ def main(argv: list[str] | None = None) -> None:
     track.add_argument("--out", default="results/track", help="output directory")
     track.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
                        help="runs in parallel processes (up to 2, one per core)")
+    from eval import ho2018 as ho2018_module
+
+    ho2018 = sub.add_parser("ho2018", help="ho2018 static and varying tip-load experiments",
+                            description=ho2018_module.__doc__, formatter_class=HelpFormatter)
+    ho2018.add_argument("--experiments", nargs="+", default=list(ho2018_module.EXPERIMENTS),
+                        choices=list(ho2018_module.EXPERIMENTS), help="which experiments")
+    ho2018.add_argument("--seeds", type=int, nargs="+", default=[0], help="seeds (pre-training "
+                        "waypoints and episode)")
+    ho2018.add_argument("--cycle-s", type=float, default=None,
+                        help="seconds per rectangle cycle (s); default: the experiment's own "
+                             "(40 s static, 30 s varying)")
+    ho2018.add_argument("--baselines", nargs="*", default=[],
+                        help="further policies on the online run's load, e.g. cc_model "
+                             "hybrid_gpr")
+    ho2018.add_argument("--lead-in-s", type=float, default=15.0,
+                        help="seconds tracking the first corner before recording (s)")
+    ho2018.add_argument("--out", default="results/ho2018", help="output directory")
     compare = sub.add_parser(
         "compare", help="SB3 agents against the baselines, nominal and out of distribution",
         description=compare_module.__doc__, formatter_class=HelpFormatter)
@@ -159,6 +176,25 @@ def main(argv: list[str] | None = None) -> None:
     compare.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
                          help="runs in parallel processes (up to 2, one per core)")
     args = parser.parse_args(argv)
+    if args.command == "ho2018":
+        for option, value, low in (("--cycle-s", args.cycle_s, 5.0),
+                                   ("--lead-in-s", args.lead_in_s, 0.0)):
+            if value is not None and (not value >= low or value > 3600):
+                parser.error(f"{option} must be within [{low:g}, 3600] s, got {value!r}")
+        if any(seed < 0 for seed in args.seeds):
+            parser.error(f"--seeds must be >= 0, got {args.seeds}")
+        from agents.policies import BASELINES
+
+        unknown = [name for name in args.baselines
+                   if name not in BASELINES and not name.startswith("sb3:")]
+        if unknown:
+            parser.error(f"--baselines must be names from {sorted(BASELINES)} or sb3:PATH, "
+                         f"got {unknown}")
+        ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
+                                     cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
+                                     baselines=tuple(args.baselines))
+        print(f"output directory: {args.out}")
+        return
     if args.command == "compare":
         from agents.policies import shipped_agents
 

@@ -81,8 +81,8 @@ ZOU2022 = ArmSpec(
 
 _HO_SEGMENT = SegmentSpec(
     length_m=0.0775, outer_radius_m=0.0135, chamber_offset_m=7.0e-3, chamber_area_m2=1.07e-4,
-    youngs_modulus_pa=300e3, axial_modulus_pa=1.2e6, density_kg_m3=1070.0, n_links=4,
-    p_max_pa=230e3, p_pre_pa=40e3,
+    youngs_modulus_pa=450e3, axial_modulus_pa=1.2e6, density_kg_m3=1070.0, n_links=4,
+    p_max_pa=330e3, p_pre_pa=40e3,
     bending_stiffening=0.5, axial_stiffening=2.0, damping_ratio=0.3, extra_tip_mass_kg=0.0)
 
 HO2018 = ArmSpec(
@@ -96,17 +96,20 @@ HO2018 = ArmSpec(
                     "tips it further as it bends",
            "chamber_area_m2": "107 mm^2 per chamber, so that with 1070 kg/m^3 the body weighs "
                               "41.7 g as the paper states",
-           "youngs_modulus_pa": "300 kPa effective bending modulus (Dragon Skin 10 ~150-180 kPa "
+           "youngs_modulus_pa": "450 kPa effective bending modulus (Dragon Skin 10 ~150-180 kPa "
                                 "solid, stiffened by the fibre-wound, pre-pressurised chambers): "
-                                "upright, the arm's own weight is then 0.27 of its self-weight "
-                                "buckling load and the full 30 g fluid tip about 0.6 of the "
-                                "tip buckling load, so the loads deform a bent arm strongly "
-                                "without collapsing a straight one (80 kPa let a straight arm "
-                                "fall over under the 14.2 g tip)",
+                                "upright, the arm's own weight is 0.18 of its self-weight "
+                                "buckling load, the 14.2 g tip 0.19 and the full 30 g fluid tip "
+                                "0.41 of the tip buckling load, so the loads deform a bent arm "
+                                "markedly (up to ~2x its compliance) without collapsing a "
+                                "straight one. At 80 kPa the straight arm fell over under the "
+                                "14.2 g tip; at 300 kPa the 30 g tip (0.86 of buckling) made it "
+                                "seven times softer, which no controller in the paper faced",
            "axial_modulus_pa": "1.2 MPa effective (the helical fibres carry the axial load): the "
                                "0.04 MPa pre-pressure lengthens the 155 mm arm to ~161 mm",
-           "p_max_pa": "chosen so one chamber at p_max bends its segment 96-105 deg upright (the "
-                       "paper: 'up to 100 deg' per segment)",
+           "p_max_pa": "chosen so one chamber at p_max bends its segment 97-104 deg upright (the "
+                       "paper: 'up to 100 deg' per segment); the paper drives volumes and states "
+                       "no pressure",
            "pneumatic_time_constant_s": "0.1 s: stepper-driven cylinders displace the chamber "
                                         "volume directly, so the chamber follows the command "
                                         "within a few control steps",

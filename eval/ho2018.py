@@ -1,0 +1,296 @@
+"""The ho2018 tracking experiments: offline vs online local learning under static and filling
+tip loads (Ho et al. 2018, Sections 3.4-3.5, Tables 1-2, Figs. 7, 8 and 10).
+
+The ``lwpr_rwr`` baseline (:mod:`agents.controllers.lwpr_rwr`) tracks a rectangle projected onto
+the upright ho2018 arm's workspace with EM feedback:
+
+| experiment | rectangle | cycles | cycle | pre-training | window | runs (setting: load)       |
+|------------|-----------|--------|-------|--------------|--------|----------------------------|
+| `static`   | 25 x 100 mm | 3    | 40 s  | 80 waypoints | 425    | offline: none; online: 14.2 g tip |
+| `varying`  | 40 x 60 mm  | 4    | 30 s  | 320 waypoints| 550    | offline: empty 14 g fluid tip; offline: filling; online: filling |
+
+Cycle lengths: the paper accumulated "approximately 400" and "approximately 300" new training
+points per cycle against windows of 425 and 550, so its window held about the last cycle and
+what was learnt on one pass was still there on the next. At ``lwpr_rwr``'s 10 Hz decisions, 40 s
+and 30 s cycles give 400 and 300 decisions per cycle.
+
+Filling (ho2018 Section 3.5.2): +10 g from the start of cycle 3 and +6 g from the start of cycle 4,
+at 0.6 g/s (0.6 mL/s of water), onto the 14 g container.
+
+Projection onto the workspace (ho2018 Section 3.4: "projected to the 3D workspace of the robot,
+which was approximated from the pre-training data"): a quadratic surface
+``z = a + b x + c y + d x^2 + e x y + f y^2`` is fitted by least squares to the pre-training tip
+positions, and the rectangle, centred on the arm's axis with its long side along x, is lifted
+onto it. Before each run the tip tracks the rectangle's first corner for ``lead_in_s`` until the
+error settles ("the robot was allowed to track to the first point of the desired trajectory
+until the error converged, at which point data acquisition was initiated": online learners learn
+from then on); the error is then recorded over the cycles: the Euclidean distance
+between the target and the true tip (mm), per cycle mean, standard deviation and maximum.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from tqdm import tqdm
+
+import soft_gym  # noqa: F401
+from agents.policies import make_policy
+from soft_gym.scenarios import FillingLoad, TipMass
+from soft_gym.tasks.paths import PathSpec, make_reference_trajectory
+
+EXPERIMENTS = ("static", "varying")
+
+
+@dataclass(frozen=True)
+class Run:
+    """One tracking run of an experiment: a policy (``lwpr_rwr`` offline or online, or another
+    baseline) under a load (``none``, ``tip``, ``empty`` or ``filling``)."""
+
+    label: str
+    online: bool
+    load: str
+    policy: str = "lwpr_rwr"
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One of the paper's two experiments (see the module docstring)."""
+
+    name: str
+    width_mm: float
+    height_mm: float
+    cycles: int
+    pretrain_waypoints: int
+    window: int
+    cycle_s: float
+    runs: tuple[Run, ...]
+    paper: dict[str, tuple[float, ...]] = field(default_factory=dict, compare=False)
+
+
+EXPERIMENT_SPECS = {
+    "static": Experiment(
+        "static", 100.0, 25.0, 3, 80, 425, 40.0,
+        (Run("offline, no load", False, "none"), Run("online, 14.2 g tip", True, "tip")),
+        paper={"offline, no load": (4.56, 5.72, 5.53), "online, 14.2 g tip": (4.42, 3.33, 1.63)}),
+    "varying": Experiment(
+        "varying", 60.0, 40.0, 4, 320, 550, 30.0,
+        (Run("offline, empty 14 g tip", False, "empty"),
+         Run("offline, filling", False, "filling"), Run("online, filling", True, "filling")),
+        paper={"offline, empty 14 g tip": (6.01, 7.19, 7.08, 6.94),
+               "offline, filling": (5.82, 7.24, 10.36, 12.84),
+               "online, filling": (4.16, 3.10, 1.07, 0.98)}),
+}
+"""The experiments, with the paper's per-cycle mean errors (mm, Tables 1 and 2)."""
+
+
+def workspace_surface(tips_mm: np.ndarray) -> np.ndarray:
+    """Least-squares coefficients ``(a, b, c, d, e, f)`` of ``z = a + b x + c y + d x^2 + e x y +
+    f y^2`` through tip positions (mm)."""
+    x, y, z = tips_mm.T
+    basis = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=1)
+    return np.linalg.lstsq(basis, z, rcond=None)[0]
+
+
+def workspace_rectangle(surface: np.ndarray, width_mm: float, height_mm: float,
+                        points_per_mm: float = 1.0) -> np.ndarray:
+    """The closed rectangle ``width x height`` (mm, long side along x) centred on the axis,
+    lifted onto the fitted surface; points (m) along its edges, first corner first."""
+    corners = np.array([[-width_mm / 2, -height_mm / 2], [width_mm / 2, -height_mm / 2],
+                        [width_mm / 2, height_mm / 2], [-width_mm / 2, height_mm / 2]])
+    points = []
+    for a, b in zip(corners, np.roll(corners, -1, axis=0)):
+        n = max(2, int(np.ceil(np.linalg.norm(b - a) * points_per_mm)))
+        points.extend(a + (b - a) * t for t in np.arange(n) / n)
+    xy = np.array(points)
+    x, y = xy.T
+    z = surface @ np.stack([np.ones_like(x), x, y, x * x, x * y, y * y])
+    return np.column_stack([xy, z]) / 1000.0
+
+
+def _scenario(load: str, lead_in_s: float, cycle_s: float) -> list:
+    if load == "none":
+        return []
+    if load == "tip":
+        return [TipMass(mass_kg=0.0142)]
+    if load == "empty":
+        return [TipMass(mass_kg=0.014)]
+    if load == "filling":
+        return [FillingLoad(initial_mass_kg=0.014, added_mass_kg=0.010, rate_kg_s=0.0006,
+                            start_s=lead_in_s + 2 * cycle_s),
+                FillingLoad(initial_mass_kg=0.0, added_mass_kg=0.006, rate_kg_s=0.0006,
+                            start_s=lead_in_s + 3 * cycle_s)]
+    raise ValueError(f"load must be one of none, tip, empty, filling; got {load!r}")
+
+
+def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
+                   lead_in_s: float = 15.0,
+                   preset: str = "ho2018", pretrain_waypoints: int | None = None,
+                   baselines: tuple[str, ...] = (), progress: bool = True,
+                   **controller_params: Any) -> dict[str, dict]:
+    """Run every setting of experiment ``name`` once; returns per-run records (targets, tips,
+    errors, per-cycle statistics).
+
+    ``baselines``: further policies (``cc_model``, ``hybrid_gpr``, ``sb3:PATH``) run on the same
+    rectangle under the load of the experiment's online run, for comparison (their own
+    calibration; ``controller_params`` go to ``lwpr_rwr`` only).
+    """
+    if name not in EXPERIMENT_SPECS:
+        raise ValueError(f"experiment must be one of {list(EXPERIMENT_SPECS)}, got {name!r}")
+    experiment = EXPERIMENT_SPECS[name]
+    waypoints = experiment.pretrain_waypoints if pretrain_waypoints is None else pretrain_waypoints
+    cycle_s = experiment.cycle_s if cycle_s is None else cycle_s
+    load = experiment.runs[-1].load
+    runs = list(experiment.runs) + [Run(f"{policy}, {_LOAD_NAMES[load]}", False, load, policy)
+                                    for policy in baselines]
+    results = {}
+    path_m = None
+    for run in runs:
+        total_s = lead_in_s + experiment.cycles * cycle_s
+        env = gym.make("SoftArmReach-v0", preset=preset, feedback="em", obs=("pose", "target"),
+                       scenario=_scenario(run.load, lead_in_s, cycle_s),
+                       episode_steps=int(round(total_s / 0.05)) + 10)
+        try:
+            if run.policy == "lwpr_rwr":
+                policy = make_policy("lwpr_rwr", env, online=run.online,
+                                     window=experiment.window, pretrain_waypoints=waypoints,
+                                     seed=seed, **controller_params)
+                report = policy.pretrain()
+                if path_m is None:
+                    path_m = workspace_rectangle(workspace_surface(policy.pretraining_tips_mm()),
+                                                 experiment.width_mm, experiment.height_mm)
+            else:
+                if path_m is None:
+                    raise ValueError("baselines run after the lwpr_rwr runs, which place the "
+                                     "rectangle")
+                policy, report = make_policy(run.policy, env), {}
+            results[run.label] = _track(env, policy, path_m, experiment.cycles, cycle_s,
+                                        lead_in_s, seed, progress, f"{name}: {run.label}")
+            results[run.label]["pretraining"] = report
+        finally:
+            env.close()
+    return results
+
+
+_LOAD_NAMES = {"none": "no load", "tip": "14.2 g tip", "empty": "empty 14 g tip",
+               "filling": "filling"}
+
+
+def _track(env, policy, path_m: np.ndarray, cycles: int, cycle_s: float, lead_in_s: float,
+           seed: int, progress: bool, label: str) -> dict:
+    """Lead-in on the first corner, then ``cycles`` rectangles; the policy sees the env's
+    observation with its ``target`` part set to this experiment's targets."""
+    unwrapped = env.unwrapped
+    period = unwrapped.spec_arm.control_period_s
+    length = float(np.linalg.norm(np.diff(np.vstack([path_m, path_m[:1]]), axis=0), axis=1).sum())
+    spec = PathSpec(shape="waypoints", center_m=(0.0, 0.0, 0.0), radius_m=1.0,
+                    speed_m_s=length / cycle_s, cycles=cycles, waypoints_m=path_m)
+    trajectory = make_reference_trajectory(spec, period)
+    lead_in = int(round(lead_in_s / period))
+    targets = np.vstack([np.repeat(trajectory[:1], lead_in, axis=0), trajectory])
+    observation, _ = env.reset(seed=seed)
+    policy.reset()
+    tips = np.empty_like(targets)
+
+    def with_targets(observation, k: int) -> np.ndarray:
+        observation = np.array(observation, copy=True)
+        unwrapped.observation_part(observation, "target")[:] = np.concatenate(
+            [targets[k], targets[min(k + 1, len(targets) - 1)]])
+        return observation
+
+    bar = tqdm(total=len(targets), desc=label, disable=not progress, leave=False)
+    for k in range(len(targets)):
+        seen = with_targets(observation, k)
+        action, _ = policy.predict(seen, deterministic=True)
+        observation, reward, _, _, info = env.step(action)
+        if k >= lead_in:  # "at which point data acquisition was initiated" (Section 3.4)
+            policy.update(seen, action, reward,
+                          with_targets(observation, min(k + 1, len(targets) - 1)), info)
+        tips[k] = info["tip_position_m"]
+        bar.update(1)
+    bar.close()
+    # after step k the tip should be at the target the policy was sent to, targets[k + 1]
+    aimed = np.vstack([targets[1:], targets[-1:]])
+    errors_mm = np.linalg.norm(tips - aimed, axis=1)[lead_in:] * 1000.0
+    per_cycle = np.array_split(errors_mm, cycles)
+    return {"targets_m": aimed[lead_in:], "tips_m": tips[lead_in:], "errors_mm": errors_mm,
+            "time_s": np.arange(len(errors_mm)) * period,
+            "cycle_mean_mm": [float(c.mean()) for c in per_cycle],
+            "cycle_std_mm": [float(c.std()) for c in per_cycle],
+            "cycle_max_mm": [float(c.max()) for c in per_cycle]}
+
+
+def report_table(name: str, results: dict[str, dict]) -> str:
+    """Markdown table like the paper's Tables 1-2: per-cycle mean (std) and max, ours and the
+    paper's means."""
+    experiment = EXPERIMENT_SPECS[name]
+    header = ["setting"] + [f"cycle {i + 1} mean (std)" for i in range(experiment.cycles)] + \
+        [f"cycle {i + 1} max" for i in range(experiment.cycles)] + ["paper means"]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for label, record in results.items():
+        cells = [label] + [f"{m:.2f} ({s:.2f})" for m, s in zip(record["cycle_mean_mm"],
+                                                                  record["cycle_std_mm"])]
+        cells += [f"{m:.2f}" for m in record["cycle_max_mm"]]
+        cells.append(", ".join(f"{v:.2f}" for v in experiment.paper.get(label, ())))
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def plot_experiment(path: str | Path, name: str, results: dict[str, dict]) -> Path:
+    """Figs. 7/8/10-like figure: tracked path over the target (top view) and the error over
+    time with the cycle boundaries, one column per setting."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    experiment = EXPERIMENT_SPECS[name]
+    fig, axes = plt.subplots(2, len(results), figsize=(4.5 * len(results), 7), squeeze=False)
+    for column, (label, record) in enumerate(results.items()):
+        top, bottom = axes[0, column], axes[1, column]
+        target, tip = record["targets_m"] * 1000, record["tips_m"] * 1000
+        top.plot(target[:, 0], target[:, 1], "k--", lw=1, label="target")
+        top.plot(tip[:, 0], tip[:, 1], lw=0.8, label="tip")
+        top.set(title=label, xlabel="x (mm)", ylabel="y (mm)", aspect="equal")
+        top.legend(fontsize=8)
+        bottom.plot(record["time_s"], record["errors_mm"], lw=0.8)
+        for i in range(1, experiment.cycles):
+            bottom.axvline(record["time_s"][-1] * i / experiment.cycles, color="grey", ls=":")
+        bottom.set(xlabel="time (s)", ylabel="tracking error (mm)")
+    fig.suptitle(f"ho2018 {name} load experiment")
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
+                   cycle_s: float | None = None, lead_in_s: float = 15.0,
+                   baselines: tuple[str, ...] = ()) -> dict:
+    """Run the experiments for every seed; write ``ho2018_<experiment>_seed<N>.md/.png`` and
+    ``ho2018.json`` under ``out`` and print the tables."""
+    from eval.report import package_version, write_json
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    summary: dict[str, Any] = {}
+    for name in experiments:
+        for seed in seeds:
+            results = run_experiment(name, seed=seed, cycle_s=cycle_s, lead_in_s=lead_in_s,
+                                     baselines=baselines)
+            table = report_table(name, results)
+            print(f"\n{name} load experiment, seed {seed} (tracking error, mm)\n{table}")
+            (out / f"ho2018_{name}_seed{seed}.md").write_text(table + "\n")
+            plot_experiment(out / f"ho2018_{name}_seed{seed}.png", name, results)
+            summary[f"{name}_seed{seed}"] = {
+                label: {key: record[key] for key in ("cycle_mean_mm", "cycle_std_mm",
+                                                     "cycle_max_mm", "pretraining")}
+                for label, record in results.items()}
+    write_json(out / "ho2018.json", {"soft_arm_gym_version": package_version(),
+                                     "experiments": summary})
+    return summary
