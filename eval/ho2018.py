@@ -147,13 +147,26 @@ def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
     load = experiment.runs[-1].load
     runs = list(experiment.runs) + [Run(f"{policy}, {_LOAD_NAMES[load]}", False, load, policy)
                                     for policy in baselines]
+    for policy in baselines:  # refuse a baseline that cannot drive the arm before any work
+        if not policy.startswith("sb3:"):
+            probe = gym.make("SoftArmReach-v0", preset=preset, feedback="em",
+                             obs=("pose", "target"))
+            try:
+                make_policy(policy, probe)
+            finally:
+                probe.close()
     results = {}
     path_m = None
     for run in runs:
         total_s = lead_in_s + experiment.cycles * cycle_s
-        env = gym.make("SoftArmReach-v0", preset=preset, feedback="em", obs=("pose", "target"),
+        interface = {"obs": ("pose", "target")}
+        agent = None
+        if run.policy.startswith("sb3:"):  # the env as the agent was trained (its obs, actions)
+            agent = make_policy(run.policy)
+            interface = {"obs": ("pose", "target", "pressure"), **agent.env_interface}
+        env = gym.make("SoftArmReach-v0", preset=preset, feedback="em",
                        scenario=_scenario(run.load, lead_in_s, cycle_s),
-                       episode_steps=int(round(total_s / 0.05)) + 10)
+                       episode_steps=int(round(total_s / 0.05)) + 10, **interface)
         try:
             if run.policy == "lwpr_rwr":
                 policy = make_policy("lwpr_rwr", env, online=run.online,
@@ -167,7 +180,9 @@ def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
                 if path_m is None:
                     raise ValueError("baselines run after the lwpr_rwr runs, which place the "
                                      "rectangle")
-                policy, report = make_policy(run.policy, env), {}
+                if agent is not None:
+                    agent.check_env(env)
+                policy, report = agent or make_policy(run.policy, env), {}
             results[run.label] = _track(env, policy, path_m, experiment.cycles, cycle_s,
                                         lead_in_s, seed, progress, f"{name}: {run.label}")
             results[run.label]["pretraining"] = report

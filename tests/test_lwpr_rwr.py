@@ -194,3 +194,45 @@ def test_short_filling_load_offline_degrades_online_holds(short_varying):
     online = short_varying["online, filling"]["cycle_mean_mm"]
     assert offline[3] > 2.0 * offline[0]
     assert online[3] < 0.5 * offline[3]
+
+
+TINY = {"pretrain_waypoints": 6, "max_epochs": 2, "leg_decisions": 5}
+
+
+def test_pretraining_is_cached_on_disk_and_a_corrupt_file_is_rebuilt(tmp_path, monkeypatch):
+    """A second controller (another process would do the same) reads the pre-training from the
+    user cache; a corrupted file is refused with a warning and pre-trained again, giving the
+    same model."""
+    from soft_gym.sensing import calibration_cache
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setenv("SOFT_GYM_CACHE", "on")
+    calibration_cache.clear_memory()
+    env = _env()
+    first = make_policy("lwpr_rwr", env, **TINY)
+    first.pretrain()
+    files = list(tmp_path.rglob("*.pkl"))
+    assert len(files) == 1
+    calibration_cache.clear_memory()
+    second = make_policy("lwpr_rwr", env, **TINY)
+    second.pretrain()
+    files[0].write_bytes(files[0].read_bytes()[:-100] + b"\x00" * 100)
+    calibration_cache.clear_memory()
+    third = make_policy("lwpr_rwr", env, **TINY)
+    with pytest.warns(RuntimeWarning, match="ignoring calibration cache file"):
+        third.pretrain()
+    position, target = np.array([0.0, 0.0, 0.16]), np.array([0.01, 0.0, 0.155])
+    for controller in (second, third):
+        assert np.array_equal(controller.inverse.betas, first.inverse.betas)
+        assert np.array_equal(controller.action_for(position, target),
+                              first.action_for(position, target))
+    calibration_cache.clear_memory()
+    env.close()
+
+
+@pytest.mark.parametrize("name", ["cc_model", "hybrid_gpr"])
+def test_cc_controllers_refuse_two_segment_arms_by_name(name):
+    env = _env()
+    with pytest.raises(ValueError, match=rf"{name} drives one-segment arms only.*ho2018.*2 segments"):
+        make_policy(name, env)
+    env.close()

@@ -21,6 +21,10 @@ the controlled env, its episode and its random state are left as they were, and 
 ``obs -> predict -> step`` loop works as with an SB3 model. :meth:`~CCModelController.calibrate`
 called directly probes the controlled env itself and leaves it reset.
 
+One-segment arms only (wang2023, zou2022): on a redundant arm the probes' tip displacements do
+not identify the individual chambers' gains, so an arm with several segments is refused with a
+``ValueError``.
+
 Pressures cannot go below the pre-pressure or above ``p_max``: the model lengths are kept
 consistent with the saturated pressures (anti-windup), so the integrator of eq. (26) does not
 wind up.
@@ -84,6 +88,13 @@ class CCModelController(BaselinePolicy):
         self.controlled_axes = axes
         self.env = env.unwrapped
         spec = self.env.spec_arm
+        if spec.n_segments != 1:
+            raise ValueError(
+                f"{self.name} drives one-segment arms only, got the {spec.name} arm with "
+                f"{spec.n_segments} segments: its start-up probes read each chamber's gain from "
+                "the tip displacement mapped through the CC Jacobian's pseudo-inverse (eq. (27)), "
+                "which cannot tell the chambers of several segments apart; use lwpr_rwr, which "
+                "learns a redundant arm's inverse")
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:
                 raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
