@@ -326,9 +326,14 @@ class ArmSimulator:
             load.update(self, 0.0)
         if settle_s > 0:
             self.step_physics(settle_s)
-            self.time_s = 0.0
-            self._substep = 0
-            self._frames_substep = self._positions_substep = -1
+            self.restart_clock()
+
+    def restart_clock(self) -> None:
+        """Set the simulated time back to 0 where the arm is (after a settle or a set-up
+        motion), so that timed loads and faults count from here."""
+        self.time_s = 0.0
+        self._substep = 0
+        self._frames_substep = self._positions_substep = -1
 
     def set_joint_positions(self, positions: np.ndarray) -> None:
         """Set every joint's position (rad or m) at rest, e.g. to impose a shape in a test."""

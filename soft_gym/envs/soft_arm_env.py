@@ -86,6 +86,11 @@ from soft_gym.sensing.measurement import Measurement, measure
 from soft_gym.sensors import SENSORS, make_sensor
 from soft_gym.sim import ArmSimulator
 from soft_gym.tasks import ReachTask, TrackTask
+from soft_gym.tasks.positioning import drive_tip_to
+from soft_gym.tasks.tasks import within_reach
+
+START_TOLERANCE_MM = 2.0
+"""How close ``reset`` must bring the tip to ``start_m`` (mm)."""
 
 STATE_PARTS = ("pose", "target", "pressure")
 OBSERVATION_PARTS = STATE_PARTS + tuple(name for name in SENSORS if name != "stereo")
@@ -120,6 +125,13 @@ class SoftArmEnv(gym.Env):
         action_rate_weight: weight of the action-rate penalty.
         episode_steps: reach episode length in control steps.
         settle_s: simulated time the arm rests before each episode (s).
+        target_m: reach only: a fixed goal (m, base frame) instead of a random reachable one.
+        start_m: reach only: the tip is driven there during ``reset`` (the episode's loads in
+            place, steps not counted; :func:`soft_gym.tasks.positioning.drive_tip_to`), and the
+            command starts at the pressures found; ``reset`` raises ``ValueError`` if the arm
+            cannot get within 2 mm of it.
+        tolerance_mm: reach only: the episode terminates when the tip is this close to the
+            target (mm); ``info["step"]`` then gives the steps taken.
         render_mode: ``None`` or ``"rgb_array"``.
         render_size: (width, height) of rendered frames in pixels.
     """
@@ -135,7 +147,8 @@ class SoftArmEnv(gym.Env):
                  randomization: Any = None,
                  action_mode: str = "absolute",
                  delta_fraction: float = 0.1, action_rate_weight: float = 0.001,
-                 episode_steps: int = 100, settle_s: float = 0.5,
+                 episode_steps: int = 100, settle_s: float = 0.5, target_m: Any = None,
+                 start_m: Any = None, tolerance_mm: float | None = None,
                  render_mode: str | None = None, render_size: tuple[int, int] = (320, 240)) -> None:
         if not isinstance(preset, (str, ArmSpec)):
             raise ValueError(f"preset must be a preset name or an ArmSpec, got {preset!r}")
@@ -178,7 +191,14 @@ class SoftArmEnv(gym.Env):
         if (not isinstance(paths, (list, tuple)) or not paths
                 or not all(isinstance(name, str) for name in paths)):
             raise ValueError(f"path must be a path name or a non-empty list of them, got {path!r}")
-        self.tasks = [ReachTask(self.spec_arm, episode_steps) if task == "reach" else
+        if task != "reach" and any(value is not None for value in (target_m, start_m,
+                                                                     tolerance_mm)):
+            raise ValueError("target_m, start_m and tolerance_mm belong to the reach task, got "
+                             f"task={task!r}")
+        self.start_m = None if start_m is None else within_reach(self.spec_arm, "start_m",
+                                                                 start_m)
+        self.tasks = [ReachTask(self.spec_arm, episode_steps, target_m=target_m,
+                                tolerance_mm=tolerance_mm) if task == "reach" else
                       TrackTask(self.spec_arm, path=name, cycles=cycles, speed_m_s=speed_m_s,
                                 waypoints_m=waypoints_m) for name in paths]
         self.task = self.tasks[0]
@@ -303,6 +323,7 @@ class SoftArmEnv(gym.Env):
         if self.randomizer is not None:
             self._apply_draw(self.randomizer.sample(self.np_random))
         self.sim.reset(settle_s=self.settle_s)
+        start_pressures = self._drive_to_start() if self.start_m is not None else None
         if len(self.tasks) > 1:
             self.task = self.tasks[int(self.np_random.integers(len(self.tasks)))]
         self.task.reset(self.np_random)
@@ -311,8 +332,26 @@ class SoftArmEnv(gym.Env):
         self._sense()
         self._step = 0
         self._last_action = np.zeros(self.spec_arm.n_chambers)
-        self._command = self.actuation.initial_command_pa.copy()
+        self._command = (self.actuation.initial_command_pa.copy() if start_pressures is None
+                         else start_pressures)
         return self._observation(), self._info()
+
+    def _drive_to_start(self) -> np.ndarray:
+        """Hold the pressures that put the tip at ``start_m`` (found on the simulator with the
+        episode's loads); the episode's clock starts at 0 from there."""
+        pressures, _ = drive_tip_to(self.sim, self.start_m)
+        self.sim.step_physics(max(self.settle_s, 1.0))
+        self.sim.restart_clock()
+        for load in self.sim.loads:  # timed loads start with the episode, as after a reset
+            load.reset(self.sim)
+            load.update(self.sim, 0.0)
+        distance_mm = float(np.linalg.norm(self.sim.tip_pose()[0] - self.start_m)) * 1e3
+        if distance_mm > START_TOLERANCE_MM:
+            raise ValueError(
+                f"start_m={np.round(self.start_m, 4).tolist()} is out of the {self.spec_arm.name} "
+                f"arm's reach with this episode's loads: the closest tip position found is "
+                f"{distance_mm:.1f} mm away (at most {START_TOLERANCE_MM:g} mm allowed)")
+        return pressures
 
     def _apply_draw(self, draw) -> None:
         """Put one episode's randomised loads, faults, noise and arm parameters in place."""
@@ -340,9 +379,10 @@ class SoftArmEnv(gym.Env):
         rate = float(np.sum((action - self._last_action) ** 2))
         reward = -error_m - self.action_rate_weight * rate
         self._last_action = action
-        truncated = self.task.is_over(self._step)
+        terminated = isinstance(self.task, ReachTask) and self.task.is_reached(error_m)
+        truncated = not terminated and self.task.is_over(self._step)
         info = self._info(tip_target=(tip, target))
-        return self._observation(), reward, False, truncated, info
+        return self._observation(), reward, terminated, truncated, info
 
     def render(self):
         if self.render_mode != "rgb_array":

@@ -1,11 +1,15 @@
 """Tasks: where the target is at each control step, and when an episode ends.
 
-* :class:`ReachTask` draws a random target from the preset's reachable set each episode.
+* :class:`ReachTask` draws a random target from the preset's reachable set each episode, or
+  keeps a fixed goal (point to point, zhao2021 Section V-B), optionally ending the episode when
+  the tip is within a tolerance of it.
 * :class:`TrackTask` moves the target along a path at constant speed (Wang et al. 2023 track
   pentagram and circle paths; docs/architecture.md, "Tasks and metrics"), for a number of cycles.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 
@@ -19,20 +23,37 @@ MAX_TRACK_STEPS = 72_000
 
 
 class ReachTask:
-    """Reach a random reachable target within ``episode_steps`` control steps."""
+    """Reach a target within ``episode_steps`` control steps: a random reachable one each
+    episode, or the fixed ``target_m``; with ``tolerance_mm`` the episode ends (terminates) as
+    soon as the tip is that close to it.
+
+    Args:
+        spec: the arm.
+        episode_steps: most control steps of an episode.
+        target_m: a fixed goal (m, base frame) within the arm's reach, or ``None`` for random
+            reachable targets.
+        tolerance_mm: distance (mm) at which the goal counts as reached, or ``None`` (the
+            episode runs ``episode_steps``).
+    """
 
     name = "reach"
 
-    def __init__(self, spec: ArmSpec, episode_steps: int = 100) -> None:
+    def __init__(self, spec: ArmSpec, episode_steps: int = 100, target_m: Any = None,
+                 tolerance_mm: float | None = None) -> None:
         if episode_steps < 1:
             raise ValueError(f"episode_steps must be >= 1, got {episode_steps!r}")
         self.spec = spec
         self.episode_steps = int(episode_steps)
-        self.targets = reachable_tips(spec)
+        self.fixed_target = None if target_m is None else within_reach(spec, "target_m", target_m)
+        self.tolerance_mm = None if tolerance_mm is None else require_positive("tolerance_mm",
+                                                                                 tolerance_mm)
+        self.targets = reachable_tips(spec) if self.fixed_target is None else \
+            self.fixed_target[None].copy()
         self.target_m = self.targets[0]
 
     def reset(self, rng: np.random.Generator) -> None:
-        self.target_m = self.targets[rng.integers(len(self.targets))]
+        if self.fixed_target is None:
+            self.target_m = self.targets[rng.integers(len(self.targets))]
 
     def target(self, step: int) -> tuple[np.ndarray, np.ndarray]:
         """Current and next target (m)."""
@@ -40,6 +61,21 @@ class ReachTask:
 
     def is_over(self, step: int) -> bool:
         return step >= self.episode_steps
+
+    def is_reached(self, error_m: float) -> bool:
+        """Whether the tip at ``error_m`` from the target has reached it (``tolerance_mm``)."""
+        return self.tolerance_mm is not None and error_m * 1000.0 <= self.tolerance_mm
+
+
+def within_reach(spec: ArmSpec, name: str, point_m: Any) -> np.ndarray:
+    """``point_m`` as a float (3,) array, refused with a ``ValueError`` naming ``name`` unless it
+    is finite and within the arm's reach of its base (:attr:`ArmSpec.max_reach_m`)."""
+    point = as_finite_array(name, point_m, shape=(3,))
+    if np.linalg.norm(point) > spec.max_reach_m:
+        raise ValueError(f"{name} must lie within the {spec.name} arm's reach of "
+                         f"{spec.max_reach_m * 1e3:.0f} mm from its base, got a point "
+                         f"{np.linalg.norm(point) * 1e3:.0f} mm away")
+    return point
 
 
 class TrackTask:
