@@ -48,8 +48,7 @@ def test_static_load_online_learning_learns_the_load_away(runs):
 def test_filling_load_offline_degrades_and_online_ends_far_below(runs):
     """Table 2: with the fluid tip filling in cycles 3-4 the offline error more than doubles
     while the online learner's ends below half of it and averages below its first cycle over
-    cycles 2-4; with the
-    empty tip the offline error does not improve. Measured (mm, cycle 1 -> 4): offline filling
+    cycles 2-4; with the empty tip the offline error does not improve. Measured (mm, cycle 1 -> 4): offline filling
     7.14 -> 21.95, 6.41 -> 23.07, 7.41 -> 24.00; online filling 2.82 -> 2.76, 3.00 -> 2.23,
     2.65 -> 2.17 (seeds 0, 1, 2)."""
     seed, _, varying = runs
