@@ -73,12 +73,13 @@ import numpy as np
 from gymnasium import spaces
 
 from soft_gym._validation import require_integer, require_non_negative
+from soft_gym.envs.rendering import SceneRenderer
 from soft_gym.robots.actuation import Actuation
 from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.scenarios import make_scenario
 from soft_gym.sensors.faults import make_faults
-from soft_gym.scenarios.loads import heaviest_total_load_n
+from soft_gym.scenarios.loads import SwayingMass, heaviest_total_load_n
 from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConfig
 from soft_gym.sensing.feedback import (CalibrationContext, FeedbackEstimate,
                                        make_feedback_source)
@@ -88,6 +89,7 @@ from soft_gym.sim import ArmSimulator
 from soft_gym.tasks import ReachTask, TrackTask
 from soft_gym.tasks.positioning import drive_tip_to
 from soft_gym.tasks.tasks import within_reach
+from soft_gym.tasks.workspace import reachable_tips
 
 START_TOLERANCE_MM = 2.0
 """How close ``reset`` must bring the tip to ``start_m`` (mm)."""
@@ -237,6 +239,9 @@ class SoftArmEnv(gym.Env):
         self.settle_s = float(settle_s)
         self.render_mode = render_mode
         self.render_size = tuple(render_size)
+        # Gymnasium's metadata is a class attribute: this env's frame rate is its control rate
+        self.metadata = {**self.metadata, "render_fps": 1.0 / self.spec_arm.control_period_s}
+        self._renderer: SceneRenderer | None = None  # built on the first render()
 
         n = self.spec_arm.n_chambers
         self.action_space = spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
@@ -384,19 +389,38 @@ class SoftArmEnv(gym.Env):
         info = self._info(tip_target=(tip, target))
         return self._observation(), reward, terminated, truncated, info
 
-    def render(self):
+    def render(self) -> np.ndarray | None:
+        """An (H, W, 3) ``uint8`` frame of ``render_size`` in ``"rgb_array"`` mode, else None.
+
+        The camera frames the preset's workspace, image up against gravity; over the PyBullet
+        scene it draws a floor grid, the base plate, the targets and path, the loads and the
+        ground-truth tip (ring) next to the feedback estimate (cross); see
+        :mod:`soft_gym.envs.rendering`. Rendering never touches the physics.
+        """
         if self.render_mode != "rgb_array":
             return None
-        width, height = self.render_size
-        length = self.spec_arm.length_m
-        view = self.sim.client.computeViewMatrix(
-            cameraEyePosition=[2.2 * length, -2.2 * length, 0.4 * length],
-            cameraTargetPosition=[0, 0, 0.6 * length], cameraUpVector=[0, 0, -1])
-        projection = self.sim.client.computeProjectionMatrixFOV(
-            fov=50, aspect=width / height, nearVal=0.01, farVal=10 * length)
-        image = self.sim.client.getCameraImage(width, height, view, projection,
-                                               renderer=self.sim.client.ER_TINY_RENDERER)[2]
-        return np.asarray(image, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+        if self._renderer is None:
+            self._renderer = self.make_renderer()
+        target, upcoming = self.task.target(self._step)
+        return self._renderer.render(
+            self.sim, target_m=target, next_target_m=upcoming,
+            path_m=getattr(self.task, "polyline_m", None),
+            estimate_m=None if self._estimate is None else self.feedback_pose()[0])
+
+    def make_renderer(self, overlays: bool = True) -> SceneRenderer:
+        """A :class:`~soft_gym.envs.rendering.SceneRenderer` of ``render_size`` framing this
+        arm's reachable tips and every task's targets and path (``overlays=False``: the scene,
+        floor and grid only)."""
+        points = [reachable_tips(self.spec_arm)]
+        down = self.spec_arm.gravity_base / max(np.linalg.norm(self.spec_arm.gravity_base), 1e-9)
+        for load in self.sim.loads:  # a swaying mass hangs below the tip
+            if isinstance(load, SwayingMass):
+                points.append(points[0] + down * (load.length_m + load.radius_m))
+        for task in self.tasks:
+            path = getattr(task, "polyline_m", task.target(0)[0])
+            points.append(np.asarray(path).reshape(-1, 3))
+        return SceneRenderer(self.spec_arm, self.render_size, np.vstack(points),
+                             overlays=overlays)
 
     def close(self):
         self.sim.close()
