@@ -187,8 +187,7 @@ class SceneRenderer:
         # the base plate: the far face of PyBullet's base mount (soft_gym.robots.builder), a
         # disc normal to the arm's rest axis (base z) behind the base
         first_segment = spec.segments[0]
-        mount_m = 0.004 + (first_segment.max_length_m / first_segment.length_m - 1.0) \
-            * first_segment.link_length_m
+        mount_m = 0.004 + (first_segment.max_extension_ratio - 1.0) * first_segment.link_length_m
         angles = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False)
         self.plate_m = np.stack([3.0 * radius * np.cos(angles), 3.0 * radius * np.sin(angles),
                                  np.full_like(angles, -mount_m)], axis=1)
