@@ -182,7 +182,10 @@ def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
                                      "rectangle")
                 if agent is not None:
                     agent.check_env(env)
-                policy, report = agent or make_policy(run.policy, env), {}
+                    policy = agent
+                else:
+                    policy = make_policy(run.policy, env)
+                report = {}
             results[run.label] = _track(env, policy, path_m, experiment.cycles, cycle_s,
                                         lead_in_s, seed, progress, f"{name}: {run.label}")
             results[run.label]["pretraining"] = report

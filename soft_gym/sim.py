@@ -321,12 +321,16 @@ class ArmSimulator:
         self._frames_substep = self._positions_substep = -1
         self.time_s = 0.0
         self._substep = 0
-        for load in self.loads:
-            load.reset(self)
-            load.update(self, 0.0)
+        self.restart_loads()
         if settle_s > 0:
             self.step_physics(settle_s)
             self.restart_clock()
+
+    def restart_loads(self) -> None:
+        """Put every load back to its state at the start of an episode (time 0)."""
+        for load in self.loads:
+            load.reset(self)
+            load.update(self, 0.0)
 
     def restart_clock(self) -> None:
         """Set the simulated time back to 0 where the arm is (after a settle or a set-up

@@ -161,7 +161,7 @@ def test_short_static_load_online_improves_offline_does_not(short_static):
     assert offline[2] > 0.8 * offline[0]
 
 
-def test_controller_save_load_predicts_identically(tmp_path, short_static):
+def test_controller_save_load_predicts_identically(tmp_path):
     env = _env()
     controller = make_policy("lwpr_rwr", env, cache=False, pretrain_waypoints=10,
                              max_epochs=2, leg_decisions=5)

@@ -96,6 +96,7 @@ class RewardWeightedInverse:
         self.regressor_dim = self.task_dim + self.config_dim + 1
         self.centres = np.zeros((0, self.config_dim))
         self.metrics = np.zeros((0, self.config_dim, self.config_dim))
+        self._diagonal = True  # every metric diagonal (set with the fields)
         self.betas = np.zeros((0, self.regressor_dim, self.actuator_dim))
         self.prior_betas = np.zeros_like(self.betas)
         self._data = np.zeros((0, self.task_dim + self.config_dim + self.actuator_dim))
@@ -135,6 +136,7 @@ class RewardWeightedInverse:
                                                         self.metrics)[:, 0]))
                 betas[j], priors[j] = self.betas[i], self.prior_betas[i]
         self.centres, self.metrics = centres.copy(), metrics.copy()
+        self._diagonal = _all_diagonal(self.metrics)
         self.betas, self.prior_betas = betas, priors
 
     # ------------------------------------------------------------------ learning
@@ -170,7 +172,7 @@ class RewardWeightedInverse:
         if not self.n_fields:
             return 0
         z = sample[:, self.task_dim:self.task_dim + self.config_dim]
-        log_w = self._log_weights(z, self.centres, self.metrics)[:, 0]
+        log_w = self._log_weights(z, self.centres, self.metrics, self._diagonal)[:, 0]
         fields = np.flatnonzero(log_w >= np.log(self.refit_weight))
         if len(fields):
             self.betas[fields] = self._solve(fields, self._data)
@@ -186,7 +188,7 @@ class RewardWeightedInverse:
         p = as_finite_array("position", position, shape=(self.task_dim,))
         u = as_finite_array("actuation", actuation, shape=(self.actuator_dim,))
         z = np.concatenate([p, u])
-        log_w = self._log_weights(z[None], self.centres, self.metrics)[:, 0]
+        log_w = self._log_weights(z[None], self.centres, self.metrics, self._diagonal)[:, 0]
         weights = np.exp(log_w - log_w.max())  # normalised in eq. (5); far from every field the
         weights /= weights.sum()               # nearest one still decides
         x = self._regressors(dp[None], z[None], np.arange(self.n_fields))[:, 0]  # (fields, R)
@@ -224,6 +226,7 @@ class RewardWeightedInverse:
                         refit_weight=float(state["refit_weight"]))
             model.centres = np.array(state["centres"], dtype=float)
             model.metrics = np.array(state["metrics"], dtype=float)
+            model._diagonal = _all_diagonal(model.metrics) if len(model.metrics) else True
             model.betas = np.array(state["betas"], dtype=float)
             model.prior_betas = np.array(state["prior_betas"], dtype=float)
             model._data = np.array(state["data"], dtype=float)
@@ -271,11 +274,15 @@ class RewardWeightedInverse:
         return np.concatenate([dp, p, u, du], axis=1)
 
     @staticmethod
-    def _log_weights(z: np.ndarray, centres: np.ndarray, metrics: np.ndarray) -> np.ndarray:
-        """``log w`` of eq. (6), shape (fields, samples). Diagonal metrics (LWPR's default)
-        expand ``sum_i D_ii (z_i - c_i)^2`` into three matrix products."""
+    def _log_weights(z: np.ndarray, centres: np.ndarray, metrics: np.ndarray,
+                     diagonal: bool | None = None) -> np.ndarray:
+        """``log w`` of eq. (6), shape (fields, samples). Diagonal metrics (LWPR's default;
+        ``diagonal=None`` checks) expand ``sum_i D_ii (z_i - c_i)^2`` into three matrix
+        products."""
         diagonals = np.diagonal(metrics, axis1=1, axis2=2)
-        if np.array_equal(metrics, diagonals[:, :, None] * np.eye(metrics.shape[1])[None]):
+        if diagonal is None:
+            diagonal = _all_diagonal(metrics)
+        if diagonal:
             quadratic = (diagonals @ (z * z).T - 2.0 * (diagonals * centres) @ z.T
                          + np.sum(diagonals * centres * centres, axis=1)[:, None])
             return -0.5 * np.maximum(quadratic, 0.0)
@@ -311,7 +318,8 @@ class RewardWeightedInverse:
         attractor = self.attractor_gain * (self.rest_actuation - u)
         cost = ((du - attractor) ** 2) @ self.cost_weights
         weights = np.exp(np.maximum(self._log_weights(z, self.centres[fields],
-                                                      self.metrics[fields]), _LOG_WEIGHT_FLOOR))
+                                                      self.metrics[fields], self._diagonal),
+                                    _LOG_WEIGHT_FLOOR))
         mean_cost = (weights @ cost) / np.maximum(weights.sum(axis=1), 1e-300)
         reward = np.exp(-0.5 * cost[None, :] / np.maximum(mean_cost[:, None], 1e-300))
         combined = reward * weights  # W_fs, (fields, samples)
@@ -335,6 +343,12 @@ class RewardWeightedInverse:
         gram += self.ridge * np.eye(r)[None]
         moment += self.ridge * self.prior_betas[fields]
         return np.linalg.solve(gram, moment)
+
+
+def _all_diagonal(metrics: np.ndarray) -> bool:
+    """Whether every metric in the stack ``(n, d, d)`` is diagonal."""
+    diagonals = np.diagonal(metrics, axis1=1, axis2=2)
+    return bool(np.array_equal(metrics, diagonals[:, :, None] * np.eye(metrics.shape[1])[None]))
 
 
 def _per_actuator(name: str, value: Any, size: int, positive: bool) -> np.ndarray:

@@ -347,9 +347,7 @@ class SoftArmEnv(gym.Env):
         pressures, _ = drive_tip_to(self.sim, self.start_m)
         self.sim.step_physics(max(self.settle_s, 1.0))
         self.sim.restart_clock()
-        for load in self.sim.loads:  # timed loads start with the episode, as after a reset
-            load.reset(self.sim)
-            load.update(self.sim, 0.0)
+        self.sim.restart_loads()  # timed loads start with the episode, as after a reset
         distance_mm = float(np.linalg.norm(self.sim.tip_pose()[0] - self.start_m)) * 1e3
         if distance_mm > START_TOLERANCE_MM:
             raise ValueError(
@@ -384,7 +382,7 @@ class SoftArmEnv(gym.Env):
         rate = float(np.sum((action - self._last_action) ** 2))
         reward = -error_m - self.action_rate_weight * rate
         self._last_action = action
-        terminated = isinstance(self.task, ReachTask) and self.task.is_reached(error_m)
+        terminated = self.task.is_reached(error_m)
         truncated = not terminated and self.task.is_over(self._step)
         info = self._info(tip_target=(tip, target))
         return self._observation(), reward, terminated, truncated, info

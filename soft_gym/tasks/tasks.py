@@ -142,3 +142,7 @@ class TrackTask:
 
     def is_over(self, step: int) -> bool:
         return step >= self.episode_steps
+
+    def is_reached(self, error_m: float) -> bool:
+        """A tracked path is never "reached": track episodes end by truncation only."""
+        return False
