@@ -33,6 +33,7 @@ BASELINES: dict[str, str] = {
     "cc_model": "agents.controllers.cc_model:CCModelController",
     "hybrid_gpr": "agents.controllers.hybrid_gpr:HybridGPRController",
     "lwpr_rwr": "agents.controllers.lwpr_rwr:LWPRRWRController",
+    "local_ik_asdm": "agents.controllers.local_ik_asdm:LocalIKASDMController",
 }
 """Baseline names and the classes implementing them."""
 

@@ -18,6 +18,7 @@ that order; ``obs_format="dict"``: a ``Dict`` of the parts (needed for image par
 | `pose`     | 7               | feedback tip position (x, y, z) + quaternion (x, y, z, w) | m, - |
 | `target`   | 6               | current target and next target positions                  | m    |
 | `pressure` | 3 * n_segments  | chamber pressures over p_max                              | -    |
+| `shape`    | 18              | feedback key points P_1..P_6 (sixths of the rest length)  | m    |
 | `fbg`      | n_gratings      | FBG Bragg wavelength shifts (wang2023)                    | nm   |
 | `strain`   | 3 * n_segments  | strain-gauge readings (zhao2021)                          | -    |
 | `encoder`  | 3 * n_segments  | chamber lengths from cable encoders (zou2022)             | m    |
@@ -30,7 +31,9 @@ own rate (sample and hold) and noise (:mod:`soft_gym.sensors`).
 ## Feedback pose
 ``feedback=`` names the feedback source (:mod:`soft_gym.sensing.feedback`) that fills the ``pose``
 part: ``"fused"`` (default; camera and F-emp fused by wang2023 eq. (18)), ``"camera"`` (the vision
-tracker), ``"fbg"`` (F-emp), ``"em"`` (EM tracker) or ``"ground_truth"``. The first three run the
+tracker), ``"fbg"`` (F-emp), ``"em"`` (EM tracker), ``"strain_sr"`` (zhao2021's shape
+reconstruction from the strain gauges, which also fills the ``shape`` part) or
+``"ground_truth"``. The first three run the
 sensing pipeline (:mod:`soft_gym.sensing.pipeline`): it is calibrated when the env is created
 (vision map at rest, F-emp from ``n_init`` spiral exploration steps labelled by the camera; the
 result is cached in memory and on disk, :mod:`soft_gym.sensing.calibration_cache`) and on
@@ -95,7 +98,9 @@ START_TOLERANCE_MM = 2.0
 """How close ``reset`` must bring the tip to ``start_m`` (mm)."""
 
 STATE_PARTS = ("pose", "target", "pressure")
-OBSERVATION_PARTS = STATE_PARTS + tuple(name for name in SENSORS if name != "stereo")
+"""The default observation."""
+OBSERVATION_PARTS = STATE_PARTS + ("shape",) + tuple(name for name in SENSORS
+                                                     if name != "stereo")
 OBS_FORMATS = ("flat", "dict")
 TASKS = ("reach", "track")
 
@@ -120,8 +125,9 @@ class SoftArmEnv(gym.Env):
         faults: visual faults on the eye-in-hand camera.
         randomization: domain randomisation per episode (``None``/``False`` off, ``True``
             defaults, a dict of ranges or a YAML path; see "Domain randomisation" above).
-        sensing: keyword arguments of the sensing pipeline (``n_init``, ``femp``, ``fusion``,
-            ``vision``, ``exploration``, ``map_steps``, ``femp_prior``).
+        sensing: options of the feedback source: the camera/F-emp pipeline's (``n_init``,
+            ``femp``, ``fusion``, ``vision``, ``exploration``, ``map_steps``, ``femp_prior``) or
+            ``strain_sr``'s (:class:`~soft_gym.sensing.feedback.StrainShapeFeedback`).
         action_mode: ``"absolute"`` or ``"delta"``.
         delta_fraction: pressure change per unit action in delta mode, as a fraction of p_max.
         action_rate_weight: weight of the action-rate penalty.
@@ -178,6 +184,10 @@ class SoftArmEnv(gym.Env):
             raise ValueError(f"sensor_config keys must be sensor names from {sorted(SENSORS)}, "
                              f"got {sorted(sensor_config)!r}")
         self.feedback_source = make_feedback_source(feedback, sensing)
+        if "shape" in obs and not self.feedback_source.estimates_shape:
+            raise ValueError(f"obs part 'shape' needs a feedback source that estimates the "
+                             f"backbone ('ground_truth' or 'strain_sr'), got feedback "
+                             f"{feedback!r}")
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         action_rate_weight = require_non_negative("action_rate_weight", action_rate_weight)
@@ -310,6 +320,8 @@ class SoftArmEnv(gym.Env):
             low, high = np.r_[np.full(3, -reach), np.full(4, -1.0)], np.r_[np.full(3, reach), np.ones(4)]
         elif part == "target":
             low, high = np.full(6, -reach), np.full(6, reach)
+        elif part == "shape":
+            low, high = np.full(18, -reach), np.full(18, reach)
         else:
             low, high = np.zeros(self.spec_arm.n_chambers), np.ones(self.spec_arm.n_chambers)
         return spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
@@ -454,6 +466,8 @@ class SoftArmEnv(gym.Env):
         elif part == "target":
             current, upcoming = self.task.target(self._step)
             value = np.r_[current, upcoming]
+        elif part == "shape":
+            value = np.asarray(self._estimate.key_points_m, dtype=float).ravel()
         else:
             value = self.sim.pressures_pa / self._p_high
         return value.astype(np.float32)

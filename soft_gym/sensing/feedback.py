@@ -14,6 +14,7 @@ docs/architecture.md, "Feedback sources".
 | `camera`       | `image`, `fbg`  | the eye-in-hand vision tracker (wang2023 Section III-B)      |
 | `fbg`          | `image`, `fbg`  | F-emp, the online ELM on the FBG shifts (wang2023 eqs. 9-17) |
 | `fused`        | `image`, `fbg`  | camera and F-emp fused by wang2023 eq. (18)                  |
+| `strain_sr`    | `strain`        | zhao2021's shape reconstruction: SFE-PD key points + fit     |
 """
 
 from __future__ import annotations
@@ -35,12 +36,15 @@ class FeedbackEstimate:
         position_m: tip position (m, base frame).
         quaternion: tip orientation (x, y, z, w).
         shape_m: backbone points (m, base frame, (n, 3)) where the source estimates a shape.
+        key_points_m: the backbone's key points ``P_1..P_6`` (m, (6, 3), sixths of the rest
+            length, zhao2021 Section III) where the source estimates them (the ``shape`` part).
         details: what ``info["estimates"]`` reports (e.g. camera, F-emp and fused positions).
     """
 
     position_m: np.ndarray
     quaternion: np.ndarray
     shape_m: np.ndarray | None = None
+    key_points_m: np.ndarray | None = None
     details: dict[str, Any] = field(default_factory=dict)
 
 
@@ -68,6 +72,8 @@ class FeedbackSource:
     """Sensor names the source reads (see :data:`soft_gym.sensors.SENSORS`)."""
     calibrates: ClassVar[bool] = False
     """Whether :meth:`calibrate` does anything (``reset(options={"recalibrate": True})``)."""
+    estimates_shape: ClassVar[bool] = False
+    """Whether estimates carry ``key_points_m`` (needed by the env's ``shape`` part)."""
 
     def __init__(self, options: dict | None = None) -> None:
         if options:
@@ -116,10 +122,15 @@ class GroundTruthFeedback(FeedbackSource):
     """The simulator's own tip pose and backbone (no sensor, no noise)."""
 
     name = "ground_truth"
+    estimates_shape = True
 
     def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+        from soft_gym.sensing.shape_exploration import key_points_from_backbone
+
         position, quaternion = sim.tip_pose()
-        return FeedbackEstimate(position, quaternion, shape_m=sim.backbone())
+        backbone = sim.backbone()
+        return FeedbackEstimate(position, quaternion, shape_m=backbone,
+                                key_points_m=key_points_from_backbone(sim.spec, backbone))
 
 
 @register_feedback_source
@@ -221,3 +232,72 @@ class FusedFeedback(_PipelineFeedback):
 
     name = "fused"
     output = "fused"
+
+
+@register_feedback_source
+class StrainShapeFeedback(FeedbackSource):
+    """zhao2021's shape reconstruction from the strain gauges (Section III): the SFE-PD networks'
+    key points, the backbone fitted through them, the tip at the last key point.
+
+    Calibration is the paper's model preparation (Section VI-A): a random exploration of a
+    private copy of the arm with the env's gauge model, then the networks' training
+    (:mod:`soft_gym.sensing.shape_reconstruction`; cached on disk). The networks read the last
+    ``w + 1 = 6`` steps of commanded pressures and readings; in the paper a step is one command
+    and 1 s of settling, so the source keeps the state of every ``history_step_s`` (1 s) of
+    simulated time and hands the networks the last five of them plus the present one.
+
+    Options (the env's ``sensing=``): the fields of
+    :class:`~soft_gym.sensing.shape_reconstruction.ReconstructionConfig` (e.g. ``n_free``,
+    ``n_loaded``, ``max_iterations`` for a quick model) and ``history_step_s`` (s, > 0).
+    """
+
+    name = "strain_sr"
+    sensors = ("strain",)
+    calibrates = True
+    estimates_shape = True
+
+    def __init__(self, options: dict | None = None) -> None:
+        from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+        from soft_gym._validation import require_positive
+
+        options = dict(options or {})
+        self.history_step_s = require_positive("history_step_s",
+                                               options.pop("history_step_s", 1.0))
+        self.config = ReconstructionConfig.from_options(options)
+        self.reconstructor: Any = None
+        self.report: dict[str, Any] = {}
+        self._history: list[np.ndarray] = []
+        self._next_history_s = 0.0
+        self._last_time_s = -np.inf
+
+    def calibrate(self, context: CalibrationContext, use_cache: bool = True) -> None:
+        from soft_gym.sensing.shape_reconstruction import cached_reconstruction
+
+        self.reconstructor, self.report = cached_reconstruction(
+            context.sim.spec, context.sensors["strain"], self.config, use_cache=use_cache,
+            progress=False)
+        self.restore()
+
+    def restore(self) -> None:
+        self._history = []
+        self._next_history_s = 0.0
+        self._last_time_s = -np.inf
+
+    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+        state = np.concatenate([np.asarray(sim.supply.command_pa, dtype=float),
+                                np.asarray(measurement["strain"], dtype=float)])
+        if measurement.time_s + 1e-9 < self._last_time_s:
+            self.restore()  # the clock went back: a new episode, whose history starts afresh
+        self._last_time_s = measurement.time_s
+        if not self._history:
+            self._history = [state] * self.reconstructor.window
+            self._next_history_s = measurement.time_s + self.history_step_s
+        elif measurement.time_s + 1e-9 >= self._next_history_s:
+            self._history = self._history[1:] + [state]
+            self._next_history_s += self.history_step_s
+        steps = np.array(self._history + [state])
+        n = sim.spec.n_chambers
+        shape = self.reconstructor.reconstruct(steps[:, :n], steps[:, n:])
+        return FeedbackEstimate(shape.tip_position_m, shape.tip_quaternion,
+                                shape_m=shape.backbone_m, key_points_m=shape.key_points_m,
+                                details={"key_points_m": shape.key_points_m.copy()})

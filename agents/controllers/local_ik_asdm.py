@@ -1,0 +1,270 @@
+"""zhao2021's locally learned controller: the local inverse-kinematics network with a step
+distance that is fixed or adapted by ASDM (Zhao et al. 2021, Section IV, eqs. 13-18).
+
+One controller step ``n`` (Section IV-A):
+
+* the tip ``Q_n`` comes from the env's feedback pose (the paper feeds back its shape
+  reconstruction's tip, ``feedback="strain_sr"``; any source works);
+* if ``||Q_d - Q_n|| <= E`` (``tolerance_mm``, paper 4 mm) the arm holds its actuation;
+* else the temporary goal is ``Q_dn = Q_n + d_n (Q_d - Q_n) / ||Q_d - Q_n||`` (eq. 16) and the
+  next actuation ``A_{n+1} = g(A_n, Q_n, Q_dn, S_n)`` (eq. 15,
+  :class:`~agents.learners.local_ik.LocalIKNetwork`);
+* with ``adaptive=True`` (ASDM) the step distance follows the error of the last step,
+  ``e_n = ||Q_d(n-1) - Q_n||`` (eq. 17):
+  ``d_n = d_{n-1} + sgn((Q_n - Q_{n-1}) . (Q_d(n-1) - Q_{n-1})) K e_n`` (eq. 18), kept in
+  [2, 15] mm; with ``adaptive=False`` ``d_n = step_mm`` throughout.
+
+The paper waits 1 s after each command before it measures (Section VI-A), so one controller step
+is one command held for ``settle_s`` (1 s, 20 env steps at the usual 0.05 s control period):
+:meth:`predict` returns the held command between decisions.
+
+The network is trained on the same random exploration as the shape reconstruction
+(:func:`soft_gym.sensing.shape_reconstruction.cached_reconstruction`, on a private copy of the arm
+with the env's gauge model; cached on disk), from pairs of consecutive samples with the ground
+truth tip of the exploration (the paper's RGB-D camera).
+
+Needs ``pose``, ``target``, ``strain`` and ``pressure`` in the env's observation (``pressure``
+gives ``A_0`` where an episode starts from held pressures, e.g. ``start_m=``). Works on any preset
+(the strain gauges exist on every arm); the actuation becomes actions through the env's own
+:class:`~soft_gym.robots.actuation.Actuation`, in either action mode.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents.learners.local_ik import LocalIKNetwork
+from agents.policies import BaselinePolicy
+from soft_gym._validation import require_in_range, require_integer, require_positive
+from soft_gym.robots.actuation import Actuation
+
+_MM = 1000.0
+MIN_STEP_MM, MAX_STEP_MM = 2.0, 15.0
+"""ASDM's limits on the step distance (zhao2021 Section IV-B: 2 mm <= d_n <= 15 mm)."""
+
+_REQUIRED_PARTS = ("pose", "target", "strain", "pressure")
+_SETTINGS = ("step_mm", "adaptive", "gain", "tolerance_mm", "settle_s", "max_iterations",
+             "batch_size", "learning_rate", "skip", "exploration", "seed", "cache")
+
+
+@functools.lru_cache(maxsize=1)
+def _learner_source_digest() -> str:
+    import agents.learners.local_ik
+
+    return hashlib.sha256(Path(agents.learners.local_ik.__file__).read_bytes()).hexdigest()
+
+
+class LocalIKASDMController(BaselinePolicy):
+    """zhao2021's local-IK controller with fixed or adaptive step distance.
+
+    Args:
+        env: the env to control (see the module docstring for the obs parts it needs).
+        step_mm: the step distance ``d`` (mm, in [2, 15]); with ``adaptive`` its start ``d_1``.
+        adaptive: adapt ``d`` by ASDM (eqs. 17-18).
+        gain: ASDM's ``K`` (paper: 0.12).
+        tolerance_mm: ``E``, the distance at which the arm stops (mm; paper: 4).
+        settle_s: seconds one command is held (a controller step; paper: 1 s).
+        max_iterations, batch_size, learning_rate: the network's training (eq. 20; paper: at
+            most 1000 iterations, Adam at 0.001).
+        skip: the network adds ``A_n`` to its output layer (:class:`LocalIKNetwork`).
+        exploration: options of the exploration data set
+            (:class:`~soft_gym.sensing.shape_reconstruction.ReconstructionConfig`, e.g.
+            ``{"n_free": 400, "n_loaded": 200}`` for a quick model); default the paper's 6000.
+        seed: seeds the network's training.
+        cache: keep the trained network on disk and reuse it.
+    """
+
+    name = "local_ik_asdm"
+
+    def __init__(self, env, step_mm: float = 8.0, adaptive: bool = True, gain: float = 0.12,
+                 tolerance_mm: float = 4.0, settle_s: float = 1.0, max_iterations: int = 1000,
+                 batch_size: int = 64, learning_rate: float = 1e-2, skip: bool = True,
+                 exploration: dict | None = None, seed: int = 0, cache: bool = True) -> None:
+        from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+
+        if env is None:
+            raise ValueError("env must be the environment to control, got None")
+        self.step_mm = require_in_range("step_mm", step_mm, MIN_STEP_MM, MAX_STEP_MM)
+        for name, value in (("adaptive", adaptive), ("skip", skip), ("cache", cache)):
+            if not isinstance(value, (bool, np.bool_)):
+                raise ValueError(f"{name} must be True or False, got {value!r}")
+        self.adaptive, self.skip, self.cache = bool(adaptive), bool(skip), bool(cache)
+        self.gain = require_positive("gain", gain)
+        self.tolerance_mm = require_positive("tolerance_mm", tolerance_mm)
+        self.settle_s = require_positive("settle_s", settle_s)
+        self.max_iterations = require_integer("max_iterations", max_iterations, 1)
+        self.batch_size = require_integer("batch_size", batch_size, 1)
+        self.learning_rate = require_positive("learning_rate", learning_rate)
+        self.seed = require_integer("seed", seed, 0)
+        if exploration is not None and not isinstance(exploration, dict):
+            raise ValueError(f"exploration must be None or a dict of options, got "
+                             f"{exploration!r}")
+        self.exploration = dict(exploration or {})
+        self._config = ReconstructionConfig.from_options(self.exploration)
+        self.env = env.unwrapped
+        missing = [part for part in _REQUIRED_PARTS if part not in self.env.obs_parts]
+        if missing:
+            raise ValueError(f"the env's obs must include {list(_REQUIRED_PARTS)} for "
+                             f"{self.name}; missing {missing} in {self.env.obs_parts!r}")
+        spec = self.env.spec_arm
+        self.actuation = Actuation.of_env(self.env)
+        self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa
+        self.hold_steps = max(1, int(round(self.settle_s / spec.control_period_s)))
+        self.network: LocalIKNetwork | None = None
+        self.training: dict[str, Any] = {}
+        self.reset()
+
+    # ------------------------------------------------------------------ episode
+    def reset(self) -> None:
+        """Start of an episode: ``d`` back to ``step_mm``, no step taken yet."""
+        self._step = 0
+        self._command: np.ndarray | None = None
+        self._previous: tuple[np.ndarray, np.ndarray] | None = None  # (Q_{n-1}, Q_d(n-1))
+        self.step_distance_mm = self.step_mm
+        self.history: list[dict[str, Any]] = []
+
+    @property
+    def decisions(self) -> int:
+        """Controller steps taken this episode (commands sent)."""
+        return len(self.history)
+
+    def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        """The action for ``observation``: a new command every ``settle_s``, else the held one."""
+        if self.network is None:
+            self.pretrain()
+        env = self.env
+        if self._command is None:  # A_0: the pressures the episode starts from
+            self._command = np.asarray(env.observation_part(observation, "pressure"),
+                                       dtype=float) * self.p_high
+        if self._step % self.hold_steps == 0:
+            position = np.asarray(env.observation_part(observation, "pose"), dtype=float)[:3]
+            goal = np.asarray(env.observation_part(observation, "target"), dtype=float)[:3]
+            readings = np.asarray(env.observation_part(observation, "strain"), dtype=float)
+            self._command = self.decide(self._command, position, goal, readings)
+        self._step += 1
+        action = self.actuation.action(self._command)
+        return action, state
+
+    def decide(self, pressures_pa: np.ndarray, position_m: np.ndarray, goal_m: np.ndarray,
+               readings: np.ndarray) -> np.ndarray:
+        """One controller step (eqs. 15-18): the next actuation ``A_{n+1}`` (Pa) from ``A_n``
+        (Pa), ``Q_n`` and ``Q_d`` (m) and ``S_n``; recorded in :attr:`history`."""
+        q = np.asarray(position_m, dtype=float) * _MM
+        goal = np.asarray(goal_m, dtype=float) * _MM
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(goal))):
+            raise ValueError(f"position_m and goal_m must be finite, got {position_m!r}, "
+                             f"{goal_m!r}")
+        error_mm = 0.0
+        if self._previous is not None:
+            q_previous, planned = self._previous
+            error_mm = float(np.linalg.norm(planned - q))                          # eq. (17)
+            if self.adaptive:
+                direction = np.sign(np.dot(q - q_previous, planned - q_previous))
+                self.step_distance_mm = float(np.clip(                              # eq. (18)
+                    self.step_distance_mm + direction * self.gain * error_mm,
+                    MIN_STEP_MM, MAX_STEP_MM))
+        distance = float(np.linalg.norm(goal - q))
+        record = {"position_mm": q, "goal_mm": goal, "distance_mm": distance,
+                  "step_mm": self.step_distance_mm, "error_mm": error_mm,
+                  "reached": distance <= self.tolerance_mm}
+        if record["reached"]:
+            planned, command = q, np.asarray(pressures_pa, dtype=float)
+        else:
+            planned = q + self.step_distance_mm * (goal - q) / distance            # eq. (16)
+            command = self.network.predict(pressures_pa, q / _MM, planned / _MM, readings)
+            command = np.clip(command, self.p_low, self.p_high)  # the regulators' range
+        record.update(planned_mm=planned, pressures_pa=command)
+        self.history.append(record)
+        self._previous = (q, planned)
+        return command
+
+    # ------------------------------------------------------------------ training
+    def pretrain(self) -> dict[str, Any]:
+        """Train the network on the exploration data (or take it from the cache); returns the
+        training report."""
+        from soft_gym.sensing.calibration_cache import cached
+        from soft_gym.sensing.shape_reconstruction import cached_reconstruction
+
+        spec = self.env.spec_arm
+        gauges = self._gauges()
+
+        def compute() -> dict[str, Any]:
+            _, report = cached_reconstruction(spec, gauges, self._config, use_cache=self.cache,
+                                              progress=False)
+            data = report["data"]
+            network = LocalIKNetwork(spec.n_chambers, data.readings.shape[1], spec.p_max_pa,
+                                     skip=self.skip, seed=self.seed)
+            training = network.fit(data.pressures_pa, data.key_points_m[:, -1], data.readings,
+                                   max_iterations=self.max_iterations,
+                                   batch_size=self.batch_size,
+                                   learning_rate=self.learning_rate, progress=False)
+            return {"network": network.state(), "training": training}
+
+        parts = {"kind": f"{self.name} network", "arm": repr(spec),
+                 "gauges": repr(sorted(vars(gauges).keys())),
+                 "exploration": asdict(self._config),
+                 "settings": {k: getattr(self, k) for k in ("max_iterations", "batch_size",
+                                                             "learning_rate", "skip", "seed")},
+                 "learner": _learner_source_digest()}
+        result = cached(parts, compute, use_cache=self.cache)
+        self.network = LocalIKNetwork.from_state(result["network"])
+        self.training = result["training"]
+        return self.training
+
+    def _gauges(self):
+        from soft_gym.sensors.strain_gauge import StrainGauges
+
+        sensors = getattr(self.env, "sensors", {})
+        return sensors.get("strain", StrainGauges())
+
+    # ------------------------------------------------------------------ persistence
+    def save(self, path: str | Path) -> None:
+        """Write the settings and the network; :meth:`load` restores a controller that
+        predicts identically."""
+        if self.network is None:
+            raise ValueError(f"{self.name} has no network to save yet: call pretrain() first")
+        state = self.network.state()
+        settings = {k: getattr(self, k) for k in _SETTINGS}
+        np.savez(path, format=np.array(self.name), settings=np.array(json.dumps(settings)),
+                 training=np.array(json.dumps(self.training)),
+                 meta=np.array([state["n_chambers"], state["n_gauges"], state["seed"],
+                                int(state["skip"])]),
+                 hidden=np.array(state["hidden"]), p_max_pa=state["p_max_pa"],
+                 input_low=state["input_norm"][0], input_high=state["input_norm"][1],
+                 **{f"w:{k}": v for k, v in state["weights"].items()})
+
+    @classmethod
+    def load(cls, path: str | Path, env=None) -> "LocalIKASDMController":
+        """Read a controller written by :meth:`save` for ``env``; a corrupt or foreign file is
+        refused with a ``ValueError`` naming the path."""
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                if str(data["format"]) != cls.name:
+                    raise ValueError(f"format {str(data['format'])!r}")
+                settings = json.loads(str(data["settings"]))
+                training = json.loads(str(data["training"]))
+                meta = data["meta"].astype(int)
+                state = {"n_chambers": int(meta[0]), "n_gauges": int(meta[1]),
+                         "seed": int(meta[2]), "skip": bool(meta[3]),
+                         "hidden": data["hidden"].astype(int).tolist(),
+                         "p_max_pa": data["p_max_pa"],
+                         "input_norm": (data["input_low"], data["input_high"]),
+                         "weights": {k[2:]: data[k] for k in data.files if k.startswith("w:")}}
+            network = LocalIKNetwork.from_state(state)
+        except (OSError, ValueError, KeyError, EOFError, RuntimeError) as error:
+            raise ValueError(f"path {str(path)!r} is not a saved {cls.name} controller "
+                             f"({error})") from None
+        controller = cls(env, **settings)
+        if network.n_chambers != controller.env.spec_arm.n_chambers:
+            raise ValueError(f"path {str(path)!r} holds a {cls.name} controller for another arm "
+                             f"({network.n_chambers} chambers, this env has "
+                             f"{controller.env.spec_arm.n_chambers})")
+        controller.network, controller.training = network, training
+        return controller
