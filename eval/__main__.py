@@ -157,6 +157,25 @@ def main(argv: list[str] | None = None) -> None:
     ho2018.add_argument("--lead-in-s", type=float, default=15.0,
                         help="seconds tracking the first corner before recording (s)")
     ho2018.add_argument("--out", default="results/ho2018", help="output directory")
+    from eval import zhao2021 as zhao2021_module
+
+    zhao2021 = sub.add_parser("zhao2021", help="zhao2021 shape reconstruction and local-IK "
+                              "control experiments", description=zhao2021_module.__doc__,
+                              formatter_class=HelpFormatter)
+    zhao2021.add_argument("--experiments", nargs="+", default=list(zhao2021_module.EXPERIMENTS),
+                          choices=list(zhao2021_module.EXPERIMENTS), help="which experiments")
+    zhao2021.add_argument("--seeds", type=int, nargs="+", default=[0],
+                          help="seeds (exploration, training and episodes)")
+    zhao2021.add_argument("--samples", type=int, nargs=2, default=[4000, 2000],
+                          metavar=("FREE", "LOADED"),
+                          help="exploration samples free and with the 75 g tip (paper: 4000 "
+                               "2000)")
+    zhao2021.add_argument("--iterations", type=int, default=1000,
+                          help="most training iterations of the networks (paper: 1000)")
+    zhao2021.add_argument("--baselines", nargs="*", default=[],
+                          help="further policies on the free point-to-point run and circle, "
+                               "e.g. lwpr_rwr cc_model sb3:PATH")
+    zhao2021.add_argument("--out", default="results/zhao2021", help="output directory")
     compare = sub.add_parser(
         "compare", help="SB3 agents against the baselines, nominal and out of distribution",
         description=compare_module.__doc__, formatter_class=HelpFormatter)
@@ -193,6 +212,29 @@ def main(argv: list[str] | None = None) -> None:
         ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
                                      cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
                                      baselines=tuple(args.baselines))
+        print(f"output directory: {args.out}")
+        return
+    if args.command == "zhao2021":
+        free, loaded = args.samples
+        if free < 0 or loaded < 0 or free + loaded < 24:
+            parser.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
+                         f"{args.samples}")
+        if args.iterations < 1:
+            parser.error(f"--iterations must be >= 1, got {args.iterations}")
+        if any(seed < 0 for seed in args.seeds):
+            parser.error(f"--seeds must be >= 0, got {args.seeds}")
+        from agents.policies import BASELINES
+        from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+
+        unknown = [name for name in args.baselines
+                   if name not in BASELINES and not name.startswith("sb3:")]
+        if unknown:
+            parser.error(f"--baselines must be names from {sorted(BASELINES)} or sb3:PATH, "
+                         f"got {unknown}")
+        config = ReconstructionConfig(n_free=free, n_loaded=loaded,
+                                      max_iterations=args.iterations)
+        zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
+                                       baselines=tuple(args.baselines))
         print(f"output directory: {args.out}")
         return
     if args.command == "compare":

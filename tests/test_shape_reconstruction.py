@@ -112,7 +112,7 @@ def test_small_model_beats_the_mean_and_reloads_identically(small_model, tmp_pat
     reconstructor.save(path)
     loaded = type(reconstructor).load(path)
     again = loaded.key_points(x[:20, :, :6], x[:20, :, 6:])
-    assert np.array_equal(again, predicted[:20])
+    assert np.array_equal(again, reconstructor.key_points(x[:20, :, :6], x[:20, :, 6:]))
     raw = bytearray(path.read_bytes())
     raw[-20] ^= 0xFF
     path.write_bytes(bytes(raw))
@@ -146,13 +146,14 @@ def test_strain_sr_env_passes_the_checker_and_fills_the_shape_part(small_model):
         check_env(env.unwrapped, skip_render_check=True)
         observation, _ = env.reset(seed=0)
         unwrapped = env.unwrapped
-        shape = unwrapped.observation_part(observation, "shape").reshape(6, 3)
+        shape = unwrapped.observation_part(observation, "shape").reshape(7, 3)
         pose = unwrapped.observation_part(observation, "pose")
+        assert np.array_equal(shape[0], np.zeros(3))        # P_0: the base
         assert np.allclose(shape[-1], pose[:3], atol=1e-6)  # the tip is the last key point
         for _ in range(30):
             observation, *_, info = env.step(env.action_space.sample())
         truth = key_points_from_backbone(ZHAO, info["backbone_m"])
-        shape = unwrapped.observation_part(observation, "shape").reshape(6, 3)
+        shape = unwrapped.observation_part(observation, "shape").reshape(7, 3)[1:]
         assert np.all(np.isfinite(shape))
         assert np.linalg.norm(shape - truth, axis=1).max() < 0.05  # a small model, 5 cm
     finally:
@@ -166,8 +167,10 @@ def test_shape_part_needs_a_source_that_estimates_the_backbone():
                    obs=("pose", "shape"))
     try:
         observation, info = env.reset(seed=0)
-        shape = env.unwrapped.observation_part(observation, "shape").reshape(6, 3)
-        assert np.allclose(shape, key_points_from_backbone(ZHAO, info["backbone_m"]), atol=1e-6)
+        shape = env.unwrapped.observation_part(observation, "shape").reshape(7, 3)
+        assert np.allclose(shape[1:], key_points_from_backbone(ZHAO, info["backbone_m"]),
+                           atol=1e-6)
+        assert np.allclose(shape[0], 0.0)
     finally:
         env.close()
     with pytest.raises(ValueError, match="shape-reconstruction options"):

@@ -18,7 +18,7 @@ that order; ``obs_format="dict"``: a ``Dict`` of the parts (needed for image par
 | `pose`     | 7               | feedback tip position (x, y, z) + quaternion (x, y, z, w) | m, - |
 | `target`   | 6               | current target and next target positions                  | m    |
 | `pressure` | 3 * n_segments  | chamber pressures over p_max                              | -    |
-| `shape`    | 18              | feedback key points P_1..P_6 (sixths of the rest length)  | m    |
+| `shape`    | 21              | feedback backbone points P_0..P_6 (sixths of rest length) | m    |
 | `fbg`      | n_gratings      | FBG Bragg wavelength shifts (wang2023)                    | nm   |
 | `strain`   | 3 * n_segments  | strain-gauge readings (zhao2021)                          | -    |
 | `encoder`  | 3 * n_segments  | chamber lengths from cable encoders (zou2022)             | m    |
@@ -321,7 +321,7 @@ class SoftArmEnv(gym.Env):
         elif part == "target":
             low, high = np.full(6, -reach), np.full(6, reach)
         elif part == "shape":
-            low, high = np.full(18, -reach), np.full(18, reach)
+            low, high = np.full(21, -reach), np.full(21, reach)
         else:
             low, high = np.zeros(self.spec_arm.n_chambers), np.ones(self.spec_arm.n_chambers)
         return spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
@@ -467,7 +467,7 @@ class SoftArmEnv(gym.Env):
             current, upcoming = self.task.target(self._step)
             value = np.r_[current, upcoming]
         elif part == "shape":
-            value = np.asarray(self._estimate.key_points_m, dtype=float).ravel()
+            value = np.asarray(self._estimate.shape_points_m, dtype=float).ravel()
         else:
             value = self.sim.pressures_pa / self._p_high
         return value.astype(np.float32)

@@ -36,15 +36,17 @@ class FeedbackEstimate:
         position_m: tip position (m, base frame).
         quaternion: tip orientation (x, y, z, w).
         shape_m: backbone points (m, base frame, (n, 3)) where the source estimates a shape.
-        key_points_m: the backbone's key points ``P_1..P_6`` (m, (6, 3), sixths of the rest
-            length, zhao2021 Section III) where the source estimates them (the ``shape`` part).
+        shape_points_m: seven backbone points ``P_0..P_6`` from the base to the tip (m, (7, 3)),
+            at sixths of the rest length (zhao2021 Section III's key points with the base; the
+            seven points of zou2022's shape), where the source estimates them (the ``shape``
+            obs part).
         details: what ``info["estimates"]`` reports (e.g. camera, F-emp and fused positions).
     """
 
     position_m: np.ndarray
     quaternion: np.ndarray
     shape_m: np.ndarray | None = None
-    key_points_m: np.ndarray | None = None
+    shape_points_m: np.ndarray | None = None
     details: dict[str, Any] = field(default_factory=dict)
 
 
@@ -73,7 +75,7 @@ class FeedbackSource:
     calibrates: ClassVar[bool] = False
     """Whether :meth:`calibrate` does anything (``reset(options={"recalibrate": True})``)."""
     estimates_shape: ClassVar[bool] = False
-    """Whether estimates carry ``key_points_m`` (needed by the env's ``shape`` part)."""
+    """Whether estimates carry ``shape_points_m`` (needed by the env's ``shape`` part)."""
 
     def __init__(self, options: dict | None = None) -> None:
         if options:
@@ -130,7 +132,8 @@ class GroundTruthFeedback(FeedbackSource):
         position, quaternion = sim.tip_pose()
         backbone = sim.backbone()
         return FeedbackEstimate(position, quaternion, shape_m=backbone,
-                                key_points_m=key_points_from_backbone(sim.spec, backbone))
+                                shape_points_m=np.vstack([backbone[0], key_points_from_backbone(
+                                    sim.spec, backbone)]))
 
 
 @register_feedback_source
@@ -299,5 +302,6 @@ class StrainShapeFeedback(FeedbackSource):
         n = sim.spec.n_chambers
         shape = self.reconstructor.reconstruct(steps[:, :n], steps[:, n:])
         return FeedbackEstimate(shape.tip_position_m, shape.tip_quaternion,
-                                shape_m=shape.backbone_m, key_points_m=shape.key_points_m,
+                                shape_m=shape.backbone_m,
+                                shape_points_m=np.vstack([np.zeros(3), shape.key_points_m]),
                                 details={"key_points_m": shape.key_points_m.copy()})

@@ -1,0 +1,571 @@
+"""The zhao2021 experiments: shape reconstruction under tip loads, and the local-IK controller with
+fixed and adaptive step distance (Zhao et al. 2021, Sections VI-B to VI-D, Tables III-IV,
+Figs. 10-12).
+
+``shape`` (Section VI-B): the SR model (:mod:`soft_gym.sensing.shape_reconstruction`: the paper's
+exploration, six SFE-PD networks, the backbone fit) is built once, then each test configuration
+is reached the way the exploration moves (two chambers by 0.05 bar per 1 s step, so the networks
+see the kind of history they learnt from) and held 2 s:
+
+* Table III: the paper's pressures (0, 0.5, 0.6, 0.8, 0.7, 0) bar; the key points predicted
+  against the simulated ones (mm), and the simulated ones against the paper's (the arm's
+  fidelity, in the paper's frame: :func:`soft_gym.robots.presets.paper_point_from_base`);
+* the mean backbone error of eq. (21) (60 points) over Table III's configuration and 11 random
+  ones (paper: 5.85 mm);
+* Table IV: four configurations, each free and with 50, 75, 119 and 150 g on the tip, maximum and
+  mean backbone error.
+
+``p2p`` (Section VI-C-1): from (40, 20, 300) to (-50, 70, 210) mm (paper frame) with
+``local_ik_asdm`` on ``strain_sr`` feedback, ``E`` = 4 mm, ``K`` = 0.12: ``d`` = 8, ``d`` = 2,
+ASDM from ``d`` = 8, and ASDM with 50, 75 and 100 g on the tip. Steps until the feedback is within
+``E``, the true distance then, and how often the true distance grew on the way (oscillation).
+
+``sway`` (Section VI-C-2): ASDM with a swaying 119 g block on the tip, replaced at step 7 by a
+pull at the arm's middle (``PULL_N`` towards the axis), released at step 12.
+
+``circle`` (Section VI-D): a 100 mm diameter circle of ``CIRCLE_POINTS`` path points, ASDM from
+``d`` = 8, a point counted reached within ``E`` (then the next is presented); free, and with a
+263 g block added at step 29 and removed at step 60.
+
+A controller step is one command held 1 s (20 env steps). ``--baselines`` adds other policies
+(``lwpr_rwr``, ``sb3:PATH``; ``cc_model`` and ``hybrid_gpr`` refuse the two-segment arm, which the
+table records) on the free point-to-point run and the free circle, for the same time.
+
+Where the simulation differs from the paper is said in docs/architecture.md ("zhao2021
+experiments"): the calibrated arm cannot reach the paper's end point exactly (the preset's
+``notes["reach"]``), so the point-to-point goal is the reachable point nearest to it.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from tqdm import tqdm
+
+import soft_gym  # noqa: F401
+from agents.policies import make_policy
+from soft_gym.robots.presets import (base_point_from_paper, get_preset,
+                                     paper_point_from_base, paper_pressures_to_chambers)
+from soft_gym.sensing.shape_exploration import key_points_from_backbone
+from soft_gym.sensing.shape_reconstruction import ReconstructionConfig, cached_reconstruction
+from soft_gym.sensors.strain_gauge import StrainGauges
+
+EXPERIMENTS = ("shape", "p2p", "sway", "circle")
+PRESET = "zhao2021"
+OBS = ("pose", "target", "strain", "pressure")
+SETTLE_S = 1.0
+"""A controller step: one command held this long (the paper measures 1 s after each change)."""
+
+TABLE3_PRESSURES_BAR = (0.0, 0.5, 0.6, 0.8, 0.7, 0.0)
+TABLE3_TRUE_MM = np.array([[-0.1, 0.5, 49.6], [4.2, 4.9, 90.1], [3.8, 9.6, 133.2],
+                           [-22.6, 19.9, 172.9], [-35.9, 35.2, 210.8], [-58.7, 64.7, 248.5]])
+TABLE3_PAPER_ERRORS_MM = (1.31, 1.3, 2.14, 1.7, 1.45, 1.51)
+TABLE4_LOADS_G = (0, 50, 75, 119, 150)
+TABLE4_PAPER_MEAN_MM = {0: (5.63, 5.78, 6.01, 5.57), 50: (5.64, 5.81, 5.97, 5.62),
+                        75: (6.13, 6.03, 6.21, 6.34), 119: (6.24, 6.31, 6.41, 6.28),
+                        150: (6.56, 6.49, 6.94, 6.45)}
+PAPER_MEAN_BACKBONE_ERROR_MM = 5.85
+
+P2P_START_MM = (40.0, 20.0, 300.0)
+P2P_END_MM = (-50.0, 70.0, 210.0)
+P2P_RUNS = (("d = 8", 8.0, False, 0.0), ("d = 2", 2.0, False, 0.0),
+            ("ASDM (d1 = 8)", 8.0, True, 0.0), ("ASDM, 50 g", 8.0, True, 0.050),
+            ("ASDM, 75 g", 8.0, True, 0.075), ("ASDM, 100 g", 8.0, True, 0.100))
+"""Label, ``d`` (mm), adaptive, tip mass (kg) (Section VI-C-1)."""
+PAPER_P2P_STEPS = {"d = 8": 24, "d = 2": 75, "ASDM (d1 = 8)": 14}
+MAX_P2P_STEPS = 100
+
+SWAY_MASS_KG, PULL_N, PULL_STEPS = 0.119, 1.0, (7, 12)
+CIRCLE_DIAMETER_MM, CIRCLE_Z_MM, CIRCLE_POINTS = 100.0, 240.0, 24
+CIRCLE_LOAD_KG, CIRCLE_LOAD_STEPS, MAX_CIRCLE_STEPS = 0.263, (29, 60), 150
+
+
+# ---------------------------------------------------------------------------- shape (VI-B)
+def _walk_to(sim, sensor, command: np.ndarray, target: np.ndarray, step_pa: float,
+             history: list, hold_steps: int = 2) -> np.ndarray:
+    """Move the command to ``target`` as the exploration moves (the two chambers furthest from
+    it by up to ``step_pa`` per 1 s step), then hold; every step's (A, S) goes into
+    ``history``."""
+    command = command.copy()
+    while np.abs(target - command).max() > 1e-6:
+        order = np.argsort(-np.abs(target - command))[:2]
+        command[order] += np.clip(target[order] - command[order], -step_pa, step_pa)
+        sim.set_pressures(command)
+        sim.step_physics(SETTLE_S)
+        history.append(np.concatenate([command, sensor.sample(sim)]))
+    for _ in range(hold_steps):
+        sim.step_physics(SETTLE_S)
+        history.append(np.concatenate([command, sensor.sample(sim)]))
+    return command
+
+
+def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True) -> dict:
+    """Table III, the mean backbone error and Table IV on the SR model of ``config``."""
+    from soft_gym.scenarios.loads import TipMass
+    from soft_gym.sensing.backbone_fit import mean_backbone_error_m, resample_by_arc_length
+    from soft_gym.sim import ArmSimulator
+
+    spec = get_preset(PRESET)
+    gauges = StrainGauges()
+    reconstructor, report = cached_reconstruction(spec, gauges, config, progress=progress)
+    sensor = StrainGauges()
+    sensor.rng = np.random.default_rng([seed, 7])
+    rng = np.random.default_rng(seed)
+    n, window = spec.n_chambers, reconstructor.window
+    p_max = spec.p_max_pa
+    step_pa = float(p_max.min()) / 16.0
+
+    def measure(pressures: np.ndarray, load_kg: float = 0.0) -> dict:
+        sim = ArmSimulator(spec)
+        try:
+            if load_kg > 0:
+                sim.add_load(TipMass(mass_kg=load_kg))
+            sim.reset(spec.p_pre_pa, settle_s=SETTLE_S)
+            history: list = []
+            _walk_to(sim, sensor, spec.p_pre_pa, pressures, step_pa, history)
+            steps = np.array(([history[0]] * window + history)[-(window + 1):])
+            estimate = reconstructor.reconstruct(steps[:, :n], steps[:, n:])
+            truth = sim.backbone()
+        finally:
+            sim.close()
+        true_points = key_points_from_backbone(spec, truth)
+        return {"predicted_mm": estimate.key_points_m * 1000.0,
+                "true_mm": true_points * 1000.0,
+                "key_point_errors_mm": np.linalg.norm(estimate.key_points_m - true_points,
+                                                      axis=1) * 1000.0,
+                "backbone_error_mm": mean_backbone_error_m(
+                    resample_by_arc_length(truth, 60), estimate.backbone_m) * 1000.0}
+
+    table3_pressures = paper_pressures_to_chambers(np.array(TABLE3_PRESSURES_BAR) * 1e5)
+    configurations = [table3_pressures] + [rng.uniform(0.0, 1.0, n) * p_max for _ in range(11)]
+    bar = tqdm(total=len(configurations) + 4 * len(TABLE4_LOADS_G), desc="zhao2021 shape",
+               disable=not progress, leave=False)
+    results = []
+    for pressures in configurations:
+        results.append(measure(pressures))
+        bar.update(1)
+    table3 = results[0]
+    table4 = {}
+    for load_g in TABLE4_LOADS_G:
+        errors = []
+        for pressures in configurations[1:5]:
+            errors.append(measure(pressures, load_g / 1000.0))
+            bar.update(1)
+        table4[load_g] = {"max_mm": [float(e["key_point_errors_mm"].max()) for e in errors],
+                          "mean_backbone_mm": [float(e["backbone_error_mm"]) for e in errors]}
+    bar.close()
+    true_paper_frame = paper_point_from_base(table3["true_mm"] / 1000.0) * 1000.0
+    return {"config": asdict(config), "training": {k: v for k, v in report.items()
+                                                   if k != "data"},
+            "table3": {"pressures_bar": list(TABLE3_PRESSURES_BAR),
+                       "predicted_mm": table3["predicted_mm"].tolist(),
+                       "simulated_mm": table3["true_mm"].tolist(),
+                       "errors_mm": table3["key_point_errors_mm"].tolist(),
+                       "simulated_vs_paper_mm": np.linalg.norm(
+                           true_paper_frame - TABLE3_TRUE_MM, axis=1).tolist()},
+            "mean_backbone_error_mm": float(np.mean([r["backbone_error_mm"] for r in results])),
+            "key_point_errors_mm": np.array([r["key_point_errors_mm"] for r in results]
+                                            ).mean(axis=0).tolist(),
+            "table4": table4}
+
+
+# ---------------------------------------------------------------------------- control (VI-C/D)
+def reachable_point(point_m: np.ndarray, scenario=(), tries: int = 12) -> np.ndarray:
+    """``point_m`` where the env's start drive reaches it (within 2 mm) with ``scenario``'s
+    loads; else the nearest tip position the drive's pressure search finds, or the first point
+    on the way from there towards the middle of the workspace (all chambers at half pressure)
+    that the drive reaches, in 5 % steps (m, rounded to 0.1 mm)."""
+    from soft_gym.sim import ArmSimulator
+    from soft_gym.tasks.positioning import drive_tip_to
+
+    spec = get_preset(PRESET)
+    sim = ArmSimulator(spec)
+    try:
+        for load in copy.deepcopy(list(scenario)):
+            sim.add_load(load)
+        sim.reset(0.5 * (spec.p_pre_pa + spec.p_max_pa), settle_s=3.0)
+        middle = sim.tip_pose()[0]
+        drive_tip_to(sim, np.asarray(point_m, dtype=float), max_trials=80)
+        sim.step_physics(1.0)
+        nearest = sim.tip_pose()[0]
+    finally:
+        sim.close()
+    point = np.asarray(point_m, dtype=float)
+    if np.linalg.norm(nearest - point) > 2e-3:
+        point = nearest
+    for k in range(tries):
+        candidate = np.round(point + 0.05 * k * (middle - point), 4)
+        env = gym.make("SoftArmReach-v0", preset=PRESET, feedback="ground_truth",
+                       obs=("pose",), scenario=copy.deepcopy(list(scenario)),
+                       start_m=tuple(candidate))
+        try:
+            env.reset(seed=0)
+            return candidate
+        except ValueError as error:
+            if "out of the" not in str(error):
+                raise
+        finally:
+            env.close()
+    raise ValueError(f"no point between {np.round(point, 4).tolist()} and the middle of the "
+                     f"workspace is reachable with scenario {scenario!r}")
+
+
+def p2p_goal_m() -> np.ndarray:
+    """The point-to-point goal in our frame: the paper's end point, or the reachable point
+    nearest to it on the way to the middle of the workspace (see :func:`reachable_point`)."""
+    return reachable_point(base_point_from_paper(np.array(P2P_END_MM) / 1000.0))
+
+
+def p2p_start_m(scenario=()) -> np.ndarray:
+    """The point-to-point start in our frame, reached with ``scenario``'s loads on the arm."""
+    return reachable_point(base_point_from_paper(np.array(P2P_START_MM) / 1000.0), scenario)
+
+
+def _make_env(sensing: dict, scenario: list, start_m, target_m, steps: int, obs=OBS,
+              **interface):
+    return gym.make("SoftArmReach-v0", preset=PRESET, feedback="strain_sr",
+                    sensing=dict(sensing), obs=obs, scenario=scenario, start_m=tuple(start_m),
+                    target_m=tuple(target_m), episode_steps=steps, **interface)
+
+
+def _drive(env, policy, targets_m, max_steps: int, seed: int, label: str, progress: bool,
+           advance_within_mm: float | None = None) -> dict:
+    """Run a controller step by step (``SETTLE_S`` each) towards ``targets_m`` in turn; with
+    ``advance_within_mm`` the next target is presented once the feedback is that close, else
+    the run ends there. Records per controller step the true tip, the feedback tip, ``d`` and
+    the distances."""
+    unwrapped = env.unwrapped
+    hold = int(round(SETTLE_S / unwrapped.spec_arm.control_period_s))
+    observation, info = env.reset(seed=seed)
+    policy.reset()
+    targets = np.atleast_2d(np.asarray(targets_m, dtype=float))
+    current = 0
+    records = []
+    bar = tqdm(total=max_steps, desc=label, disable=not progress, leave=False)
+    for step in range(max_steps):
+        goal = targets[current]
+        seen = np.array(observation, copy=True)
+        unwrapped.observation_part(seen, "target")[:] = np.r_[goal, goal]
+        feedback = np.asarray(unwrapped.observation_part(seen, "pose")[:3], dtype=float)
+        records.append({"step": step, "tip_mm": np.asarray(info["tip_position_m"]) * 1000.0,
+                        "feedback_mm": feedback * 1000.0, "goal_mm": goal * 1000.0,
+                        "true_distance_mm": float(np.linalg.norm(info["tip_position_m"] - goal)
+                                                  * 1000.0),
+                        "feedback_distance_mm": float(np.linalg.norm(feedback - goal) * 1000.0),
+                        "step_mm": getattr(policy, "step_distance_mm", np.nan),
+                        "target_index": current})
+        if records[-1]["feedback_distance_mm"] <= (advance_within_mm or 0.0):
+            if current + 1 >= len(targets):
+                break
+            current += 1
+            goal = targets[current]
+            unwrapped.observation_part(seen, "target")[:] = np.r_[goal, goal]
+        for _ in range(hold):
+            action, _ = policy.predict(seen, deterministic=True)
+            observation, reward, _, _, info = env.step(action)
+            policy.update(seen, action, reward, observation, info)
+            seen = np.array(observation, copy=True)
+            unwrapped.observation_part(seen, "target")[:] = np.r_[goal, goal]
+        bar.update(1)
+    bar.close()
+    return {"records": records}
+
+
+def _summary_p2p(run: dict, tolerance_mm: float) -> dict:
+    distances = np.array([r["feedback_distance_mm"] for r in run["records"]])
+    true = np.array([r["true_distance_mm"] for r in run["records"]])
+    within = np.flatnonzero(distances <= tolerance_mm)
+    reached = int(within[0]) if within.size else None
+    rises = np.diff(true) > 0.5  # the true distance grew by more than the gauges' noise
+    return {"steps": reached, "true_distance_at_reach_mm": None if reached is None
+            else float(true[reached]), "final_true_distance_mm": float(true[-1]),
+            "distance_rises": int(rises.sum()),
+            "distance_rises_last_5": int(rises[-5:].sum()) if reached else None}
+
+
+def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
+            runs=P2P_RUNS, baselines: tuple[str, ...] = ()) -> dict:
+    """Section VI-C-1's runs (and ``baselines`` on the free run)."""
+    from soft_gym.scenarios.loads import TipMass
+
+    goal = p2p_goal_m()
+    start = p2p_start_m()
+    results = {}
+    for label, step_mm, adaptive, load_kg in runs:
+        scenario = [TipMass(mass_kg=load_kg)] if load_kg > 0 else []
+        start = p2p_start_m(scenario)
+        env = _make_env(sensing, scenario, start, goal, (MAX_P2P_STEPS + 2) * 20)
+        try:
+            policy = make_policy("local_ik_asdm", env, step_mm=step_mm, adaptive=adaptive,
+                                 exploration=_exploration(sensing), seed=seed)
+            run = _drive(env, policy, goal, MAX_P2P_STEPS, seed, f"p2p {label}", progress,
+                         advance_within_mm=policy.tolerance_mm)
+        finally:
+            env.close()
+        run.update(_summary_p2p(run, 4.0))
+        results[label] = run
+    for baseline in baselines:
+        results[baseline] = _baseline_run(baseline, sensing, p2p_start_m(), [goal],
+                                          MAX_P2P_STEPS // 2,
+                                          seed, progress)
+    return {"start_mm": (p2p_start_m() * 1000).tolist(), "goal_mm": (goal * 1000).tolist(),
+            "paper_goal_mm": (base_point_from_paper(np.array(P2P_END_MM) / 1000) * 1000
+                              ).tolist(), "runs": results}
+
+
+def run_sway(sensing: dict, seed: int = 0, progress: bool = True) -> dict:
+    """Section VI-C-2: a swaying 119 g block, then a pull at the middle from step 7 to 12."""
+    from soft_gym.scenarios.loads import Push, SwayingMass
+
+    goal = p2p_goal_m()
+    paper_start = base_point_from_paper(np.array(P2P_START_MM) / 1000.0)
+    toward_axis = -np.r_[paper_start[:2], 0.0] / np.linalg.norm(paper_start[:2])
+    spec = get_preset(PRESET)
+    middle_link = sum(s.n_links for s in spec.segments) // 2 - 1
+    scenario = [SwayingMass(mass_kg=SWAY_MASS_KG, length_m=0.05, radius_m=0.015,
+                            end_s=PULL_STEPS[0] * SETTLE_S),
+                Push(force_n=tuple(PULL_N * toward_axis), link=middle_link, ramp_s=0.3,
+                     start_s=PULL_STEPS[0] * SETTLE_S, end_s=PULL_STEPS[1] * SETTLE_S)]
+    start = p2p_start_m(scenario)
+    env = _make_env(sensing, scenario, start, goal, (MAX_P2P_STEPS + 2) * 20)
+    try:
+        policy = make_policy("local_ik_asdm", env, step_mm=8.0, adaptive=True,
+                             exploration=_exploration(sensing), seed=seed)
+        run = _drive(env, policy, goal, MAX_P2P_STEPS, seed, "sway and pull", progress,
+                     advance_within_mm=policy.tolerance_mm)
+    finally:
+        env.close()
+    run.update(_summary_p2p(run, 4.0))
+    steps = np.array([r["step_mm"] for r in run["records"]])
+    run["step_mm_before_pull"] = float(steps[:PULL_STEPS[0]].mean())
+    run["step_mm_during_pull"] = float(steps[PULL_STEPS[0]:PULL_STEPS[1] + 1].max())
+    return run
+
+
+def circle_points_m(n: int = CIRCLE_POINTS) -> np.ndarray:
+    """The 100 mm circle about the arm's axis at ``CIRCLE_Z_MM`` (m), first point on +x."""
+    angles = 2.0 * np.pi * np.arange(n + 1) / n
+    radius = CIRCLE_DIAMETER_MM / 2000.0
+    return np.column_stack([radius * np.cos(angles), radius * np.sin(angles),
+                            np.full(n + 1, CIRCLE_Z_MM / 1000.0)])
+
+
+def _summary_circle(run: dict, load_steps) -> dict:
+    records = run["records"]
+    tips = np.array([r["tip_mm"] for r in records])
+    radius = np.hypot(tips[:, 0], tips[:, 1])
+    path_error = np.hypot(radius - CIRCLE_DIAMETER_MM / 2, tips[:, 2] - CIRCLE_Z_MM)
+    feedback = np.array([r["feedback_distance_mm"] for r in records])
+    recovery = {}
+    for name, step in zip(("added", "removed"), load_steps or ()):
+        after = np.flatnonzero(feedback[step + 1:] <= 4.0)
+        recovery[name] = int(after[0]) + 1 if after.size and step < len(records) else None
+    return {"steps": len(records), "points_reached": int(records[-1]["target_index"]),
+            "path_error_mean_mm": float(path_error.mean()),
+            "path_error_max_mm": float(path_error.max()), "recovery_steps": recovery}
+
+
+def run_circle(sensing: dict, seed: int = 0, progress: bool = True,
+               baselines: tuple[str, ...] = ()) -> dict:
+    """Section VI-D: the circle free and with the 263 g block from step 29 to 60."""
+    from soft_gym.scenarios.loads import TipMass
+
+    points = circle_points_m()
+    results = {}
+    for label, load in (("free", False), ("263 g, steps 29-60", True)):
+        scenario = ([TipMass(mass_kg=CIRCLE_LOAD_KG, start_s=CIRCLE_LOAD_STEPS[0] * SETTLE_S,
+                             end_s=CIRCLE_LOAD_STEPS[1] * SETTLE_S)] if load else [])
+        env = _make_env(sensing, scenario, points[0], points[0], (MAX_CIRCLE_STEPS + 2) * 20)
+        try:
+            policy = make_policy("local_ik_asdm", env, step_mm=8.0, adaptive=True,
+                                 exploration=_exploration(sensing), seed=seed)
+            run = _drive(env, policy, points[1:], MAX_CIRCLE_STEPS, seed, f"circle {label}",
+                         progress, advance_within_mm=policy.tolerance_mm)
+        finally:
+            env.close()
+        run.update(_summary_circle(run, CIRCLE_LOAD_STEPS if load else None))
+        results[label] = run
+    for baseline in baselines:
+        run = _baseline_run(baseline, sensing, points[0], points[1:], MAX_CIRCLE_STEPS, seed,
+                            progress)
+        if "records" in run:
+            run.update(_summary_circle(run, None))
+        results[baseline] = run
+    return results
+
+
+def _baseline_run(name: str, sensing: dict, start_m, targets_m, max_steps: int, seed: int,
+                  progress: bool) -> dict:
+    """Another policy on the same start, targets and ``strain_sr`` feedback; a policy that
+    cannot drive the arm is recorded as refused, with its reason."""
+    interface: dict[str, Any] = {"obs": ("pose", "target")}
+    agent = None
+    if name.startswith("sb3:"):
+        agent = make_policy(name)
+        interface = {"obs": ("pose", "target", "pressure"), **agent.env_interface}
+    env = _make_env(sensing, [], start_m, targets_m[0], (max_steps + 2) * 20, **interface)
+    try:
+        if agent is not None:
+            agent.check_env(env)
+            policy = agent
+        else:
+            try:
+                policy = make_policy(name, env, **({"seed": seed} if name == "lwpr_rwr" else {}))
+            except ValueError as error:
+                return {"refused": str(error)}
+        return _drive(env, policy, targets_m, max_steps, seed, name, progress,
+                      advance_within_mm=4.0)
+    finally:
+        env.close()
+
+
+def _exploration(sensing: dict) -> dict:
+    return {k: v for k, v in sensing.items() if k != "history_step_s"}
+
+
+# ---------------------------------------------------------------------------- report
+def report_tables(results: dict) -> str:
+    """Markdown tables of every experiment run."""
+    lines = []
+    shape = results.get("shape")
+    if shape:
+        t3 = shape["table3"]
+        lines += ["Table III: key points (mm)", "",
+                  "| key point | predicted (ours) | simulated (ours) | error | paper's error | "
+                  "simulated vs paper's true |", "|---|---|---|---|---|---|"]
+        for i in range(6):
+            lines.append(f"| P{i + 1} | {_xyz(t3['predicted_mm'][i])} | "
+                         f"{_xyz(t3['simulated_mm'][i])} | {t3['errors_mm'][i]:.2f} | "
+                         f"{TABLE3_PAPER_ERRORS_MM[i]:.2f} | {t3['simulated_vs_paper_mm'][i]:.1f} |")
+        lines += ["", f"Mean backbone error, eq. (21), 12 configurations: "
+                      f"{shape['mean_backbone_error_mm']:.2f} mm (paper "
+                      f"{PAPER_MEAN_BACKBONE_ERROR_MM} mm)", "",
+                  "Table IV: backbone error by tip load, max key-point error / mean backbone "
+                  "error (mm)", "", "| load | 1 | 2 | 3 | 4 | paper means |",
+                  "|---|---|---|---|---|---|"]
+        for load, row in shape["table4"].items():
+            cells = [f"{m:.2f}/{b:.2f}" for m, b in zip(row["max_mm"], row["mean_backbone_mm"])]
+            paper = ", ".join(f"{v:.2f}" for v in TABLE4_PAPER_MEAN_MM[int(load)])
+            lines.append(f"| {load} g | " + " | ".join(cells) + f" | {paper} |")
+    for name in ("p2p",):
+        if name in results:
+            p2p = results[name]
+            lines += ["", f"Point to point {_xyz(p2p['start_mm'])} -> {_xyz(p2p['goal_mm'])} mm "
+                          f"(ours; the paper's end is {_xyz(p2p['paper_goal_mm'])})", "",
+                      "| run | steps to E | true distance then (mm) | rises of the true "
+                      "distance | paper steps |", "|---|---|---|---|---|"]
+            for label, run in p2p["runs"].items():
+                if "refused" in run:
+                    lines.append(f"| {label} | refused: {run['refused']} | | | |")
+                    continue
+                summary = run if "steps" in run else _summary_p2p(run, 4.0)
+                steps = "not reached" if summary["steps"] is None else summary["steps"]
+                at = summary["true_distance_at_reach_mm"]
+                lines.append(f"| {label} | {steps} | {'' if at is None else f'{at:.1f}'} | "
+                             f"{summary['distance_rises']} | "
+                             f"{PAPER_P2P_STEPS.get(label, '')} |")
+    if "sway" in results:
+        run = results["sway"]
+        lines += ["", f"Sway then pull: steps to E {run['steps']}, d before the pull "
+                      f"{run['step_mm_before_pull']:.1f} mm, largest d during it "
+                      f"{run['step_mm_during_pull']:.1f} mm (paper: 15 mm)"]
+    if "circle" in results:
+        lines += ["", "Circle, 100 mm diameter", "",
+                  "| run | steps | points reached | path error mean / max (mm) | steps back "
+                  "within E after the load change |", "|---|---|---|---|---|"]
+        for label, run in results["circle"].items():
+            if "refused" in run:
+                lines.append(f"| {label} | refused: {run['refused']} | | | |")
+                continue
+            lines.append(f"| {label} | {run['steps']} | {run['points_reached']}/"
+                         f"{CIRCLE_POINTS} | {run['path_error_mean_mm']:.1f} / "
+                         f"{run['path_error_max_mm']:.1f} | {run['recovery_steps'] or ''} |")
+    return "\n".join(lines)
+
+
+def _xyz(point) -> str:
+    return "(" + ", ".join(f"{v:.1f}" for v in point) + ")"
+
+
+def plot_control(path: str | Path, results: dict) -> Path:
+    """Figs. 11-12-like figure: top-view paths, distance to the goal and ``d`` per step."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs = dict(results.get("p2p", {}).get("runs", {}))
+    if "sway" in results:
+        runs["sway and pull"] = results["sway"]
+    runs.update({f"circle {k}": v for k, v in results.get("circle", {}).items()})
+    runs = {k: v for k, v in runs.items() if "records" in v}
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    for label, run in runs.items():
+        tips = np.array([r["tip_mm"] for r in run["records"]])
+        axes[0].plot(tips[:, 0], tips[:, 1], label=label)
+        axes[1].plot([r["true_distance_mm"] for r in run["records"]], label=label)
+        axes[2].plot([r["step_mm"] for r in run["records"]], label=label)
+    axes[0].set(xlabel="x (mm)", ylabel="y (mm)", title="tip path (top view)", aspect="equal")
+    axes[1].set(xlabel="controller step", ylabel="true distance to goal (mm)", yscale="log",
+                title="distance to the (temporary) goal")
+    axes[2].set(xlabel="controller step", ylabel="d (mm)", title="step distance")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
+                   config: ReconstructionConfig | None = None,
+                   baselines: tuple[str, ...] = (), progress: bool = True) -> dict:
+    """Run the experiments for every seed; write ``zhao2021_seed<N>.md/.png`` and
+    ``zhao2021.json`` under ``out`` and print the tables."""
+    from eval.report import package_version, write_json
+
+    unknown = sorted(set(experiments) - set(EXPERIMENTS))
+    if unknown:
+        raise ValueError(f"experiments must be among {list(EXPERIMENTS)}, got {unknown}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    summary: dict[str, Any] = {}
+    base = config or ReconstructionConfig()
+    for seed in seeds:
+        seeded = ReconstructionConfig(**{**asdict(base), "seed": seed})
+        sensing = {k: v for k, v in asdict(seeded).items()}
+        results: dict[str, Any] = {}
+        if "shape" in experiments:
+            results["shape"] = run_shape(seeded, seed, progress)
+        if "p2p" in experiments:
+            results["p2p"] = run_p2p(sensing, seed, progress, baselines=baselines)
+        if "sway" in experiments:
+            results["sway"] = run_sway(sensing, seed, progress)
+        if "circle" in experiments:
+            results["circle"] = run_circle(sensing, seed, progress, baselines=baselines)
+        table = report_tables(results)
+        print(f"\nzhao2021, seed {seed}\n{table}")
+        (out / f"zhao2021_seed{seed}.md").write_text(table + "\n")
+        if any(name in results for name in ("p2p", "sway", "circle")):
+            plot_control(out / f"zhao2021_seed{seed}.png", results)
+        summary[f"seed{seed}"] = _jsonable(results)
+    write_json(out / "zhao2021.json", {"soft_arm_gym_version": package_version(),
+                                       "results": summary})
+    return summary
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    return value
