@@ -17,9 +17,13 @@ from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
-from soft_gym.robots.pneumatics import PneumaticSupply, chamber_loads
+from soft_gym.robots.pneumatics import (
+    PneumaticSupply,
+    effective_pressure_pa,
+    loads_of_effective_pressure,
+)
 from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
-from soft_gym.robots.stops import STOP_STIFFNESS_FACTOR, EndStops
+from soft_gym.robots.stops import STOP_STIFFNESS_FACTOR, THREAD_STIFFNESS_FACTOR, EndStops
 from soft_gym.scenarios.loads import heaviest_total_load_n
 
 
@@ -95,10 +99,17 @@ class ArmSimulator:
         self._chamber_weights = self._segment_bend_weights()
         self._stiffness0 = 1.0 / self.arm.compliance
         self._damping = self.arm.damping_time_s * self._stiffness0
-        self._inverse_upper = 1.0 / self.arm.upper_limit
+        threaded = self.arm.thread_band > 0
+        # a thread may stop a link at or near its rest length (upper limit 0 or tiny): judge
+        # divergence of such a joint against its shortening range where that is larger
+        self._inverse_upper = 1.0 / np.where(
+            threaded, np.maximum(self.arm.upper_limit, -self.arm.lower_limit),
+            self.arm.upper_limit)
         self._inverse_lower = 1.0 / self.arm.lower_limit
-        self._stops = EndStops(self.arm.lower_limit, self.arm.upper_limit,
-                               stiffness=STOP_STIFFNESS_FACTOR / self.arm.compliance)
+        self._stops = EndStops(
+            self.arm.lower_limit, self.arm.upper_limit,
+            stiffness=np.where(threaded, THREAD_STIFFNESS_FACTOR, STOP_STIFFNESS_FACTOR)
+            / self.arm.compliance, thread_band=self.arm.thread_band)
         self._station_links = self.arm.station_link.tolist()
         self._frames_substep = self._positions_substep = -1  # read-out caches, per substep
         self._state = np.zeros(4 * self.arm.n_joints)
@@ -439,13 +450,15 @@ class ArmSimulator:
 
     # ------------------------------------------------------------------ internals
     def _pressure_to_rest_matrix(self) -> np.ndarray:
-        """Matrix (n_joints, n_chambers) from chamber pressures (Pa) to each joint's rest
-        deflection under the small-strain compliance (the pressure -> load map is linear)."""
+        """Matrix (n_joints, n_chambers) from effective chamber pressures (Pa,
+        :func:`~soft_gym.robots.pneumatics.effective_pressure_pa`) to each joint's rest
+        deflection under the small-strain compliance (the effective pressure -> load map is
+        linear)."""
         columns = []
         for chamber in range(self.spec.n_chambers):
             unit = np.zeros(self.spec.n_chambers)
             unit[chamber] = 1.0
-            axial, moment = chamber_loads(self.spec, unit)
+            axial, moment = loads_of_effective_pressure(self.spec, unit)
             per_kind = np.stack([moment[:, 0], moment[:, 1], np.zeros_like(axial), axial], axis=1)
             columns.append((self.arm.compliance_parts * per_kind[:, self._kind].T).sum(axis=1))
         return np.stack(columns, axis=1)
@@ -494,7 +507,8 @@ class ArmSimulator:
         for load in self.loads:
             load.update(self, now_s)
         pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
-        self._load_torque = self._stiffness0 * (self._pressure_to_rest @ pressure)
+        self._load_torque = self._stiffness0 * (
+            self._pressure_to_rest @ effective_pressure_pa(self.spec, pressure))
         tangent = self._tangent_stiffness(q)
         if (self._substep % self._substeps_per_gain_update == 0
                 or np.any(tangent > self._implicit_stiffness)
@@ -518,12 +532,13 @@ class ArmSimulator:
 
     def _tangent_stiffness(self, q: np.ndarray) -> np.ndarray:
         """Tangent stiffness of every joint at ``q``: ``k0 (1 + 3 beta strain^2)`` plus the end
-        stops' (:class:`~soft_gym.robots.stops.EndStops`)."""
+        stops' (:class:`~soft_gym.robots.stops.EndStops`), a thread about to go taut counted as
+        taut (:meth:`~soft_gym.robots.stops.EndStops.implicit_stiffness_at`)."""
         tangent = self._stiffness0
         if self._stiffening:
             strain_squared = (q * self.arm.strain_scale) ** 2
             tangent = self._stiffness0 * (1.0 + 3.0 * self.arm.stiffening * strain_squared)
-        return tangent + self._stops.stiffness_at(q)
+        return tangent + self._stops.implicit_stiffness_at(q)
 
     def _update_implicit_gains(self, q: np.ndarray, tangent_stiffness: np.ndarray) -> None:
         """Semi-implicit spring update (Newmark-like, a stable-PD form).

@@ -139,7 +139,10 @@ def single_chamber_pressures(spec, fractions: dict[int, float]) -> np.ndarray:
         ("wang2023", {0: 0.4}),
         ("wang2023", {1: 0.4}),
         ("wang2023", {2: 0.4}),
-        ("zhao2021", {0: 0.5, 4: 0.5}),
+        # zhao2021's chambers stretch a segment several % well below p_max: the reference bends
+        # per stretched length where the beam bends per rest length (a difference of the axial
+        # strain), so the load stays where that fits the 2 % tolerance
+        ("zhao2021", {0: 0.3, 4: 0.3}),
     ],
 )
 def test_pure_moment_gives_constant_curvature_arc(make_sim, preset, fractions):
@@ -148,9 +151,10 @@ def test_pure_moment_gives_constant_curvature_arc(make_sim, preset, fractions):
     Reference: each segment is the arc of curvature ``kappa = |M| / (E I)`` with ``M`` the pressure
     moment (``|M| = p A_c d``), length ``s = L (1 + p A_c / (E A))``, bending away from the
     chamber (azimuth ``sigma_i + pi``); segment ``k+1`` starts at segment ``k``'s end frame.
-    Every backbone point within 2 % of the segment length.
+    Every backbone point within 2 % of the segment length. Rigid bores (no
+    ``chamber_area_growth``), so the force is ``p A_c``.
     """
-    spec = linear(get_preset(preset))
+    spec = linear(get_preset(preset), chamber_area_growth=0.0)
     sim = make_sim(spec, gravity=False)
     pressure = single_chamber_pressures(spec, fractions)
     ramp_pressures(sim, pressure, ramp_s=3.0 if spec.n_segments == 1 else 10.0)
@@ -242,6 +246,8 @@ def test_equal_pressures_only_lengthen(make_sim, preset, segment_index):
     (tip x, y within 1e-6 m of the axis, the three chamber lengths of every segment equal within
     1e-6 m); the axial force ``3 dp A_c`` lengthens that segment (by at most the linear
     ``3 dp A_c L / (E A)``, strain stiffening can only shorten it) and leaves the others unchanged.
+    A growing bore (``chamber_area_growth`` g) pushes ``p A_c (1 + g p / p_max)``: ``dp`` is then
+    the change of that effective pressure.
     """
     spec = get_preset(preset)
     segment = spec.segments[segment_index]
@@ -260,7 +266,11 @@ def test_equal_pressures_only_lengthen(make_sim, preset, segment_index):
     assert np.abs(tip[:2]).max() < 1e-6
     assert np.ptp(lengths, axis=1).max() < 1e-6
     elongation = lengths.mean(axis=1) - before
-    linear_elongation = (3.0 * extra * segment.chamber_area_m2 * segment.length_m
+    def effective(p):
+        return p * (1.0 + segment.chamber_area_growth * p / segment.p_max_pa)
+
+    extra_effective = effective(segment.p_pre_pa + extra) - effective(segment.p_pre_pa)
+    linear_elongation = (3.0 * extra_effective * segment.chamber_area_m2 * segment.length_m
                          / segment.axial_rigidity_n)
     others = np.delete(elongation, segment_index)
     assert 0.0 < elongation[segment_index] <= linear_elongation * (1.0 + 1e-3)
@@ -491,6 +501,10 @@ def test_library_load_map_matches_the_cross_product_reference():
         spec = get_preset(name)
         pressures = rng.uniform(0.0, 1.0, spec.n_chambers) * spec.p_max_pa
         axial, moment = chamber_loads(spec, pressures)
-        reference_axial, reference_moment = pneumatic_loads_reference(spec, pressures)
+        # a growing bore (zhao2021's chamber_area_growth g) pushes p A_c (1 + g p / p_max): the
+        # reference's p A_c at that scaled pressure
+        growth = np.repeat([segment.chamber_area_growth for segment in spec.segments], 3)
+        reference_axial, reference_moment = pneumatic_loads_reference(
+            spec, pressures * (1.0 + growth * pressures / spec.p_max_pa))
         np.testing.assert_allclose(axial, reference_axial, rtol=1e-12)
         np.testing.assert_allclose(moment, reference_moment, rtol=1e-9, atol=1e-15)

@@ -26,9 +26,15 @@ import numpy as np
 import pybullet
 
 from soft_gym.robots.spec import ArmSpec
+from soft_gym.robots.stops import THREAD_BAND_FRACTION
 
 BEND_X, BEND_Y, TORSION, AXIAL = 0, 1, 2, 3
 """Joint kinds inside a station."""
+
+THREAD_CONSTRAINT_MARGIN = 50.0
+"""PyBullet's limit constraint of a threaded axial joint sits this many thread bands past the
+thread's length (0.1 of the link's rest length): the thread's stiff stop holds the joint long
+before it, and a constraint acting at the stop itself would fight the stop's spring."""
 
 _MASSLESS_FRACTION = 0.02
 """Share of a link's mass placed on each of the joint-only sub-links (Featherstone needs > 0)."""
@@ -51,7 +57,8 @@ class ArmBody:
     strain_scale: np.ndarray        # (n_joints,) q * strain_scale = strain measure for stiffening
     damping_time_s: np.ndarray      # (n_joints,) stiffness-proportional damping c / k (s)
     lower_limit: np.ndarray
-    upper_limit: np.ndarray
+    upper_limit: np.ndarray         # (n_joints,) >= 0 for a threaded axial joint, else > 0
+    thread_band: np.ndarray         # (n_joints,) > 0 where the upper stop is a thread (m)
     station_link: np.ndarray        # (n_stations,) multibody link index carrying each link's mass
     station_segment: np.ndarray     # (n_stations,) segment owning each link
     station_rest_length: np.ndarray  # (n_stations,) ds of each link (m)
@@ -87,7 +94,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         [], [], [], [], [], [], [], [])
     inertias = []
     kind, station_of_joint, parts, local_inertia, beta, strain_scale, zeta = [], [], [], [], [], [], []
-    lower, upper = [], []
+    lower, upper, thread_band = [], [], []
     station_link, station_segment, station_length = [], [], []
     bend_joints, axial_joints, torsion_joints, y_first = [], [], [], []
 
@@ -105,7 +112,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         # The axial joint slides a link's body away from its joint by up to ``stretch``: the
         # visual reaches back by that much, so a stretched arm renders without gaps (at rest the
         # extra length hides inside the previous link, or in the base mount for the first one)
-        stretch = (segment.max_extension_ratio - 1.0) * ds
+        stretch = (segment.max_length_m / segment.length_m - 1.0) * ds
         cyl_vis = client.createVisualShape(pybullet.GEOM_CYLINDER, radius=radius,
                                            length=ds + stretch,
                                            visualFramePosition=[0, 0, (ds - stretch) / 2],
@@ -171,8 +178,12 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
                     part[k] += ds / ea
                     local = link_mass
                     scale = 1.0 / ds
-                    lo, hi = -0.4 * ds, (segment.max_extension_ratio - 1.0) * ds
+                    # a thread (SegmentSpec.thread_length_m) stops lengthening at its length;
+                    # shortening keeps the material's range
+                    lo, hi = -0.4 * ds, segment.max_length_m / segment.n_links - ds
                     b = segment.axial_stiffening
+                threaded = joint_kind == AXIAL and segment.thread_length_m is not None
+                thread_band.append(THREAD_BAND_FRACTION * ds if threaded else 0.0)
                 kind.append(joint_kind)
                 station_of_joint.append(station)
                 parts.append(part)
@@ -192,7 +203,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
             station += 1
 
     first = spec.segments[0]
-    mount_m = 0.004 + (first.max_extension_ratio - 1.0) * first.link_length_m
+    mount_m = 0.004 + (first.max_length_m / first.length_m - 1.0) * first.link_length_m
     base_visual = client.createVisualShape(pybullet.GEOM_CYLINDER,
                                            radius=first.outer_radius_m * 1.3,
                                            length=mount_m, visualFramePosition=[0, 0, -mount_m / 2],
@@ -206,10 +217,13 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         linkOrientations=[[0, 0, 0, 1]] * n, linkInertialFramePositions=inertial_positions,
         linkInertialFrameOrientations=[[0, 0, 0, 1]] * n, linkParentIndices=parents,
         linkJointTypes=joint_types, linkJointAxis=axes, useMaximalCoordinates=False)
+    # PyBullet's own limit constraint stays behind the end stops; a thread is taut just past its
+    # limit (EndStops), so its joint gets that constraint further out, where it never acts
+    bullet_upper = np.array(upper) + THREAD_CONSTRAINT_MARGIN * np.array(thread_band)
     for i in range(n):
         client.changeDynamics(body, i, localInertiaDiagonal=inertias[i], linearDamping=0.0,
                               angularDamping=0.0, jointDamping=0.0, jointLowerLimit=lower[i],
-                              jointUpperLimit=upper[i], lateralFriction=0.8)
+                              jointUpperLimit=float(bullet_upper[i]), lateralFriction=0.8)
     client.changeDynamics(body, -1, linearDamping=0.0, angularDamping=0.0)
     # free the default velocity motors so only the spring motors act
     client.setJointMotorControlArray(body, list(range(n)), pybullet.VELOCITY_CONTROL,
@@ -221,6 +235,7 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
         local_inertia=np.array(local_inertia), stiffening=np.array(beta),
         strain_scale=np.array(strain_scale), damping_time_s=np.array(zeta),
         lower_limit=np.array(lower), upper_limit=np.array(upper),
+        thread_band=np.array(thread_band),
         station_link=np.array(station_link), station_segment=np.array(station_segment),
         station_rest_length=np.array(station_length), station_bend_joints=np.array(bend_joints),
         station_y_first=np.array(y_first),

@@ -5,6 +5,11 @@ docs/architecture.md, "Pneumatic actuation": chamber ``i`` at gauge pressure ``p
 ``F_i = p_i A_c``; its segment receives the axial force ``sum_i F_i`` and the bending moment
 ``sum_i F_i d (sin sigma_i, -cos sigma_i)`` about the local x and y axes. Equal pressures give no
 moment, so pre-pressure only lengthens the arm.
+
+A chamber whose bore widens with pressure (:attr:`soft_gym.robots.spec.SegmentSpec.chamber_area_growth`
+``g``, zhao2021's thread-wrapped chambers) pushes ``F_i = p_i A_c (1 + g p_i / p_max)``: the map
+stays linear in the *effective pressure* ``p_i (1 + g p_i / p_max)``
+(:func:`effective_pressure_pa`), which is what the simulator feeds its linear load matrix.
 """
 
 from __future__ import annotations
@@ -64,6 +69,25 @@ class PneumaticSupply:
         return self.pressure_pa
 
 
+def chamber_area_growth(spec: ArmSpec) -> np.ndarray:
+    """Per-chamber area growth ``g`` (dimensionless), shape (n_chambers,)."""
+    return np.repeat([segment.chamber_area_growth for segment in spec.segments], 3).astype(float)
+
+
+def effective_pressure_pa(spec: ArmSpec, pressure_pa: np.ndarray) -> np.ndarray:
+    """Chamber pressures (Pa) scaled by their bores' growth: ``p (1 + g p / p_max)`` (Pa).
+
+    ``p A_c`` of the effective pressure is the chamber's force ``p A_c(p)`` with
+    ``A_c(p) = A_c (1 + g p / p_max)`` (:attr:`soft_gym.robots.spec.SegmentSpec.chamber_area_growth`);
+    equal to ``pressure_pa`` where ``g = 0``. Works on ``(..., n_chambers)`` arrays.
+    """
+    pressure = np.asarray(pressure_pa, dtype=float)
+    growth = chamber_area_growth(spec)
+    if not np.any(growth):
+        return pressure
+    return pressure * (1.0 + growth * pressure / spec.p_max_pa)
+
+
 def chamber_loads(spec: ArmSpec, pressure_pa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per-segment axial force (N) and bending moment (N m) from chamber pressures.
 
@@ -74,8 +98,16 @@ def chamber_loads(spec: ArmSpec, pressure_pa: np.ndarray) -> tuple[np.ndarray, n
     Returns:
         ``(axial_force_n, moment_nm)`` with shapes (n_segments,) and (n_segments, 2); the moment
         is about the segment's local x and y axes (docs/architecture.md, "Pneumatic actuation").
+        A growing bore (``chamber_area_growth``) enters through :func:`effective_pressure_pa`.
     """
-    pressure = np.asarray(pressure_pa, dtype=float).reshape(spec.n_segments, 3)
+    return loads_of_effective_pressure(spec, effective_pressure_pa(spec, pressure_pa))
+
+
+def loads_of_effective_pressure(spec: ArmSpec, effective_pa: np.ndarray
+                                ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`chamber_loads` of already effective pressures (:func:`effective_pressure_pa`):
+    linear in ``effective_pa``, the simulator's load matrix."""
+    pressure = np.asarray(effective_pa, dtype=float).reshape(spec.n_segments, 3)
     area = np.array([segment.chamber_area_m2 for segment in spec.segments])[:, None]
     offset = spec.chamber_offset_m[:, None]
     sigma = CHAMBER_ANGLES_RAD

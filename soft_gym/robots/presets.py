@@ -29,6 +29,8 @@ spring chain would need about 0.5 ms at four links (measured: it diverges at 1 m
 
 from __future__ import annotations
 
+import numpy as np
+
 from soft_gym.robots.spec import ArmSpec, SegmentSpec
 
 _WANG_SEGMENT = SegmentSpec(
@@ -49,19 +51,119 @@ WANG2023 = ArmSpec(
            "extra_tip_mass_kg": "camera + LED tip cap, 6 g assumed"})
 
 _ZHAO_SEGMENT = SegmentSpec(
-    length_m=0.150, outer_radius_m=0.0175, chamber_offset_m=9.0e-3, chamber_area_m2=5.0e-5,
+    length_m=0.107, outer_radius_m=0.0175, chamber_offset_m=7.1e-3, chamber_area_m2=7.1e-5,
     youngs_modulus_pa=103e3, poisson_ratio=0.48, density_kg_m3=1070.0, n_links=4,
-    p_max_pa=80e3, bending_stiffening=1.0, axial_stiffening=2.0, damping_ratio=0.3,
-    extra_tip_mass_kg=0.010)
+    p_max_pa=80e3, bending_stiffening=1.0, axial_stiffening=0.0, max_extension_ratio=1.5,
+    thread_length_m=0.150, chamber_area_growth=1.1, damping_ratio=0.3, extra_tip_mass_kg=0.006)
 
 ZHAO2021 = ArmSpec(
     name="zhao2021", segments=(_ZHAO_SEGMENT, _ZHAO_SEGMENT), mount="hanging",
     pneumatic_time_constant_s=0.2, control_period_s=0.05, physics_dt_s=2.5e-3,
     actuation_update_s=0.01,
-    description=("Zhao et al. 2021: two 150 mm segments, OD 35 mm, silicone E = 15 psi, "
+    description=("Zhao et al. 2021: two segments held to at most 150 mm each by a central "
+                 "inextensible thread (107 mm at rest), OD 35 mm, silicone E = 15 psi, "
                  "nu = 0.48, 1.07 g/cm^3, 0-0.8 bar, 3 strain gauges per segment."),
-    notes={"chamber_offset_m": "not stated; 9 mm", "chamber_area_m2": "not stated; 50 mm^2",
-           "extra_tip_mass_kg": "10 g end plate / connector per segment assumed"})
+    notes={"thread_length_m": "zhao2021 Section II-A: an inextensible thread at the centre of "
+                              "the end rings limits each segment to 150 mm; the segment shortens "
+                              "freely and cannot lengthen past it",
+           "length_m": "rest length not stated; 107 mm. The paper states the thread's limit "
+                       "(150 mm), not the unpressurised length: Table III's chord sums give "
+                       "segment 1 ~134 mm at (0, 0.5, 0.6) bar with the segment nearly straight, "
+                       "shorter than its thread, so the segment rests shorter and the chambers' "
+                       "end-cap force stretches it (simulated: 128 and 138 mm under Table III's "
+                       "pressures). A 150 mm rest length (thread taut at rest) fits Table III "
+                       "with RMS ~17 mm and cannot shorten to reach the point-to-point end",
+           "axial_stiffening": "0: the thread, not the silicone's stiffening, ends the stretch",
+           "chamber_area_m2": "not stated; 71 mm^2 at rest (bore radius 4.75 mm): with "
+                              "d = 7.1 mm it leaves 2.8 mm walls between bores, 2.35 mm around "
+                              "the thread and 5.6 mm outside; fitted with d and the growth to "
+                              "Table III",
+           "chamber_offset_m": "not stated; 7.1 mm, fitted with chamber_area_m2 (the bending "
+                               "moment goes with A_c d, the axial force with A_c)",
+           "chamber_area_growth": "not stated; 1.1: a bore wrapped in nylon thread (Section II-A) "
+                                  "still bulges between the windings, so its effective area "
+                                  "grows with pressure, to 2.1 A_c (149 mm^2, bore radius 6.9 mm) "
+                                  "at 0.8 bar. Fitted together with A_c and d: it lets full "
+                                  "pressure pull both threads taut while leaving enough "
+                                  "difference between chambers to tilt the tip 45 mm off axis "
+                                  "(Section VI-C's start point (40, 20, 300) mm, ~7 mm short "
+                                  "without it), where a linear bore cannot",
+           "youngs_modulus_pa": "15 psi = 103 kPa (zhao2021 Table I), for bending and axial strain",
+           "bending_stiffening": "1.0 (the fit hardly depends on it: bending strain is small)",
+           "max_extension_ratio": "1.5: only bounds the thread (thread_length_m <= 1.5 length_m); "
+                                  "the thread sets the longest length",
+           "extra_tip_mass_kg": "6 g PLA ring per segment end (zhao2021 Table I: rings and "
+                                "fixator, 1.29 g/cm^3)",
+           "calibration": "Table III pressures (paper order 0, 0.5, 0.6, 0.8, 0.7, 0 bar) held "
+                          "3 s: key points P1..P6 within 1.0, 7.1, 10.1, 8.4, 5.0, 6.6 mm of the "
+                          "paper's (RMS 7.0 mm) (tests/test_zhao2021_arm.py). The paper's "
+                          "segment 1 bends 10 mm sideways in a direction ~70 deg off segment 2's, "
+                          "which no pressure moment plus gravity reproduces (a segment-2 chamber "
+                          "clocking of 30-90 deg fits no better); P2/P3 carry the largest errors",
+           "reach": "Section VI-C's start (40, 20, 300) mm and a 100 mm diameter circle "
+                    "(Section VI-D) at z = 240 mm are reached within 2 mm; its end "
+                    "(-50, 70, 210) mm is not (~23 mm short): with the stretch and bend per "
+                    "pressure that Table III fixes, any pressures that put the tip 86 mm off "
+                    "axis leave the arm ~25 mm too long to hold it at z = 210 mm",
+           "paper_frame": "see ZHAO2021_PAPER_CHAMBERS and paper_point_from_base: the paper's "
+                          "chambers run clockwise where ours run counter-clockwise, segment 2's "
+                          "numbering starts one chamber (120 deg) on, and the paper's axes are "
+                          "ours turned 144.5 deg about z, origin 6 mm above the silicone base"})
+
+ZHAO2021_PAPER_CHAMBERS = (0, 2, 1, 5, 3, 4)
+"""Paper regulator (0-based: zhao2021's chambers 1-6 are 0-5) that drives each of our chambers.
+
+Our chamber ``i`` of a segment sits at ``sigma_i = 2 pi i / 3`` counter-clockwise from +x (seen
+from the base looking along +z, towards the tip). The assignment best reproducing Table III is:
+segment 1 ours (0, 1, 2) = paper (1, 3, 2), segment 2 ours (0, 1, 2) = paper (6, 4, 5), i.e.
+the paper numbers clockwise, and its segment 2 starts one chamber further round than its
+segment 1: turning segment 2's numbering by another 120 deg either way raises the key points'
+RMS error from ~7 mm to 20-25 mm. Two other assignments fit as well as this one with the
+calibrated preset (RMS 7.24, 7.24 and 7.26 mm with the frame angle fitted to each; all leave
+the point-to-point end ~23 mm short): the data cannot tell them apart, and the first is kept."""
+
+ZHAO2021_PAPER_FRAME_DEG = 144.5
+"""The paper's x axis is our x axis turned by this angle about +z (deg), fitted to Table III."""
+
+ZHAO2021_PAPER_ORIGIN_Z_M = 0.006
+"""Our base (the first silicone station) lies this far along the paper's +z below its origin O
+(m): the base ring. The paper's arm is 310 mm long with its rings (zhao2021 Section VI-E) where
+the threads allow 300 mm, so up to 10 mm of rigid ring; 6 mm are put at the base, fitted to
+Table III within that range (Section VI-C's start point (40, 20, 300) mm is 303 mm from O, and
+Section VI-C's disturbed tip (19.8, 10.2, 303.6) mm 304 mm, beyond 300 mm of threads alone)."""
+
+
+def paper_pressures_to_chambers(paper_pa: np.ndarray) -> np.ndarray:
+    """zhao2021's six regulator pressures (its order, Pa) as our chamber pressures (Pa)."""
+    paper = np.asarray(paper_pa, dtype=float)
+    if paper.shape != (6,):
+        raise ValueError(f"paper_pa must have shape (6,), got {paper.shape}")
+    return paper[list(ZHAO2021_PAPER_CHAMBERS)]
+
+
+def paper_point_from_base(point_m: np.ndarray) -> np.ndarray:
+    """A point in our zhao2021 base frame (m) in the paper's key-point frame (m).
+
+    Both z axes run from the base towards the tip (the paper's key points have z = 0 at O and
+    248.5 mm at the tip); the paper's x axis is ours turned by ``ZHAO2021_PAPER_FRAME_DEG`` about
+    z, and its origin lies ``ZHAO2021_PAPER_ORIGIN_Z_M`` before our base along z. Works on
+    ``(..., 3)`` arrays.
+    """
+    angle = np.radians(ZHAO2021_PAPER_FRAME_DEG)
+    c, s = np.cos(angle), np.sin(angle)
+    p = np.asarray(point_m, dtype=float)
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    return np.stack([c * x - s * y, s * x + c * y, z + ZHAO2021_PAPER_ORIGIN_Z_M], axis=-1)
+
+
+def base_point_from_paper(point_m: np.ndarray) -> np.ndarray:
+    """A point in the paper's key-point frame (m) in our zhao2021 base frame (m)."""
+    angle = np.radians(ZHAO2021_PAPER_FRAME_DEG)
+    c, s = np.cos(angle), np.sin(angle)
+    p = np.asarray(point_m, dtype=float)
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    return np.stack([c * x + s * y, -s * x + c * y, z - ZHAO2021_PAPER_ORIGIN_Z_M], axis=-1)
+
 
 _ZOU_SEGMENT = SegmentSpec(
     length_m=0.077, outer_radius_m=0.016, chamber_offset_m=0.010, chamber_area_m2=7.0e-5,

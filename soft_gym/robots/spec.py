@@ -34,9 +34,13 @@ and from any direction (``tests/test_runaway.py``); at eight times its weight a 
 arm under random pressures no longer does. An upright arm folds over under a load on top: the
 upright ho2018 arm stays on its stops under random pressures with 120 g (2.9 times its weight)
 and not with 150 g, so upright arms bear twice their weight. The papers' loads are well inside
-it (zhao2021's 263 g is about its hanging arm's own weight, ho2018's 32 g fluid tip 0.77 of its
-upright arm's)."""
+it (zhao2021's 263 g is 1.4 times its hanging arm's own weight, ho2018's 32 g fluid tip 0.77 of
+its upright arm's)."""
 """How the arm base is mounted: hanging (tip down, the papers' setups), upright, horizontal."""
+
+MAX_CHAMBER_AREA_GROWTH = 4.0
+"""Largest :attr:`SegmentSpec.chamber_area_growth`: a bore up to five times its rest area at
+``p_max``. A wrapped chamber bulging further is past what the quadratic force law describes."""
 
 
 @dataclass(frozen=True)
@@ -58,7 +62,23 @@ class SegmentSpec:
             ``k_b(kappa) = k_b0 (1 + beta_b (kappa R)^2)`` (secant stiffness).
         axial_stiffening: ``beta_a`` in ``k_a(eps) = k_a0 (1 + beta_a eps^2)``.
         axial_modulus_pa: axial modulus if it differs from ``E`` (e.g. a braided PMA bundle).
-        max_extension_ratio: longest allowed link length over rest length (joint limit).
+        max_extension_ratio: longest allowed link length over rest length (joint limit), > 1.
+        thread_length_m: length of an inextensible central thread between the segment's end
+            rings (m), or ``None`` for no thread (zhao2021, Section II-A: the thread holds each
+            segment to at most 150 mm). The thread is slack while the segment is shorter and taut
+            at its length, so the backbone cannot lengthen past it: each link's axial joint stops
+            at ``thread_length_m / n_links`` (a stiff tether,
+            :data:`soft_gym.robots.stops.THREAD_STIFFNESS_FACTOR`), while shortening stays
+            free. Must lie in ``[length_m, length_m * max_extension_ratio]``; equal to
+            ``length_m`` the segment cannot lengthen at all and the chambers' axial force goes into
+            the thread, leaving only their bending moment.
+        chamber_area_growth: dimensionless growth ``g`` of a chamber's pressurised cross-section
+            with its pressure, ``A_c(p) = A_c (1 + g p / p_max)`` (0: a rigid bore). A silicone
+            chamber wrapped in a thread (zhao2021 Section II-A: "Nylon thread was twined around
+            the soft manipulator to limit radial expansion") still bulges between the windings
+            and its bore widens as the walls thin, so its force ``p A_c(p)`` (axial and bending
+            alike, :func:`soft_gym.robots.pneumatics.effective_pressure_pa`) grows faster than
+            linearly with the pressure. In ``[0, 4]``.
         max_bend_per_m_rad: largest curvature allowed by the joint limits (rad/m).
         damping_ratio: damping ratio of the arm's first bending mode. The damping is
             stiffness-proportional, as for a viscoelastic solid: every joint of the segment gets
@@ -83,6 +103,8 @@ class SegmentSpec:
     axial_stiffening: float = 0.0
     axial_modulus_pa: float | None = None
     max_extension_ratio: float = 1.6
+    thread_length_m: float | None = None
+    chamber_area_growth: float = 0.0
     max_bend_per_m_rad: float = 40.0
     damping_ratio: float = 0.7
     torsion: bool = False
@@ -102,6 +124,23 @@ class SegmentSpec:
             raise ValueError(f"n_links must be an integer in [2, 40], got {self.n_links!r}")
         if self.max_extension_ratio <= 1.0 or not np.isfinite(self.max_extension_ratio):
             raise ValueError(f"max_extension_ratio must be > 1, got {self.max_extension_ratio!r}")
+        growth = self.chamber_area_growth
+        if (isinstance(growth, (bool, np.bool_)) or not isinstance(growth, (int, float, np.integer,
+                                                                             np.floating))
+                or not np.isfinite(growth) or not 0.0 <= growth <= MAX_CHAMBER_AREA_GROWTH):
+            raise ValueError(
+                f"chamber_area_growth must be a number in [0, {MAX_CHAMBER_AREA_GROWTH}] (relative "
+                f"growth of the chamber area at p_max), got {growth!r}")
+        if self.thread_length_m is not None:
+            longest = self.length_m * self.max_extension_ratio
+            if (not isinstance(self.thread_length_m, (int, float, np.floating))
+                    or isinstance(self.thread_length_m, bool)
+                    or not np.isfinite(self.thread_length_m)
+                    or not self.length_m <= self.thread_length_m <= longest):
+                raise ValueError(
+                    f"thread_length_m must be None or a length in [length_m={self.length_m}, "
+                    f"length_m * max_extension_ratio={longest:.6g}] m (a thread shorter than the "
+                    f"rest length would compress the body at rest), got {self.thread_length_m!r}")
         if self.chamber_offset_m >= self.outer_radius_m:
             raise ValueError(
                 f"chamber_offset_m must be smaller than outer_radius_m={self.outer_radius_m}, "
@@ -142,6 +181,14 @@ class SegmentSpec:
         """``G J`` with ``J = 2 I`` (N m^2)."""
         shear = self.youngs_modulus_pa / (2.0 * (1.0 + self.poisson_ratio))
         return shear * 2.0 * self.second_moment_m4
+
+    @property
+    def max_length_m(self) -> float:
+        """Longest the backbone can get (m): the thread's length, or else ``length_m`` times
+        ``max_extension_ratio``."""
+        if self.thread_length_m is not None:
+            return float(self.thread_length_m)
+        return self.length_m * self.max_extension_ratio
 
     @property
     def link_length_m(self) -> float:
@@ -263,8 +310,9 @@ class ArmSpec:
 
     @property
     def max_reach_m(self) -> float:
-        """Farthest the tip can be from the base (m): every link at its longest."""
-        return sum(segment.length_m * segment.max_extension_ratio for segment in self.segments)
+        """Farthest the tip can be from the base (m): every link at its longest (a segment's thread,
+        where it has one, :attr:`SegmentSpec.max_length_m`)."""
+        return sum(segment.max_length_m for segment in self.segments)
 
     @property
     def gravity_base(self) -> np.ndarray:
