@@ -102,6 +102,19 @@ def _agents_against_first_gain(table: list[dict], kp: float) -> None:
                 row[column] = 100.0 * improvement(baseline[0][metric], row[metric])
 
 
+def _check_seeds_and_baselines(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``--seeds`` >= 0 and ``--baselines`` known names or ``sb3:PATH``, before any work."""
+    if any(seed < 0 for seed in args.seeds):
+        parser.error(f"--seeds must be >= 0, got {args.seeds}")
+    from agents.policies import BASELINES
+
+    unknown = [name for name in args.baselines
+               if name not in BASELINES and not name.startswith("sb3:")]
+    if unknown:
+        parser.error(f"--baselines must be names from {sorted(BASELINES)} or sb3:PATH, "
+                     f"got {unknown}")
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m eval", description=__doc__,
                                      formatter_class=HelpFormatter)
@@ -200,15 +213,7 @@ def main(argv: list[str] | None = None) -> None:
                                    ("--lead-in-s", args.lead_in_s, 0.0)):
             if value is not None and (not value >= low or value > 3600):
                 parser.error(f"{option} must be within [{low:g}, 3600] s, got {value!r}")
-        if any(seed < 0 for seed in args.seeds):
-            parser.error(f"--seeds must be >= 0, got {args.seeds}")
-        from agents.policies import BASELINES
-
-        unknown = [name for name in args.baselines
-                   if name not in BASELINES and not name.startswith("sb3:")]
-        if unknown:
-            parser.error(f"--baselines must be names from {sorted(BASELINES)} or sb3:PATH, "
-                         f"got {unknown}")
+        _check_seeds_and_baselines(parser, args)
         ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
                                      cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
                                      baselines=tuple(args.baselines))
@@ -221,16 +226,9 @@ def main(argv: list[str] | None = None) -> None:
                          f"{args.samples}")
         if args.iterations < 1:
             parser.error(f"--iterations must be >= 1, got {args.iterations}")
-        if any(seed < 0 for seed in args.seeds):
-            parser.error(f"--seeds must be >= 0, got {args.seeds}")
-        from agents.policies import BASELINES
+        _check_seeds_and_baselines(parser, args)
         from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
 
-        unknown = [name for name in args.baselines
-                   if name not in BASELINES and not name.startswith("sb3:")]
-        if unknown:
-            parser.error(f"--baselines must be names from {sorted(BASELINES)} or sb3:PATH, "
-                         f"got {unknown}")
         config = ReconstructionConfig(n_free=free, n_loaded=loaded,
                                       max_iterations=args.iterations)
         zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,

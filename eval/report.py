@@ -364,7 +364,7 @@ def _new_figure(width_in: float, height_in: float, nrows: int = 1) -> tuple[Figu
     return fig, axes
 
 
-def _save(fig: Figure, path_png: PathLike) -> Path:
+def save_figure(fig: Figure, path_png: PathLike) -> Path:
     """Save a figure as PNG (fixed dpi, no metadata) and release it."""
     out = _prepare(path_png)
     fig.savefig(out, format="png", dpi=_DPI, metadata=_PNG_METADATA, bbox_inches="tight")
@@ -469,7 +469,7 @@ def plot_trajectory(
     ax.set_title(title)
     ax.grid(True, lw=0.4, alpha=0.5)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize="small", frameon=False)
-    return _save(fig, path_png)
+    return save_figure(fig, path_png)
 
 
 def plot_error_time(
@@ -529,7 +529,7 @@ def plot_error_time(
             ax.legend(loc="upper right", fontsize="small")
     axes[-1].set_xlabel(xlabel)
     axes[0].set_title(title)
-    return _save(fig, path_png)
+    return save_figure(fig, path_png)
 
 
 def plot_estimation(
@@ -605,4 +605,4 @@ def plot_estimation(
     ax.grid(True, lw=0.4, alpha=0.5)
     ax.legend(handles, labels, loc="upper left", fontsize="small")
     ax.set_title(title, pad=18 if phases else 6)
-    return _save(fig, path_png)
+    return save_figure(fig, path_png)

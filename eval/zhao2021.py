@@ -289,8 +289,10 @@ def _summary_p2p(run: dict, tolerance_mm: float) -> dict:
 
 
 def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
-            runs=P2P_RUNS, baselines: tuple[str, ...] = ()) -> dict:
-    """Section VI-C-1's runs (and ``baselines`` on the free run)."""
+            runs=P2P_RUNS, baselines: tuple[str, ...] = (),
+            max_steps: int = MAX_P2P_STEPS) -> dict:
+    """Section VI-C-1's runs (and ``baselines`` on the free run), each at most ``max_steps``
+    controller steps."""
     from soft_gym.scenarios.loads import TipMass
 
     goal = p2p_goal_m()
@@ -299,11 +301,11 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
     for label, step_mm, adaptive, load_kg in runs:
         scenario = [TipMass(mass_kg=load_kg)] if load_kg > 0 else []
         start = p2p_start_m(scenario)
-        env = _make_env(sensing, scenario, start, goal, (MAX_P2P_STEPS + 2) * 20)
+        env = _make_env(sensing, scenario, start, goal, (max_steps + 2) * 20)
         try:
             policy = make_policy("local_ik_asdm", env, step_mm=step_mm, adaptive=adaptive,
                                  exploration=_exploration(sensing), seed=seed)
-            run = _drive(env, policy, goal, MAX_P2P_STEPS, seed, f"p2p {label}", progress,
+            run = _drive(env, policy, goal, max_steps, seed, f"p2p {label}", progress,
                          advance_within_mm=policy.tolerance_mm)
         finally:
             env.close()
@@ -311,7 +313,7 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
         results[label] = run
     for baseline in baselines:
         results[baseline] = _baseline_run(baseline, sensing, p2p_start_m(), [goal],
-                                          MAX_P2P_STEPS // 2,
+                                          max_steps // 2,
                                           seed, progress)
     return {"start_mm": (p2p_start_m() * 1000).tolist(), "goal_mm": (goal * 1000).tolist(),
             "paper_goal_mm": (base_point_from_paper(np.array(P2P_END_MM) / 1000) * 1000
@@ -494,17 +496,19 @@ def _xyz(point) -> str:
 
 def plot_control(path: str | Path, results: dict) -> Path:
     """Figs. 11-12-like figure: top-view paths, distance to the goal and ``d`` per step."""
-    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from eval.report import save_figure
 
     runs = dict(results.get("p2p", {}).get("runs", {}))
     if "sway" in results:
         runs["sway and pull"] = results["sway"]
     runs.update({f"circle {k}": v for k, v in results.get("circle", {}).items()})
     runs = {k: v for k, v in runs.items() if "records" in v}
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    fig = Figure(figsize=(15, 4.5))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(1, 3)
     for label, run in runs.items():
         tips = np.array([r["tip_mm"] for r in run["records"]])
         axes[0].plot(tips[:, 0], tips[:, 1], label=label)
@@ -515,11 +519,7 @@ def plot_control(path: str | Path, results: dict) -> Path:
                 title="distance to the (temporary) goal")
     axes[2].set(xlabel="controller step", ylabel="d (mm)", title="step distance")
     axes[0].legend(fontsize=7)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,

@@ -73,3 +73,15 @@ def as_finite_array(name: str, value: Any, shape: tuple[int, ...] | None = None)
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be finite (no NaN or inf), got {array.tolist()}")
     return array
+
+
+def fields_from_options(cls: type, options: Any, what: str) -> dict[str, Any]:
+    """``options`` (a dict of some of the dataclass ``cls``'s fields) checked: a ``ValueError``
+    naming ``what`` and the unknown names where a key is not a field."""
+    if not isinstance(options, dict):
+        raise ValueError(f"{what} options must be a dict, got {options!r}")
+    known = set(cls.__dataclass_fields__)
+    unknown = sorted(set(options) - known)
+    if unknown:
+        raise ValueError(f"{what} options must be among {sorted(known)}, got {unknown}")
+    return dict(options)

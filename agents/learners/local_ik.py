@@ -27,8 +27,6 @@ leaves open, measured on the 6000-sample zhao2021 exploration (200 iterations, l
 
 from __future__ import annotations
 
-import hashlib
-import io
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +35,7 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
+from soft_gym._model_files import read_model_file, write_model_file
 from soft_gym._validation import require_integer, require_positive
 from soft_gym.sensing.sfe_pd import Normaliser
 
@@ -236,32 +235,23 @@ class LocalIKNetwork:
                   "hidden": np.array(state["hidden"]), "p_max_pa": state["p_max_pa"],
                   "input_low": state["input_norm"][0], "input_high": state["input_norm"][1]}
         arrays.update({f"w:{k}": v for k, v in state["weights"].items()})
-        buffer = io.BytesIO()
-        np.savez(buffer, **arrays)
-        payload = buffer.getvalue()
-        Path(path).write_bytes(f"{_FORMAT} {hashlib.sha256(payload).hexdigest()}\n".encode()
-                               + payload)
+        write_model_file(path, _FORMAT, arrays)
 
     @classmethod
     def load(cls, path: str | Path) -> "LocalIKNetwork":
         """Read a file written by :meth:`save`; a corrupt or foreign file is refused by name."""
-        path = Path(path)
+        arrays = read_model_file(path, _FORMAT, "local-IK network")
         try:
-            header, payload = path.read_bytes().split(b"\n", 1)
-            name, digest = header.decode().rsplit(" ", 1)
-            if name != _FORMAT or hashlib.sha256(payload).hexdigest() != digest:
-                raise ValueError("header or digest mismatch")
-            with np.load(io.BytesIO(payload), allow_pickle=False) as arrays:
-                meta = arrays["meta"].astype(int)
-                state = {"n_chambers": int(meta[0]), "n_gauges": int(meta[1]),
-                         "seed": int(meta[2]), "skip": bool(meta[3]),
-                         "hidden": arrays["hidden"].astype(int).tolist(),
-                         "p_max_pa": arrays["p_max_pa"],
-                         "input_norm": (arrays["input_low"], arrays["input_high"]),
-                         "weights": {k[2:]: arrays[k] for k in arrays.files
-                                     if k.startswith("w:")}}
+            meta = arrays["meta"].astype(int)
+            state = {"n_chambers": int(meta[0]), "n_gauges": int(meta[1]),
+                     "seed": int(meta[2]), "skip": bool(meta[3]),
+                     "hidden": arrays["hidden"].astype(int).tolist(),
+                     "p_max_pa": arrays["p_max_pa"],
+                     "input_norm": (arrays["input_low"], arrays["input_high"]),
+                     "weights": {k[2:]: arrays[k] for k in arrays
+                                 if k.startswith("w:")}}
             return cls.from_state(state)
-        except (OSError, ValueError, KeyError, UnicodeDecodeError, RuntimeError) as error:
+        except (ValueError, KeyError, IndexError, RuntimeError) as error:
             raise ValueError(f"{str(path)!r} is not a readable local-IK network file "
                              f"({error})") from None
 

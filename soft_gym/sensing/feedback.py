@@ -26,7 +26,7 @@ in :mod:`soft_gym.sensing.zou_feedback`.
 from __future__ import annotations
 
 import copy
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 

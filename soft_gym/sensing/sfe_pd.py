@@ -28,8 +28,6 @@ once that RMSE is below the target.
 
 from __future__ import annotations
 
-import hashlib
-import io
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,6 +37,7 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
+from soft_gym._model_files import read_model_file, write_model_file
 from soft_gym._validation import require_integer, require_positive
 
 WINDOW = 5
@@ -310,33 +309,23 @@ class SFEPDPredictor:
                   "input_low": state["input_norm"][0], "input_high": state["input_norm"][1],
                   "output_low": state["output_norm"][0], "output_high": state["output_norm"][1]}
         arrays.update({f"w:{k}": v for k, v in state["weights"].items()})
-        buffer = io.BytesIO()
-        np.savez(buffer, **arrays)
-        payload = buffer.getvalue()
-        header = f"{_FORMAT} {hashlib.sha256(payload).hexdigest()}\n".encode()
-        Path(path).write_bytes(header + payload)
+        write_model_file(path, _FORMAT, arrays)
 
     @classmethod
     def load(cls, path: str | Path) -> "SFEPDPredictor":
         """Read a file written by :meth:`save`; a corrupt or foreign file is refused by name."""
-        path = Path(path)
+        arrays = read_model_file(path, _FORMAT, "SFE-PD model")
         try:
-            raw = path.read_bytes()
-            header, payload = raw.split(b"\n", 1)
-            name, digest = header.decode().rsplit(" ", 1)
-            if name != _FORMAT or hashlib.sha256(payload).hexdigest() != digest:
-                raise ValueError("header or digest mismatch")
-            with np.load(io.BytesIO(payload), allow_pickle=False) as arrays:
-                meta = arrays["meta"].astype(int)
-                state = {"n_key_points": int(meta[0]), "n_chambers": int(meta[1]),
-                         "n_gauges": int(meta[2]), "window": int(meta[3]), "seed": int(meta[4]),
-                         "hidden": int(meta[5]), "dropout": float(arrays["dropout"]),
-                         "input_norm": (arrays["input_low"], arrays["input_high"]),
-                         "output_norm": (arrays["output_low"], arrays["output_high"]),
-                         "weights": {k[2:]: arrays[k] for k in arrays.files
-                                     if k.startswith("w:")}}
+            meta = arrays["meta"].astype(int)
+            state = {"n_key_points": int(meta[0]), "n_chambers": int(meta[1]),
+                     "n_gauges": int(meta[2]), "window": int(meta[3]), "seed": int(meta[4]),
+                     "hidden": int(meta[5]), "dropout": float(arrays["dropout"]),
+                     "input_norm": (arrays["input_low"], arrays["input_high"]),
+                     "output_norm": (arrays["output_low"], arrays["output_high"]),
+                     "weights": {k[2:]: arrays[k] for k in arrays
+                                 if k.startswith("w:")}}
             return cls.from_state(state)
-        except (OSError, ValueError, KeyError, UnicodeDecodeError, RuntimeError) as error:
+        except (ValueError, KeyError, IndexError, RuntimeError) as error:
             raise ValueError(f"{str(path)!r} is not a readable SFE-PD model file ({error})") \
                 from None
 

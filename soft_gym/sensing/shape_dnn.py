@@ -35,8 +35,6 @@ calibration cache (:mod:`soft_gym.sensing.calibration_cache`) under their recipe
 from __future__ import annotations
 
 import copy
-import hashlib
-import io
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -44,8 +42,9 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from soft_gym._validation import require_in_range, require_integer, require_non_negative, \
-    require_positive
+from soft_gym._model_files import read_model_file, write_model_file
+from soft_gym._validation import (fields_from_options, require_in_range, require_integer,
+                                  require_non_negative, require_positive)
 from soft_gym.robots.spec import ArmSpec
 
 PAPER_SAMPLES = 31 ** 3
@@ -120,11 +119,7 @@ class ShapeDNNConfig:
     @classmethod
     def from_options(cls, options: dict[str, Any]) -> "ShapeDNNConfig":
         """From a dict of some of the fields; an unknown name is refused by name."""
-        known = set(cls.__dataclass_fields__)
-        unknown = sorted(set(options) - known)
-        if unknown:
-            raise ValueError(f"shape-DNN options must be among {sorted(known)}, got {unknown}")
-        return cls(**options)
+        return cls(**fields_from_options(cls, options, "shape-DNN"))
 
     def dataset_recipe(self) -> dict[str, Any]:
         """The fields that change the data set (a cache key)."""
@@ -509,33 +504,23 @@ class ShapeDNN:
                   "output_mean": state["output_mean"],
                   "output_scale": np.array(state["output_scale"])}
         arrays.update({f"w:{k}": v for k, v in state["weights"].items()})
-        buffer = io.BytesIO()
-        np.savez(buffer, **arrays)
-        payload = buffer.getvalue()
-        header = f"{_FORMAT} {hashlib.sha256(payload).hexdigest()}\n".encode()
-        Path(path).write_bytes(header + payload)
+        write_model_file(path, _FORMAT, arrays)
 
     @classmethod
     def load(cls, path: str | Path) -> "ShapeDNN":
         """Read a file written by :meth:`save`; a corrupt or foreign file is refused by name."""
-        path = Path(path)
+        arrays = read_model_file(path, _FORMAT, "zou2022 shape-DNN")
         try:
-            raw = path.read_bytes()
-            header, payload = raw.split(b"\n", 1)
-            name, digest = header.decode().rsplit(" ", 1)
-            if name != _FORMAT or hashlib.sha256(payload).hexdigest() != digest:
-                raise ValueError("header or digest mismatch")
-            with np.load(io.BytesIO(payload), allow_pickle=False) as arrays:
-                meta = arrays["meta"].astype(int)
-                state = {"n_inputs": int(meta[0]), "seed": int(meta[1]),
-                         "hidden_widths": tuple(int(w) for w in meta[2:]),
-                         "input_mean": arrays["input_mean"], "input_scale": arrays["input_scale"],
-                         "output_mean": arrays["output_mean"],
-                         "output_scale": float(arrays["output_scale"]),
-                         "weights": {k[2:]: arrays[k] for k in arrays.files
-                                     if k.startswith("w:")}}
+            meta = arrays["meta"].astype(int)
+            state = {"n_inputs": int(meta[0]), "seed": int(meta[1]),
+                     "hidden_widths": tuple(int(w) for w in meta[2:]),
+                     "input_mean": arrays["input_mean"], "input_scale": arrays["input_scale"],
+                     "output_mean": arrays["output_mean"],
+                     "output_scale": float(arrays["output_scale"]),
+                     "weights": {k[2:]: arrays[k] for k in arrays
+                                 if k.startswith("w:")}}
             return cls.from_state(state)
-        except (OSError, ValueError, KeyError, UnicodeDecodeError, RuntimeError) as error:
+        except (ValueError, KeyError, IndexError, RuntimeError) as error:
             raise ValueError(f"{str(path)!r} is not a readable zou2022 shape-DNN file ({error})") \
                 from None
 

@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from soft_gym._validation import require_integer, require_non_negative, require_positive
+from soft_gym._validation import (fields_from_options, require_integer, require_non_negative,
+                                  require_positive)
 from soft_gym.robots.spec import ArmSpec
 
 
@@ -73,12 +74,7 @@ class ReconstructionConfig:
     @classmethod
     def from_options(cls, options: dict[str, Any]) -> "ReconstructionConfig":
         """From a dict of some of the fields; an unknown name is refused by name."""
-        known = set(cls.__dataclass_fields__)
-        unknown = sorted(set(options) - known)
-        if unknown:
-            raise ValueError(f"shape-reconstruction options must be among {sorted(known)}, "
-                             f"got {unknown}")
-        return cls(**options)
+        return cls(**fields_from_options(cls, options, "shape-reconstruction"))
 
 
 @dataclass

@@ -64,8 +64,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from soft_gym._validation import as_finite_array, require_in_range, require_integer, \
-    require_positive
+from soft_gym._validation import (as_finite_array, fields_from_options, require_in_range,
+                                  require_integer, require_positive)
 
 N_POINTS = 7
 """``b`` of Table 1: centre points per image, and points ``P_0 .. P_6`` of the backbone."""
@@ -143,12 +143,8 @@ class ASESConfig:
     @classmethod
     def from_options(cls, options: dict[str, Any]) -> "ASESConfig":
         """From a dict of some of the fields; an unknown name is refused by name."""
-        known = set(cls.__dataclass_fields__)
-        unknown = sorted(set(options) - known)
-        if unknown:
-            raise ValueError(f"ASES options must be among {sorted(known)}, got {unknown}")
         values = {k: tuple(v) if k in ("hsv_low", "hsv_high") and isinstance(v, list) else v
-                  for k, v in options.items()}
+                  for k, v in fields_from_options(cls, options, "ASES").items()}
         return cls(**values)
 
     def describe(self) -> dict[str, Any]:
