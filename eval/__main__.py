@@ -17,7 +17,10 @@ visual faults and a feedback source, several gains and seeds; a Markdown table w
 max, per cycle and the improvement over ``cc_model``, per-step CSVs and plots.
 
 Every command ends by printing the output directory it wrote to (``--out``); its JSON summary
-records the soft-arm-gym version that made it (``soft_arm_gym_version``).
+records the soft-arm-gym version that made it (``soft_arm_gym_version``). ``--video`` (``track``,
+``benchmark``, ``compare``, ``estimation``) also writes an MP4 of each run next to its CSV (a GIF
+where ffmpeg is absent): the scene with the target, path, loads, true tip and estimate, and the
+camera sensors' frames beside it, one frame per control step (see ``eval/video.py``).
 """
 
 from __future__ import annotations
@@ -52,16 +55,17 @@ def _track(args: argparse.Namespace) -> None:
     runs = [(kp, seed, policy) for kp, seed, policy in itertools.product(args.kp, args.seeds,
                                                                           args.policies)
             if not (policy.startswith("sb3:") and kp != args.kp[0])]
+    video = getattr(args, "video", False)
     configs = [RunConfig(
         policy=policy, policy_params={} if policy.startswith("sb3:") else {"kp": kp}, seed=seed,
         env_kwargs={"preset": args.preset, "path": args.path, "cycles": args.cycles,
-                    "scenario": scenario, "faults": faults, "feedback": args.feedback})
+                    "scenario": scenario, "faults": faults, "feedback": args.feedback},
+        video_path=str(out / f"{_track_label(policy, kp, seed)}.mp4") if video else None)
         for kp, seed, policy in runs]
     print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
     records_in_order = run_many(configs, workers=args.workers, progress=True)
     for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
-        gain = "" if policy.startswith("sb3:") else f"_kp{kp}"
-        label = f"{compare_module.policy_label(policy)}{gain}_seed{seed}"
+        label = _track_label(policy, kp, seed)
         records[label] = record
         write_records_csv(out / f"{label}.csv", record)
         plot_trajectory(out / f"{label}_trajectory.png", record, label)
@@ -84,6 +88,18 @@ def _track(args: argparse.Namespace) -> None:
     text = markdown_table(table, columns=[c for c in columns if c in table[0]])
     (out / "track.md").write_text(text + "\n")
     print(text)
+
+
+def _track_label(policy: str, kp: float, seed: int) -> str:
+    """File stem of one track run's CSV, plots and video."""
+    gain = "" if policy.startswith("sb3:") else f"_kp{kp}"
+    return f"{compare_module.policy_label(policy)}{gain}_seed{seed}"
+
+
+def _add_video_flag(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--video", action="store_true",
+                        help="also write an MP4 of each run next to its CSV (a GIF without "
+                             "ffmpeg)")
 
 
 def _agents_against_first_gain(table: list[dict], kp: float) -> None:
@@ -124,6 +140,7 @@ def main(argv: list[str] | None = None) -> None:
     benchmark.add_argument("--out", default="results/benchmark", help="output directory")
     benchmark.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
                            help="runs in parallel processes (up to 2, one per core)")
+    _add_video_flag(benchmark)
     estimation = sub.add_parser("estimation", help="wang2023 estimation experiments",
                                 description=estimation_module.__doc__,
                                 formatter_class=HelpFormatter)
@@ -134,6 +151,7 @@ def main(argv: list[str] | None = None) -> None:
                             help="control steps of 0.05 s per run (paper: ~4000)")
     estimation.add_argument("--seed", type=int, default=0, help="episode seed")
     estimation.add_argument("--out", default="results/estimation", help="output directory")
+    _add_video_flag(estimation)
     track = sub.add_parser("track", help="baselines tracking a path",
                            formatter_class=HelpFormatter)
     track.add_argument("--policies", nargs="+", default=["cc_model", "hybrid_gpr"],
@@ -153,6 +171,7 @@ def main(argv: list[str] | None = None) -> None:
     track.add_argument("--out", default="results/track", help="output directory")
     track.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
                        help="runs in parallel processes (up to 2, one per core)")
+    _add_video_flag(track)
     from eval import ho2018 as ho2018_module
 
     ho2018 = sub.add_parser("ho2018", help="ho2018 static and varying tip-load experiments",
@@ -207,6 +226,7 @@ def main(argv: list[str] | None = None) -> None:
     compare.add_argument("--out", default="results/compare", help="output directory")
     compare.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
                          help="runs in parallel processes (up to 2, one per core)")
+    _add_video_flag(compare)
     args = parser.parse_args(argv)
     if args.command == "ho2018":
         for option, value, low in (("--cycle-s", args.cycle_s, 5.0),
@@ -245,7 +265,8 @@ def main(argv: list[str] | None = None) -> None:
                          f"camera, got {args.feedback!r}")
         rows = compare_module.run_comparison(
             policies, args.paths, args.conditions, args.seeds, args.out, cycles=args.cycles,
-            feedback=args.feedback, kp=args.kp, workers=args.workers)
+            feedback=args.feedback, kp=args.kp, workers=args.workers,
+            **({"video": True} if args.video else {}))
         from eval.report import markdown_table
 
         print(markdown_table(rows, float_format="{:.2f}"))
@@ -260,14 +281,16 @@ def main(argv: list[str] | None = None) -> None:
             policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in shipped_agents()],
             kp=[0.06], preset="wang2023", path="circle",
             cycles=3, feedback="fused", scenario=json.dumps({"name": "tip_mass", "mass_kg": 0.01}),
-            faults=json.dumps(occluder), seeds=[0], out=args.out, workers=args.workers)
+            faults=json.dumps(occluder), seeds=[0], out=args.out, workers=args.workers,
+            video=args.video)
         _track(args)
     elif args.command == "estimation":
         if args.steps < 600:
             parser.error(f"--steps must be >= 600 (the F-emp calibration alone takes 450), "
                          f"got {args.steps}")
         experiments = list(EXPERIMENTS) if "all" in args.experiments else args.experiments
-        rows = run_experiments(experiments, args.out, steps=args.steps, seed=args.seed)
+        rows = run_experiments(experiments, args.out, steps=args.steps, seed=args.seed,
+                               **({"video": True} if args.video else {}))
         from eval.report import markdown_table
 
         print(markdown_table(rows, float_format="{:.2f}"))

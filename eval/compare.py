@@ -13,7 +13,8 @@ condition for every seed, with the same feedback source. The conditions:
 Outputs: ``compare.md`` (seed mean +- std of the tracking error over all cycles and over the last
 cycle, path deviation, max, and the improvement over ``cc_model``), ``compare.csv`` /
 ``compare.json`` (every run, with the soft-arm-gym version), ``compare_<path>.png`` (bars per
-condition), and error-against-time plots of the first seed.
+condition), and error-against-time plots of the first seed. With ``video=True`` every run also
+writes ``runs/<policy>_<path>_<condition>_seed<seed>.mp4`` next to its CSV (:mod:`eval.video`).
 """
 
 from __future__ import annotations
@@ -41,8 +42,10 @@ def policy_label(policy: str) -> str:
 def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Sequence[str],
                    seeds: Sequence[int], out: str | Path, cycles: int = 2,
                    feedback: str = "fused", kp: float = 0.06, preset: str = "wang2023",
-                   progress: bool = True, workers: int = 1) -> list[dict[str, Any]]:
-    """Run the comparison grid and write its outputs; returns the seed-aggregated rows."""
+                   progress: bool = True, workers: int = 1,
+                   video: bool = False) -> list[dict[str, Any]]:
+    """Run the comparison grid and write its outputs; returns the seed-aggregated rows
+    (``video``: a video of every run beside its CSV)."""
     from eval.metrics import add_improvement, aggregate_seeds, summarize, summary_table
     from eval.report import (markdown_table, plot_error_time, with_mean_std, write_records_csv,
                              write_results_json)
@@ -60,12 +63,15 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
     configs = [RunConfig(
         policy=policy, policy_params={} if policy.startswith("sb3:") else {"kp": kp}, seed=seed,
         env_kwargs={"preset": preset, "path": path, "cycles": cycles, "feedback": feedback,
-                    **CONDITIONS[condition]}) for path, condition, seed, policy in grid]
+                    **CONDITIONS[condition]},
+        video_path=str(out / "runs" / f"{_run_name(policy, path, condition, seed)}.mp4")
+        if video else None) for path, condition, seed, policy in grid]
     print(f"{len(configs)} runs on {workers} worker(s)", flush=True)
     records = run_many(configs, workers=workers, progress=progress)
     for (path, condition, seed, policy), record in zip(grid, records):
         label = policy_label(policy)
-        write_records_csv(out / "runs" / f"{label}_{path}_{condition}_seed{seed}.csv", record)
+        write_records_csv(out / "runs" / f"{_run_name(policy, path, condition, seed)}.csv",
+                          record)
         summary = summarize(record)
         identity = {"policy": label, "path": path, "condition": condition, "seed": seed}
         rows.append((identity, summary))
@@ -103,6 +109,11 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
         f"# {preset}: agents against baselines ({feedback} feedback, {cycles} cycles, "
         f"seeds {list(seeds)})\n\n" + text)
     return shown
+
+
+def _run_name(policy: str, path: str, condition: str, seed: int) -> str:
+    """File stem of one run's CSV (and video)."""
+    return f"{policy_label(policy)}_{path}_{condition}_seed{seed}"
 
 
 def _write_csv(path: Path, rows: list[dict]) -> None:

@@ -21,9 +21,10 @@ For `init`, each run explores 1800 steps and F-emp is labelled by the last 450 /
 them, and F-emp does not guide the vision tracker, so the three share the same camera estimates
 and differ only in F-emp's initialisation.
 
-Each run writes a per-step CSV and an error-vs-time PNG; the Markdown table lists mean, max, std
-and RMSE (mm) of each estimator per phase; ``estimation.json`` holds the same rows with the
-soft-arm-gym version that made them.
+Each run writes a per-step CSV and an error-vs-time PNG (and with ``video=True`` an MP4 of the
+scene beside the faulted eye-in-hand frame with the estimates and ``e_S`` written on it,
+:mod:`eval.video`); the Markdown table lists mean, max, std and RMSE (mm) of each estimator per
+phase; ``estimation.json`` holds the same rows with the soft-arm-gym version that made them.
 """
 
 from __future__ import annotations
@@ -106,8 +107,10 @@ def _sensing(experiment: str, n_init: int) -> dict:
 
 
 def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: int = 0,
-                   progress: bool = True) -> dict[str, np.ndarray]:
-    """One estimation run; returns the per-step record (see :mod:`eval.runner`)."""
+                   progress: bool = True,
+                   video_path: str | Path | None = None) -> dict[str, np.ndarray]:
+    """One estimation run; returns the per-step record (see :mod:`eval.runner`). With
+    ``video_path``, also writes its video there (one frame after reset and one per step)."""
     if experiment not in EXPERIMENTS:
         raise ValueError(f"experiment must be one of {list(EXPERIMENTS)}, got {experiment!r}")
     duration_s = steps * 0.05
@@ -117,7 +120,16 @@ def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: 
     unwrapped = env.unwrapped
     spec = unwrapped.spec_arm
     actuation = Actuation.of_env(env)
+    video = None
+    if video_path is not None:
+        from eval.video import VideoWriter
+        from soft_gym.envs.rendering import default_panels, render_frame
+
+        panels = default_panels(env)
+        video = VideoWriter(video_path, unwrapped.metadata["render_fps"])
     env.reset(seed=seed)
+    if video is not None:
+        video.append(render_frame(env, panels))
     columns: dict[str, list] = {key: [] for key in (
         "time_s", "tip_m", "target_m", "camera_m", "femp_m", "fused_m", "reprojection_error_px",
         "lost", "femp_weight", "femp_updated")}
@@ -134,6 +146,10 @@ def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: 
         columns["lost"].append(float(estimates["lost"]))
         columns["femp_weight"].append(estimates["femp_weight"])
         columns["femp_updated"].append(float(estimates["femp_updated"]))
+        if video is not None:
+            video.append(render_frame(env, panels))
+    if video is not None:
+        video.close()
     env.close()
     return {key: np.asarray(value, dtype=float) for key, value in columns.items()}
 
@@ -158,8 +174,9 @@ def fusion_weights(record: dict[str, np.ndarray], start_s: float = 0.0,
 
 
 def run_experiments(experiments: list[str], out_dir: str | Path, steps: int = 4000,
-                    seed: int = 0, progress: bool = True) -> list[dict]:
-    """Run experiments, write CSV / PNG per run and a Markdown + JSON summary; return rows."""
+                    seed: int = 0, progress: bool = True, video: bool = False) -> list[dict]:
+    """Run experiments, write CSV / PNG (and with ``video`` an MP4) per run and a Markdown +
+    JSON summary; return rows."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rows = []
@@ -167,8 +184,9 @@ def run_experiments(experiments: list[str], out_dir: str | Path, steps: int = 40
         inits = INIT_SAMPLES if experiment == "init" else (450,)
         for n_init in inits:
             name = experiment if experiment != "init" else f"init{n_init}"
+            filming = {"video_path": out / f"{name}.mp4"} if video else {}
             record = run_estimation(experiment, steps=steps, n_init=n_init, seed=seed,
-                                    progress=progress)
+                                    progress=progress, **filming)
             phases = _phases(experiment, steps * 0.05)
             errors = estimation_errors(record, phases=phases)
             write_records_csv(out / f"{name}.csv", record)

@@ -5,12 +5,18 @@ it): ``time_s``, ``target_m``, ``tip_m`` (ground truth), ``feedback_m`` (the pos
 ``action``, ``pressure_pa``, ``cycle`` and, for tracking tasks, ``polyline_m``; plus the sensing
 pipeline's estimates (``camera_m``, ``femp_m``, ``fused_m``, ``em_m``,
 ``reprojection_error_px``) when the env provides them in ``info["estimates"]``.
+
+With a video path (``RunConfig.video_path``, ``run_episode(video_path=...)``) the run also writes
+a video (:mod:`eval.video`) of :func:`soft_gym.envs.rendering.render_frame` frames: one after
+``reset`` and one after every step, at the env's ``render_fps``. Rendering only reads the
+simulation, so the record is the same with and without a video.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from pathlib import Path
+from typing import Any, Sequence
 
 import gymnasium as gym
 import numpy as np
@@ -33,6 +39,10 @@ class RunConfig:
             faults, feedback, ...).
         seed: episode seed.
         labels: extra labels for tables (defaults are derived from the fields above).
+        video_path: write a video of the run there (``.mp4``; ``.gif`` without ffmpeg);
+            ``None``: no frames are rendered.
+        video_panels: panels of each frame (:func:`soft_gym.envs.rendering.render_frame`);
+            ``None``: the scene, and the camera sensors beside it when the env has any.
     """
 
     policy: str
@@ -41,6 +51,8 @@ class RunConfig:
     env_id: str = "SoftArmTrack-v0"
     seed: int = 0
     labels: dict = field(default_factory=dict)
+    video_path: str | None = None
+    video_panels: tuple[str, ...] | None = None
 
     def identity(self) -> dict[str, Any]:
         """Labels naming this run in tables."""
@@ -67,11 +79,17 @@ def _describe(value: Any) -> str:
 
 
 def run_episode(env: gym.Env, policy: BaselinePolicy, seed: int = 0, learn: bool = True,
-                progress: bool = False, description: str = "") -> dict[str, np.ndarray]:
-    """Run one episode of ``policy`` on ``env`` (online learners update every step)."""
+                progress: bool = False, description: str = "",
+                video_path: str | Path | None = None,
+                video_panels: Sequence[str] | None = None) -> dict[str, np.ndarray]:
+    """Run one episode of ``policy`` on ``env`` (online learners update every step); with
+    ``video_path``, write its video there (see the module docstring)."""
     unwrapped = env.unwrapped
+    video = None if video_path is None else _EpisodeVideo(env, video_path, video_panels)
     observation, info = env.reset(seed=seed)
     policy.reset()
+    if video is not None:
+        video.capture()
     columns: dict[str, list] = {key: [] for key in (
         "time_s", "target_m", "tip_m", "feedback_m", "action", "pressure_pa", "error_mm")}
     estimates: dict[str, list] = {}
@@ -97,8 +115,12 @@ def run_episode(env: gym.Env, policy: BaselinePolicy, seed: int = 0, learn: bool
             estimates.setdefault(key, []).append(value)
         observation = next_observation
         done = terminated or truncated
+        if video is not None:
+            video.capture()
         bar.update(1)
     bar.close()
+    if video is not None:
+        video.close()
     record = {key: np.asarray(value, dtype=float) for key, value in columns.items()}
     steps = len(record["time_s"])
     cycles = getattr(getattr(task, "path_spec", None), "cycles", 1)
@@ -108,8 +130,31 @@ def run_episode(env: gym.Env, policy: BaselinePolicy, seed: int = 0, learn: bool
     else:
         record["cycle"] = np.zeros(steps, dtype=int)
     for key, values in estimates.items():
-        record[key] = np.asarray(values, dtype=float)
+        try:
+            record[key] = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):  # not numbers per step (zou2022's SOM nodes, reasons)
+            continue
     return record
+
+
+class _EpisodeVideo:
+    """Frames of one episode streamed into a video file."""
+
+    def __init__(self, env: gym.Env, path: str | Path, panels: Sequence[str] | None) -> None:
+        from eval.video import VideoWriter
+        from soft_gym.envs.rendering import check_panels, default_panels
+
+        self.env = env
+        self.panels = default_panels(env) if panels is None else check_panels(env, panels)
+        self.writer = VideoWriter(path, env.unwrapped.metadata["render_fps"])
+
+    def capture(self) -> None:
+        from soft_gym.envs.rendering import render_frame
+
+        self.writer.append(render_frame(self.env, self.panels))
+
+    def close(self) -> Path:
+        return self.writer.close()
 
 
 def build(config: RunConfig) -> tuple[gym.Env, BaselinePolicy]:
@@ -132,7 +177,8 @@ def run(config: RunConfig, progress: bool = False) -> dict[str, np.ndarray]:
     env, policy = build(config)
     try:
         return run_episode(env, policy, seed=config.seed, progress=progress,
-                           description=f"{config.policy} seed {config.seed}")
+                           description=f"{config.policy} seed {config.seed}",
+                           video_path=config.video_path, video_panels=config.video_panels)
     finally:
         env.close()
 

@@ -120,3 +120,91 @@ def test_record_video_works_on_every_id(tmp_path):
         env.close()
         videos = list(folder.glob("*.mp4"))
         assert videos and videos[0].stat().st_size > 0, env_id
+
+
+# ---------------------------------------------------------------------- sensor panels
+def test_camera_panel_sits_beside_the_scene_and_shows_the_faulted_frame():
+    """``render_frame(env, ("scene", "camera"))``: the scene view unchanged on the left, the
+    eye-in-hand frame scaled to its height on the right; complete darkness makes that panel dark
+    and leaves the scene as it was."""
+    from soft_gym.envs.rendering import render_frame
+
+    frames = {}
+    for faults in (None, {"name": "low_light", "strength": 1.0}):
+        env = _env("wang2023", render_size=SIZE, sensors=("image",), faults=faults)
+        env.reset(seed=0)
+        env.step(np.zeros(env.action_space.shape, np.float32))
+        frame = render_frame(env, ("scene", "camera"))
+        camera = env.unwrapped._measurement["image"]
+        width = SIZE[0] + round(camera.shape[1] * SIZE[1] / camera.shape[0])
+        assert frame.shape == (SIZE[1], width, 3) and frame.dtype == np.uint8
+        np.testing.assert_array_equal(frame[:, :SIZE[0]], env.render())
+        assert render_frame(env, ("scene",)).shape == (SIZE[1], SIZE[0], 3)
+        frames[faults is None] = frame
+        env.close()
+    np.testing.assert_array_equal(frames[True][:, :SIZE[0]], frames[False][:, :SIZE[0]])
+    # the middle rows, between the text bands
+    rows = slice(SIZE[1] // 4, SIZE[1] // 2)
+    clear = frames[True][rows, SIZE[0]:].mean()
+    dark = frames[False][rows, SIZE[0]:].mean()
+    assert clear > 80 and dark < 15, (clear, dark)
+
+
+def test_stereo_panel_shows_both_images_and_the_som_centreline():
+    """A stereo env gets the left and right images beside the scene, each at the scene's height,
+    with the SOM nodes that zou2022's shape estimator found drawn on them."""
+    from soft_gym.envs.rendering import ESTIMATE, render_frame
+
+    env = _env("zou2022", render_size=SIZE, feedback="stereo")
+    env.reset(seed=0)
+    env.step(np.zeros(env.action_space.shape, np.float32))
+    unwrapped = env.unwrapped
+    reading = unwrapped._measurement["stereo"]
+    side = round(reading["left"].shape[1] * SIZE[1] / reading["left"].shape[0])
+    frame = render_frame(env)
+    assert frame.shape == (SIZE[1], SIZE[0] + 2 * side, 3)
+    som = unwrapped._estimate.details["som_px"]
+    factor = SIZE[1] / reading["left"].shape[0]
+    for k, name in enumerate(("left", "right")):
+        panel = frame[:, SIZE[0] + k * side:SIZE[0] + (k + 1) * side]
+        node = np.round((som[name][len(som[name]) // 2] + 0.5) * factor - 0.5).astype(int)
+        assert np.array_equal(panel[node[1], node[0]], ESTIMATE), name
+    env.close()
+
+
+def test_panels_work_without_render_mode_and_refuse_what_is_not_there():
+    """An env made without ``render_mode`` still gives the same scene view; unknown panels and a
+    camera panel on an env without a camera sensor raise ``ValueError``."""
+    from soft_gym.envs.rendering import default_panels, render_frame
+
+    plain = gym.make("SoftArmReach-v0", feedback="ground_truth", render_size=SIZE)
+    rendering = _env("wang2023", render_size=SIZE)
+    for env in (plain, rendering):
+        env.reset(seed=4)
+        env.step(np.full(env.action_space.shape, 0.5, np.float32))
+    assert default_panels(plain) == ("scene",)
+    np.testing.assert_array_equal(render_frame(plain, ("scene",)), rendering.render())
+    with pytest.raises(ValueError, match="camera"):
+        render_frame(plain, ("scene", "camera"))
+    for panels in (("scene", "thermal"), (), "scene", ("scene", "scene")):
+        with pytest.raises(ValueError, match="panels"):
+            render_frame(plain, panels)
+    plain.close()
+    rendering.close()
+
+
+def test_hidden_bodies_are_restored_and_the_camera_sees_the_same():
+    """The scene view hides the camera's scenery only for its own render: the eye-in-hand frame
+    is the same before and after it, and so are the bodies' colours."""
+    env = _env("wang2023", render_size=SIZE, sensors=("image",))
+    env.reset(seed=0)
+    unwrapped = env.unwrapped
+    client = unwrapped.sim.client
+    bodies = [client.getBodyUniqueId(i) for i in range(client.getNumBodies())]
+    colours = [[shape[7] for shape in client.getVisualShapeData(body)] for body in bodies]
+    camera = unwrapped.sensors["image"]
+    before = camera.sample(unwrapped.sim)
+    env.render()
+    assert [[shape[7] for shape in client.getVisualShapeData(body)] for body in bodies] == colours
+    np.testing.assert_array_equal(camera.sample(unwrapped.sim), before)
+    env.close()
