@@ -38,6 +38,20 @@ from soft_gym.envs import SoftArmEnv
 from soft_gym.robots import PRESETS
 
 
+def _time_side_by_side(env, frames: int, seed: int, first, second) -> tuple[float, float]:
+    """Mean ms per call of ``first()`` and ``second()``, both called after each of ``frames``
+    random env steps."""
+    rng = np.random.default_rng(seed)
+    totals = [0.0, 0.0]
+    for _ in range(frames):
+        env.step(rng.uniform(-1, 1, env.action_space.shape).astype(np.float32))
+        for k, draw in enumerate((first, second)):
+            start = time.perf_counter()
+            draw()
+            totals[k] += time.perf_counter() - start
+    return totals[0] / frames * 1e3, totals[1] / frames * 1e3
+
+
 def time_preset(preset: str, frames: int, size: tuple[int, int], seed: int) -> dict[str, float]:
     """Mean wall time per frame (ms) with and without overlays, and of the first frame."""
     env = SoftArmEnv(preset=preset, render_mode="rgb_array", feedback="ground_truth",
@@ -47,18 +61,9 @@ def time_preset(preset: str, frames: int, size: tuple[int, int], seed: int) -> d
     env.render()
     first_ms = (time.perf_counter() - start) * 1e3
     bare = env.make_renderer(overlays=False)
-    rng = np.random.default_rng(seed)
-    overlay_s = scene_s = 0.0
-    for _ in range(frames):
-        env.step(rng.uniform(-1, 1, env.action_space.shape).astype(np.float32))
-        start = time.perf_counter()
-        env.render()
-        overlay_s += time.perf_counter() - start
-        start = time.perf_counter()
-        bare.render(env.sim)
-        scene_s += time.perf_counter() - start
+    overlay_ms, scene_ms = _time_side_by_side(env, frames, seed, env.render,
+                                              lambda: bare.render(env.sim))
     env.close()
-    overlay_ms, scene_ms = overlay_s / frames * 1e3, scene_s / frames * 1e3
     return {"overlay_ms": overlay_ms, "scene_ms": scene_ms,
             "overlay_cost_ms": overlay_ms - scene_ms, "first_ms": first_ms}
 
@@ -78,18 +83,9 @@ def time_panels(preset: str, frames: int, size: tuple[int, int], seed: int) -> d
                      sensors=(camera_sensor(preset),))
     env.reset(seed=seed)
     frame = render_frame(env, ("scene", "camera"))  # builds the renderer
-    rng = np.random.default_rng(seed)
-    scene_s = panels_s = 0.0
-    for _ in range(frames):
-        env.step(rng.uniform(-1, 1, env.action_space.shape).astype(np.float32))
-        start = time.perf_counter()
-        env.render()
-        scene_s += time.perf_counter() - start
-        start = time.perf_counter()
-        render_frame(env, ("scene", "camera"))
-        panels_s += time.perf_counter() - start
+    scene_ms, panels_ms = _time_side_by_side(env, frames, seed, env.render,
+                                             lambda: render_frame(env, ("scene", "camera")))
     env.close()
-    scene_ms, panels_ms = scene_s / frames * 1e3, panels_s / frames * 1e3
     return {"scene_ms": scene_ms, "panels_ms": panels_ms, "camera_panel_ms": panels_ms - scene_ms,
             "width": frame.shape[1], "height": frame.shape[0]}
 
