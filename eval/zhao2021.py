@@ -476,7 +476,7 @@ def report_tables(results: dict) -> str:
                       "distance | paper steps |", "|---|---|---|---|---|"]
             for label, run in p2p["runs"].items():
                 if "refused" in run:
-                    lines.append(f"| {label} | refused: {run['refused']} | | | |")
+                    lines.append(f"| {label} | refused: {run['refused'].split(':')[0]} | | | |")
                     continue
                 summary = run if "steps" in run else _summary_p2p(run, 4.0)
                 steps = "not reached" if summary["steps"] is None else summary["steps"]
@@ -495,7 +495,7 @@ def report_tables(results: dict) -> str:
                   "within E after the load change |", "|---|---|---|---|---|"]
         for label, run in results["circle"].items():
             if "refused" in run:
-                lines.append(f"| {label} | refused: {run['refused']} | | | |")
+                lines.append(f"| {label} | refused: {run['refused'].split(':')[0]} | | | |")
                 continue
             lines.append(f"| {label} | {run['steps']} | {run['points_reached']}/"
                          f"{CIRCLE_POINTS} | {run['path_error_mean_mm']:.1f} / "
