@@ -339,3 +339,25 @@ def test_bad_input_is_refused_by_name(rendered):
         _make("encoder_dnn", sensing={"bogus": 1})
     with pytest.raises(ValueError, match="takes none"):
         _make("encoder_cc", sensing={"n_samples": 10})
+
+
+def test_encoder_dnn_keeps_estimating_while_the_stereo_pair_is_dark(small_dnn):
+    """zou2022's point: the DNN reads only the encoders, so it keeps working when the stereo pair
+    is blind ("poor light", Fig. 13a); the env's pair is simulated and blacked out by a fault."""
+    env = _make("encoder_dnn", sensing=dict(SMALL), sensors=("stereo",), faults="low_light")
+    try:
+        env.reset(seed=1)
+        base = env.unwrapped
+        for _ in range(3):
+            observation, _, _, _, info = env.step(np.full(3, 0.4, dtype=np.float32))
+        for side in ("left", "right"):
+            assert info["sensors"]["stereo"][side].mean() < 3.0          # the pair is blind
+        reading = info["sensors"]["stereo"]
+        assert estimate_stereo_shape(reading["left"], reading["right"], reading["P_left"],
+                                     reading["P_right"]).lost
+        shape = base.observation_part(observation, "shape").reshape(7, 3)
+        assert np.allclose(shape, small_dnn[0].predict(base._measurement["encoder"]), atol=1e-6)
+        truth = true_shape_points(ZOU, base.sim.backbone())
+        assert np.linalg.norm(shape - truth, axis=1).mean() < 0.008      # its usual error
+    finally:
+        env.close()

@@ -39,8 +39,13 @@ sensing pipeline (:mod:`soft_gym.sensing.pipeline`): it is calibrated when the e
 result is cached in memory and on disk, :mod:`soft_gym.sensing.calibration_cache`) and on
 ``reset(options={"recalibrate": True})``. It keeps learning across
 ``reset()`` calls; ``reset(seed=...)`` returns it to its calibrated state, so that a seed fixes an
-episode exactly. ``faults=`` puts visual faults on the eye-in-hand camera; an env that simulates
-no camera (no ``image`` part, no camera-based feedback) refuses them.
+episode exactly. ``faults=`` puts visual faults (:mod:`soft_gym.sensors.faults`) on the cameras
+the env simulates: the eye-in-hand camera (``image``: the ``image`` part or camera-based
+feedback) and the stereo pair (``stereo``: feedback ``"stereo"`` or ``sensors=("stereo",)``).
+One description goes to every simulated camera, each with its own fault instances (the same
+darkness for both; an occluder in front of each); a dict keyed by sensor name, e.g.
+``{"stereo": "low_light", "image": None}``, gives each camera its own. An env that simulates
+neither camera refuses them, as it does a dict naming a camera it does not simulate.
 
 Every sensor the env simulates is read once per control step into one
 :class:`~soft_gym.sensing.measurement.Measurement`; the observation, ``info`` and the feedback
@@ -81,7 +86,7 @@ from soft_gym.robots.actuation import Actuation
 from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.scenarios import make_scenario
-from soft_gym.sensors.faults import make_faults
+from soft_gym.sensors.faults import FAULT_SENSORS, copy_faults, faults_per_sensor, make_faults
 from soft_gym.scenarios.loads import SwayingMass, heaviest_total_load_n
 from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConfig
 from soft_gym.sensing.feedback import (CalibrationContext, FeedbackEstimate,
@@ -122,7 +127,8 @@ class SoftArmEnv(gym.Env):
         sensors: further sensors to simulate for ``info["sensors"]`` only (e.g. ``("stereo",)``).
         sensor_config: keyword arguments per sensor name, e.g. ``{"fbg": {"noise_std_nm": 2e-3}}``.
         feedback: source of the ``pose`` part (see "Feedback pose" above).
-        faults: visual faults on the eye-in-hand camera.
+        faults: visual faults on the simulated cameras (eye-in-hand ``image``, ``stereo`` pair):
+            one description for all, or a dict keyed by sensor name (see "Feedback pose").
         randomization: domain randomisation per episode (``None``/``False`` off, ``True``
             defaults, a dict of ranges or a YAML path; see "Domain randomisation" above).
         sensing: options of the feedback source: the camera/F-emp pipeline's (``n_init``,
@@ -222,18 +228,14 @@ class SoftArmEnv(gym.Env):
         self.feedback = feedback
         wanted = ([part for part in obs if part in SENSORS] + list(sensors)
                   + list(self.feedback_source.sensors))
-        if faults is not None and "image" not in wanted:
-            raise ValueError(f"faults act on the eye-in-hand camera, which this env does not "
-                             f"simulate (feedback {feedback!r}, obs {obs!r}): use feedback "
-                             "'fused', 'camera' or 'fbg', or ask for the 'image' part")
+        self._faults = self._route_faults(faults, wanted, feedback, obs, sensors)
         defaults = self.feedback_source.sensor_options()
         self.sensors = {}
         for name in dict.fromkeys(wanted):
             options = {**defaults.get(name, {}), **sensor_config.get(name, {})}
-            if name == "image" and faults is not None:
-                options["faults"] = faults
+            if name in self._faults:
+                options["faults"] = self._faults[name]
             self.sensors[name] = make_sensor(name, **options)
-        self._faults = faults
         config = RandomizationConfig.from_any(randomization)
         gravity = float(np.linalg.norm(self.spec_arm.gravity_base))
         fixed_load_n = heaviest_total_load_n(self.loads, gravity)
@@ -278,6 +280,34 @@ class SoftArmEnv(gym.Env):
         self._measurement: Measurement | None = None
         self._estimate: FeedbackEstimate | None = None
         self._calibrate(use_cache=True)
+
+    @staticmethod
+    def _route_faults(faults: Any, wanted: list[str], feedback: str, obs: tuple[str, ...],
+                      sensors: tuple[str, ...]) -> dict[str, Any]:
+        """The fault description of each simulated camera (see "Feedback pose")."""
+        cameras = [name for name in FAULT_SENSORS if name in wanted]
+        per_sensor = faults_per_sensor(faults)
+        if per_sensor is not None:
+            absent = [name for name, value in per_sensor.items()
+                      if value is not None and name not in cameras]
+            if absent:
+                raise ValueError(f"faults[{absent[0]!r}] is for a camera this env does not "
+                                 f"simulate (it simulates {cameras or 'no camera'}; feedback "
+                                 f"{feedback!r}, obs {obs!r}, sensors {sensors!r})")
+            return {name: value for name, value in per_sensor.items() if value is not None}
+        if faults is None:
+            return {}
+        if not cameras:
+            raise ValueError(
+                f"faults act on the eye-in-hand camera ('image') and the stereo pair ('stereo'), "
+                f"and this env simulates neither (feedback {feedback!r}, obs {obs!r}, sensors "
+                f"{sensors!r}): use feedback 'fused', 'camera' or 'fbg' or the 'image' part for "
+                f"the eye-in-hand camera, feedback 'stereo' or sensors=('stereo',) for the "
+                f"stereo pair")
+        # the first camera takes the description itself, the others fresh copies: a fault
+        # instance (its bodies, its episode draws) serves one camera
+        return {name: faults if i == 0 else copy_faults(faults)
+                for i, name in enumerate(cameras)}
 
     def observation_part(self, observation, part: str) -> np.ndarray:
         """The ``part`` of an observation from this env, flat or dict (what baselines read)."""
@@ -379,7 +409,7 @@ class SoftArmEnv(gym.Env):
         for sensor in self.sensors.values():
             sensor.set_noise_scale(draw.sensor_noise_scale)
         if "image" in self.sensors:
-            self.sensors["image"].set_faults(make_faults(self._faults) + draw.faults)
+            self.sensors["image"].set_faults(make_faults(self._faults.get("image")) + draw.faults)
 
     def step(self, action):
         action = self._check_action(action)

@@ -1,4 +1,4 @@
-"""Visual faults of the eye-in-hand camera, each on a time schedule (wang2023, Section IV-C).
+"""Visual faults of the cameras, each on a time schedule (wang2023, Section IV-C; zou2022 Fig. 13).
 
 Wang et al. 2023 test their visual-strain fusion against what defeats ORB-SLAM2 on a tip camera:
 
@@ -18,6 +18,16 @@ work on the rendered frame with numpy/OpenCV, in a fixed physical order: scene l
 (:class:`LowLight`), extra light (:class:`LEDGlare`), exposure (:class:`MotionBlur`), read-out
 (:class:`SensorNoise`).
 
+Cameras. The same faults serve the eye-in-hand camera (:class:`~soft_gym.sensors.camera.
+EyeInHandCamera`, wang2023) and the fixed stereo pair (:class:`~soft_gym.sensors.stereo.
+StereoCamera`, zou2022 Section 4.4: "poor light", Fig. 13). A camera rig is one or more cameras
+sharing a rotation, their optical centres spread ``FrameContext.baseline_m`` along the camera x
+axis about ``FrameContext.position`` (0 for one camera). A geometric fault is placed once per
+rig frame, relative to the rig; every camera of the rig then renders it from its own pose, so a
+plate in front of a stereo pair covers one view, both or parts of each depending on where it is.
+An image fault is applied to every image of the frame with that image's own context: the same
+light at the same time for both images of a pair, with per-image noise.
+
 Schedules. Every fault has ``start_s`` and ``end_s`` (``None``: until the episode ends) on the
 simulator's clock (``sim.time_s``) and a ``strength`` in [0, 1]: a number, or a schedule list of
 ``(time_s, strength)`` knots (times non-decreasing, linear in between, held before the first and
@@ -29,12 +39,14 @@ to :meth:`VisualFault.reset` and its per-frame noise from the frame's generator,
 
 Selection: ``make_faults`` accepts ``None``, a name (a fault or a preset such as
 ``"wang2023_lighting"``), a dict with ``"name"`` and parameters, an instance, or a list of these.
+The env's ``faults=`` takes such a description for every camera it simulates, or one per camera
+in a dict keyed by sensor name (:func:`faults_per_sensor`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, Callable, ClassVar, Sequence
 
 import cv2
@@ -53,6 +65,13 @@ StrengthLike = float | Sequence[tuple[float, float]]
 _PARKED_POSITION = (0.0, 0.0, -1.0e3)
 """Where an inactive occluder waits (m): beyond every camera's far plane."""
 
+EYE_IN_HAND_OCCLUDER_M = 0.015
+"""Distance of an occluder in front of the eye-in-hand camera by default (m): a hand over the
+tip camera, inside wang2023's 8-150 mm depth of field."""
+
+FAULT_SENSORS = ("image", "stereo")
+"""The sensors that take visual faults: the eye-in-hand camera and the stereo pair."""
+
 
 @dataclass
 class FrameContext:
@@ -67,6 +86,9 @@ class FrameContext:
         intrinsics: the camera's :class:`~soft_gym.sensors.intrinsics.CameraIntrinsics`.
         rng: the generator for per-frame noise.
         depth: metric depth of the rendered frame (m, (H, W)), ``None`` before rendering.
+        baseline_m: spread of the rig's optical centres along the camera x axis about
+            ``position`` (m): 0 for one camera, the baseline for a stereo pair's rig context (the
+            one geometric faults are placed with; each image's own context has 0).
     """
 
     time_s: float
@@ -78,6 +100,7 @@ class FrameContext:
     previous_position: np.ndarray | None = None
     previous_time_s: float | None = None
     depth: np.ndarray | None = None
+    baseline_m: float = 0.0
 
 
 def _check_strength(strength: Any) -> float | tuple[tuple[float, float], ...]:
@@ -143,8 +166,14 @@ class VisualFault(TimeWindow):
     def reset(self, rng: np.random.Generator) -> None:
         """Start an episode: draw this fault's random parameters from ``rng``."""
 
-    def attach(self, client, intrinsics: CameraIntrinsics) -> None:
-        """Create this fault's bodies in ``client`` (geometry faults only)."""
+    def attach(self, client, intrinsics: CameraIntrinsics, *, baseline_m: float = 0.0,
+               default_distance_m: float = EYE_IN_HAND_OCCLUDER_M) -> None:
+        """Create this fault's bodies in ``client`` (geometry faults only).
+
+        ``baseline_m``: the rig's spread of optical centres along the camera x axis (m; 0 for
+        one camera); ``default_distance_m``: the camera's distance for a body whose own is
+        ``None`` (m).
+        """
 
     def detach(self, client) -> None:
         """Remove this fault's bodies from ``client``."""
@@ -170,7 +199,10 @@ class MovingOccluder(VisualFault):
 
     A real PyBullet body (visual only: it never touches the arm) is placed ``distance_m`` in front
     of the camera before every frame, so it follows the tip and always stays between camera and
-    scene. It slides in from one side of the view (right, left, bottom or top) so that it covers
+    scene. In front of a stereo pair it is placed relative to the pair (the midpoint of the
+    optical centres) and sized for the union of both views; each camera sees it from its own
+    pose, so a partial plate coming in from the right covers the right camera's view first.
+    It slides in from one side of the view (right, left, bottom or top) so that it covers
     a fraction of the view equal to ``strength * s(t)`` (default strength: 0.6 partial, 1 full):
 
     * ``mode="partial"`` (Fig. 6 ②/③, a hand moving across the view): ``s(t)`` rises and falls
@@ -184,18 +216,24 @@ class MovingOccluder(VisualFault):
     Args:
         mode: ``"partial"`` or ``"full"``.
         distance_m: distance of the plate in front of the camera (m); must lie beyond the
-            camera's near plane and before the scene (the default suits wang2023's 60 mm).
+            camera's near plane and before the scene. ``None`` (default): the camera's own
+            choice, 15 mm for the eye-in-hand camera (suits wang2023's 60 mm working distance)
+            and 40 % of the way to the arm for the stereo pair
+            (:class:`~soft_gym.sensors.stereo.StereoCamera`).
         sweep_s: period of one partial sweep (s).
         cover_s: duration of one full cover (s).
         period_s: interval between the starts of full covers (s), > ``cover_s``.
         jitter_s: largest random delay of a full cover's start (s), <= ``period_s - cover_s``;
             ``None``: ``min(1, period_s - cover_s)``.
         rgba: colour of the plate (skin-like by default, uniform, so it carries no features).
+            Skin lies inside ASES's orange HSV range: the stereo pair's shape estimator takes a
+            skin plate for the arm (zou2022's colour segmentation would); a grey ``rgba`` makes
+            a plain obstacle.
     """
 
     strength: StrengthLike | None = None
     mode: str = "partial"
-    distance_m: float = 0.015
+    distance_m: float | None = None
     sweep_s: float = 3.0
     cover_s: float = 2.0
     period_s: float = 6.0
@@ -207,6 +245,7 @@ class MovingOccluder(VisualFault):
     _body: int = field(default=-1, init=False, repr=False)
     _client: Any = field(default=None, init=False, repr=False)
     _half_size_m: float = field(default=0.0, init=False, repr=False)
+    _distance_m: float = field(default=EYE_IN_HAND_OCCLUDER_M, init=False, repr=False)
     _phase: float = field(default=0.0, init=False, repr=False)
     _sides: np.ndarray = field(default_factory=lambda: np.zeros(1, dtype=int), init=False,
                                repr=False)
@@ -218,7 +257,8 @@ class MovingOccluder(VisualFault):
         if self.strength is None:
             self.strength = 0.6 if self.mode == "partial" else 1.0
         super().__post_init__()
-        require_positive("distance_m", self.distance_m)
+        if self.distance_m is not None:
+            require_positive("distance_m", self.distance_m)
         require_positive("sweep_s", self.sweep_s)
         require_positive("cover_s", self.cover_s)
         require_positive("period_s", self.period_s)
@@ -239,13 +279,24 @@ class MovingOccluder(VisualFault):
         self._sides = rng.integers(0, len(_SIDES), size=256)
         self._delays = rng.uniform(0.0, self.jitter_s, size=256)
 
-    def attach(self, client, intrinsics: CameraIntrinsics) -> None:
-        if intrinsics.near_m >= self.distance_m:
+    @property
+    def plate_distance_m(self) -> float:
+        """The distance in use (m): ``distance_m``, or the camera's default once attached."""
+        return self._distance_m
+
+    def attach(self, client, intrinsics: CameraIntrinsics, *, baseline_m: float = 0.0,
+               default_distance_m: float = EYE_IN_HAND_OCCLUDER_M) -> None:
+        distance = self.distance_m if self.distance_m is not None else float(default_distance_m)
+        if intrinsics.near_m >= distance:
             raise ValueError(f"distance_m must be > the camera's near_m={intrinsics.near_m}, "
-                             f"got {self.distance_m!r}")
-        # a square plate larger than the view's diagonal at distance_m, so it can cover it all
-        half_diagonal = self.distance_m * math.hypot(intrinsics.width / (2 * intrinsics.fx),
-                                                     intrinsics.height / (2 * intrinsics.fy))
+                             f"got {distance!r}")
+        baseline = require_non_negative("baseline_m", baseline_m)
+        self._distance_m = distance
+        # a square plate larger than the (rig's) view's diagonal at the distance, so it can
+        # cover it all
+        half_diagonal = math.hypot(distance * intrinsics.width / (2 * intrinsics.fx)
+                                   + 0.5 * baseline,
+                                   distance * intrinsics.height / (2 * intrinsics.fy))
         self._half_size_m = 1.2 * half_diagonal
         visual = client.createVisualShape(
             pybullet.GEOM_BOX, halfExtents=[self._half_size_m, self._half_size_m, 2e-4],
@@ -293,12 +344,14 @@ class MovingOccluder(VisualFault):
         _, side = self.motion(context.time_s)
         direction = np.array(_SIDES[side])
         intrinsics = context.intrinsics
-        half_view = self.distance_m * (intrinsics.width / (2 * intrinsics.fx) if direction[0]
-                                       else intrinsics.height / (2 * intrinsics.fy))
+        distance = self._distance_m
+        # half the (rig's) view at the plate: the union of its cameras' views along x
+        half_view = (distance * intrinsics.width / (2 * intrinsics.fx) + 0.5 * context.baseline_m
+                     if direction[0] else distance * intrinsics.height / (2 * intrinsics.fy))
         # the plate covers the points p with p . direction >= edge
         edge = half_view * (1.0 - 2.0 * min(fraction, 1.0))
         centre = (edge + self._half_size_m) * direction
-        local = np.array([centre[0], centre[1], self.distance_m])
+        local = np.array([centre[0], centre[1], distance])
         position = context.position + context.rotation @ local
         client.resetBasePositionAndOrientation(self._body, position.tolist(),
                                                matrix_to_quaternion(context.rotation).tolist())
@@ -604,6 +657,40 @@ def make_faults(faults: Any) -> list[VisualFault]:
     return made
 
 
+def faults_per_sensor(faults: Any) -> dict[str, Any] | None:
+    """The per-camera form of a fault description, or ``None`` for one shared description.
+
+    A dict without ``"name"`` whose keys are camera sensor names (:data:`FAULT_SENSORS`:
+    ``"image"``, ``"stereo"``) gives each camera its own description, e.g.
+    ``{"stereo": "low_light", "image": None}``; its values are checked with :func:`make_faults`.
+    Anything else is one description (:func:`make_faults`) for every camera.
+    """
+    if not isinstance(faults, dict) or "name" in faults:
+        return None
+    if not faults or not all(isinstance(key, str) and key in FAULT_SENSORS for key in faults):
+        raise ValueError(f"faults as a dict is one fault ({{'name': ..., parameters}}) or one "
+                         f"description per camera keyed by {list(FAULT_SENSORS)}, got keys "
+                         f"{sorted(map(str, faults))!r}")
+    for key, value in faults.items():
+        try:
+            make_faults(value)
+        except ValueError as error:
+            raise ValueError(f"faults[{key!r}]: {error}") from None
+    return dict(faults)
+
+
+def copy_faults(faults: Any) -> list[VisualFault]:
+    """Fresh faults with the parameters of ``faults`` (any :func:`make_faults` description),
+    sharing no state: neither episode draws nor bodies. For giving one description to two
+    cameras: a fault instance can serve one camera only."""
+    fresh = []
+    for fault in make_faults(faults):
+        values = {f.name: getattr(fault, f.name) for f in fields(fault) if f.init}
+        fresh.append(type(fault)(**values))
+    return fresh
+
+
 __all__ = ["FrameContext", "VisualFault", "MovingOccluder", "LowLight", "LEDGlare", "MotionBlur",
-           "SensorNoise", "FAULTS", "FAULT_PRESETS", "make_faults", "wang2023_occlusion",
+           "SensorNoise", "FAULTS", "FAULT_PRESETS", "FAULT_SENSORS", "EYE_IN_HAND_OCCLUDER_M",
+           "make_faults", "faults_per_sensor", "copy_faults", "wang2023_occlusion",
            "wang2023_lighting"]
