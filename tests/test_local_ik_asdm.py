@@ -132,3 +132,21 @@ def test_network_learns_the_exploration_and_reloads_identically(tmp_path):
     path.write_bytes(path.read_bytes()[:-10])
     with pytest.raises(ValueError, match="ik.bin"):
         LocalIKNetwork.load(path)
+
+
+def test_delta_action_mode_ramps_the_env_to_the_decided_actuation():
+    env = gym.make("SoftArmReach-v0", preset="zhao2021", feedback="ground_truth", obs=OBS,
+                   action_mode="delta", target_m=(0.02, 0.0, 0.28))
+    try:
+        controller = LocalIKASDMController(env, step_mm=8.0, cache=False)
+        jacobian = np.random.default_rng(1).normal(0.0, 1.0, (3, 6)) * 2e-7
+        controller.network = _LinearPlantInverse(jacobian)
+        observation, _ = env.reset(seed=0)
+        for _ in range(controller.hold_steps):
+            action, _ = controller.predict(observation)
+            assert env.action_space.contains(action)
+            observation, *_ = env.step(action)
+        decided = controller.history[0]["pressures_pa"]
+        assert np.allclose(env.unwrapped.sim.supply.command_pa, decided, atol=1.0)
+    finally:
+        env.close()

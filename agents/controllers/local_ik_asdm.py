@@ -125,7 +125,8 @@ class LocalIKASDMController(BaselinePolicy):
     def reset(self) -> None:
         """Start of an episode: ``d`` back to ``step_mm``, no step taken yet."""
         self._step = 0
-        self._command: np.ndarray | None = None
+        self._command: np.ndarray | None = None      # A_n: the actuation decided (Pa)
+        self._env_command: np.ndarray | None = None  # what the env holds (delta mode ramps)
         self._previous: tuple[np.ndarray, np.ndarray] | None = None  # (Q_{n-1}, Q_d(n-1))
         self.step_distance_mm = self.step_mm
         self.history: list[dict[str, Any]] = []
@@ -143,13 +144,15 @@ class LocalIKASDMController(BaselinePolicy):
         if self._command is None:  # A_0: the pressures the episode starts from
             self._command = np.asarray(env.observation_part(observation, "pressure"),
                                        dtype=float) * self.p_high
+            self._env_command = self._command.copy()
         if self._step % self.hold_steps == 0:
             position = np.asarray(env.observation_part(observation, "pose"), dtype=float)[:3]
             goal = np.asarray(env.observation_part(observation, "target"), dtype=float)[:3]
             readings = np.asarray(env.observation_part(observation, "strain"), dtype=float)
             self._command = self.decide(self._command, position, goal, readings)
         self._step += 1
-        action = self.actuation.action(self._command)
+        action = self.actuation.action(self._command, self._env_command)
+        self._env_command = self.actuation.pressure(action, self._env_command)
         return action, state
 
     def decide(self, pressures_pa: np.ndarray, position_m: np.ndarray, goal_m: np.ndarray,
