@@ -33,9 +33,11 @@ the default is the paper's 29791) and ``stereo`` (keyword arguments of the label
 Registration: :mod:`soft_gym.sensing.feedback` imports this module, whose classes register
 themselves on :mod:`soft_gym.sensing.feedback_base`'s registry.
 
-Visual faults: the env applies ``faults=`` to the eye-in-hand camera only, and
-:class:`~soft_gym.sensors.stereo.StereoCamera` takes none; a blind or occluded pair is made by
-editing frames (as the tests do) until the sensor grows fault support.
+Visual faults: the env's ``faults=`` reach the stereo pair as they reach the eye-in-hand camera
+(one description for every camera the env simulates, or a dict keyed by sensor name; see
+:mod:`soft_gym.sensors.faults`). Darkness, strong glare or a plate over the pair make ASES report
+lost; a plate hiding only the tip half is not detected (the visible part is taken for the whole
+arm, 47 mm mean error in 20 poses): ASES has no length check of its own.
 """
 
 from __future__ import annotations
