@@ -234,6 +234,10 @@ def main(argv: list[str] | None = None) -> None:
             if value is not None and (not value >= low or value > 3600):
                 parser.error(f"{option} must be within [{low:g}, 3600] s, got {value!r}")
         _check_seeds_and_baselines(parser, args)
+        try:
+            ho2018_module.check_baselines(tuple(args.baselines))
+        except ValueError as error:
+            parser.error(f"--baselines: {error}")
         ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
                                      cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
                                      baselines=tuple(args.baselines))

@@ -127,6 +127,19 @@ def _scenario(load: str, lead_in_s: float, cycle_s: float) -> list:
     raise ValueError(f"load must be one of none, tip, empty, filling; got {load!r}")
 
 
+def check_baselines(baselines: tuple[str, ...], preset: str = "ho2018") -> None:
+    """Refuse (``ValueError``) a baseline that cannot drive ``preset`` with this experiment's
+    observation (pose and target, EM feedback), before any work."""
+    for policy in baselines:
+        if not policy.startswith("sb3:"):
+            probe = gym.make("SoftArmReach-v0", preset=preset, feedback="em",
+                             obs=("pose", "target"))
+            try:
+                make_policy(policy, probe)
+            finally:
+                probe.close()
+
+
 def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
                    lead_in_s: float = 15.0,
                    preset: str = "ho2018", pretrain_waypoints: int | None = None,
@@ -147,14 +160,7 @@ def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
     load = experiment.runs[-1].load
     runs = list(experiment.runs) + [Run(f"{policy}, {_LOAD_NAMES[load]}", False, load, policy)
                                     for policy in baselines]
-    for policy in baselines:  # refuse a baseline that cannot drive the arm before any work
-        if not policy.startswith("sb3:"):
-            probe = gym.make("SoftArmReach-v0", preset=preset, feedback="em",
-                             obs=("pose", "target"))
-            try:
-                make_policy(policy, probe)
-            finally:
-                probe.close()
+    check_baselines(baselines, preset)
     results = {}
     path_m = None
     for run in runs:
