@@ -195,9 +195,11 @@ class StrainShapeFeedback(FeedbackSource):
     def calibrate(self, context: CalibrationContext, use_cache: bool = True) -> None:
         from soft_gym.sensing.shape_reconstruction import cached_reconstruction
 
+        # the paper's exploration and training take ~10 minutes on one core: show their bars
+        # (nothing is shown when the model comes from the cache)
         self.reconstructor, self.report = cached_reconstruction(
             context.sim.spec, context.sensors["strain"], self.config, use_cache=use_cache,
-            progress=False)
+            progress=True)
         self.restore()
 
     def restore(self) -> None:

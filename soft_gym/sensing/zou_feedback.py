@@ -193,9 +193,11 @@ class EncoderDNNFeedback(FeedbackSource):
         except TypeError as error:
             raise ValueError(f"stereo must hold StereoCamera keyword arguments, got "
                              f"{sorted(self.stereo_options)} ({error})") from None
+        # the paper-sized data set takes ~25 minutes on one core: show the bars (nothing is
+        # shown when the data set and network come from the cache)
         self.dnn, self.report = cached_shape_dnn(context.sim.spec, context.sensors["encoder"],
                                                  stereo, self.config, use_cache=use_cache,
-                                                 progress=False)
+                                                 progress=True)
 
     def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
         lengths = np.asarray(measurement["encoder"], dtype=float)
