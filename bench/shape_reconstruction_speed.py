@@ -38,13 +38,14 @@ def main(argv: list[str] | None = None) -> None:
     from soft_gym.sensing.backbone_fit import fit_backbone
     from soft_gym.sensing.sfe_pd import sequences
     from soft_gym.sensing.shape_reconstruction import (ReconstructionConfig,
-                                                       cached_reconstruction)
+                                                       cached_reconstruction, exploration_of)
     from soft_gym.sensors.strain_gauge import StrainGauges
 
     torch.set_num_threads(1)
     config = ReconstructionConfig(n_free=400, n_loaded=200, max_iterations=20)
-    reconstructor, report = cached_reconstruction(get_preset("zhao2021"), StrainGauges(), config)
-    data = report["data"]
+    spec, gauges = get_preset("zhao2021"), StrainGauges()
+    reconstructor, _ = cached_reconstruction(spec, gauges, config)
+    data = exploration_of(spec, gauges, config)
     x = sequences(data.pressures_pa, data.readings)
     n = data.pressures_pa.shape[1]
     states = [x[i % len(x)] for i in range(args.repeats)]

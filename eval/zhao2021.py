@@ -165,8 +165,7 @@ def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True
                           "mean_backbone_mm": [float(e["backbone_error_mm"]) for e in errors]}
     bar.close()
     true_paper_frame = paper_point_from_base(table3["true_mm"] / 1000.0) * 1000.0
-    return {"config": asdict(config), "training": {k: v for k, v in report.items()
-                                                   if k != "data"},
+    return {"config": asdict(config), "training": report,
             "table3": {"pressures_bar": list(TABLE3_PRESSURES_BAR),
                        "predicted_mm": table3["predicted_mm"].tolist(),
                        "simulated_mm": table3["true_mm"].tolist(),
@@ -294,8 +293,7 @@ def _summary_p2p(run: dict, tolerance_mm: float) -> dict:
     rises = np.diff(true) > 0.5  # the true distance grew by more than the gauges' noise
     return {"steps": reached, "true_distance_at_reach_mm": None if reached is None
             else float(true[reached]), "final_true_distance_mm": float(true[-1]),
-            "distance_rises": int(rises.sum()),
-            "distance_rises_last_5": int(rises[-5:].sum()) if reached else None}
+            "distance_rises": int(rises.sum())}
 
 
 def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
@@ -306,11 +304,11 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
     from soft_gym.scenarios.loads import TipMass
 
     goal = p2p_goal_m()
-    start = p2p_start_m()
+    free_start = p2p_start_m()
     results = {}
     for label, step_mm, adaptive, load_kg in runs:
         scenario = [TipMass(mass_kg=load_kg)] if load_kg > 0 else []
-        start = p2p_start_m(scenario)
+        start = p2p_start_m(scenario) if scenario else free_start
         env = _make_env(sensing, scenario, start, goal, (max_steps + 2) * 20)
         try:
             policy = make_policy("local_ik_asdm", env, step_mm=step_mm, adaptive=adaptive,
@@ -322,10 +320,12 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
         run.update(_summary_p2p(run, 4.0))
         results[label] = run
     for baseline in baselines:
-        results[baseline] = _baseline_run(baseline, sensing, p2p_start_m(), [goal],
-                                          max_steps // 2,
-                                          seed, progress)
-    return {"start_mm": (p2p_start_m() * 1000).tolist(), "goal_mm": (goal * 1000).tolist(),
+        run = _baseline_run(baseline, sensing, free_start, [goal], max_steps // 2, seed,
+                            progress)
+        if "records" in run:
+            run.update(_summary_p2p(run, 4.0))
+        results[baseline] = run
+    return {"start_mm": (free_start * 1000).tolist(), "goal_mm": (goal * 1000).tolist(),
             "paper_goal_mm": (base_point_from_paper(np.array(P2P_END_MM) / 1000) * 1000
                               ).tolist(), "runs": results}
 
@@ -377,7 +377,9 @@ def _summary_circle(run: dict, load_steps) -> dict:
     for name, step in zip(("added", "removed"), load_steps or ()):
         after = np.flatnonzero(feedback[step + 1:] <= 4.0)
         recovery[name] = int(after[0]) + 1 if after.size and step < len(records) else None
-    return {"steps": len(records), "points_reached": int(records[-1]["target_index"]),
+    # the last record's target was reached when the feedback was within E of it
+    reached = records[-1]["target_index"] + int(records[-1]["feedback_distance_mm"] <= 4.0)
+    return {"steps": len(records), "points_reached": int(reached),
             "path_error_mean_mm": float(path_error.mean()),
             "path_error_max_mm": float(path_error.max()), "recovery_steps": recovery}
 
@@ -456,7 +458,8 @@ def report_tables(results: dict) -> str:
         for i in range(6):
             lines.append(f"| P{i + 1} | {_xyz(t3['predicted_mm'][i])} | "
                          f"{_xyz(t3['simulated_mm'][i])} | {t3['errors_mm'][i]:.2f} | "
-                         f"{TABLE3_PAPER_ERRORS_MM[i]:.2f} | {t3['simulated_vs_paper_mm'][i]:.1f} |")
+                         f"{TABLE3_PAPER_ERRORS_MM[i]:.2f} | "
+                         f"{t3['simulated_vs_paper_mm'][i]:.1f} |")
         lines += ["", f"Mean backbone error, eq. (21), 12 configurations: "
                       f"{shape['mean_backbone_error_mm']:.2f} mm (paper "
                       f"{PAPER_MEAN_BACKBONE_ERROR_MM} mm)", "",
@@ -467,23 +470,20 @@ def report_tables(results: dict) -> str:
             cells = [f"{m:.2f}/{b:.2f}" for m, b in zip(row["max_mm"], row["mean_backbone_mm"])]
             paper = ", ".join(f"{v:.2f}" for v in TABLE4_PAPER_MEAN_MM[int(load)])
             lines.append(f"| {load} g | " + " | ".join(cells) + f" | {paper} |")
-    for name in ("p2p",):
-        if name in results:
-            p2p = results[name]
-            lines += ["", f"Point to point {_xyz(p2p['start_mm'])} -> {_xyz(p2p['goal_mm'])} mm "
-                          f"(ours; the paper's end is {_xyz(p2p['paper_goal_mm'])})", "",
-                      "| run | steps to E | true distance then (mm) | rises of the true "
-                      "distance | paper steps |", "|---|---|---|---|---|"]
-            for label, run in p2p["runs"].items():
-                if "refused" in run:
-                    lines.append(f"| {label} | refused: {run['refused'].split(':')[0]} | | | |")
-                    continue
-                summary = run if "steps" in run else _summary_p2p(run, 4.0)
-                steps = "not reached" if summary["steps"] is None else summary["steps"]
-                at = summary["true_distance_at_reach_mm"]
-                lines.append(f"| {label} | {steps} | {'' if at is None else f'{at:.1f}'} | "
-                             f"{summary['distance_rises']} | "
-                             f"{PAPER_P2P_STEPS.get(label, '')} |")
+    if "p2p" in results:
+        p2p = results["p2p"]
+        lines += ["", f"Point to point {_xyz(p2p['start_mm'])} -> {_xyz(p2p['goal_mm'])} mm "
+                      f"(ours; the paper's end is {_xyz(p2p['paper_goal_mm'])})", "",
+                  "| run | steps to E | true distance then (mm) | rises of the true "
+                  "distance | paper steps |", "|---|---|---|---|---|"]
+        for label, run in p2p["runs"].items():
+            if "refused" in run:
+                lines.append(f"| {label} | refused: {run['refused'].split(':')[0]} | | | |")
+                continue
+            steps = "not reached" if run["steps"] is None else run["steps"]
+            at = run["true_distance_at_reach_mm"]
+            lines.append(f"| {label} | {steps} | {'' if at is None else f'{at:.1f}'} | "
+                         f"{run['distance_rises']} | {PAPER_P2P_STEPS.get(label, '')} |")
     if "sway" in results:
         run = results["sway"]
         lines += ["", f"Sway then pull: steps to E {run['steps']}, d before the pull "

@@ -150,3 +150,22 @@ def test_delta_action_mode_ramps_the_env_to_the_decided_actuation():
         assert np.allclose(env.unwrapped.sim.supply.command_pa, decided, atol=1.0)
     finally:
         env.close()
+
+
+def test_controller_saves_and_loads_back_identically(env, tmp_path):
+    rng = np.random.default_rng(0)
+    pressures = rng.uniform(0.0, 80e3, (40, 6))
+    network = LocalIKNetwork(6, 6, 80e3)
+    network.fit(pressures, rng.normal(0.0, 0.01, (40, 3)), rng.normal(0.0, 1e-3, (40, 6)),
+                max_iterations=3, progress=False)
+    controller = LocalIKASDMController(env, step_mm=5.0, adaptive=False, gain=0.2, cache=False)
+    controller.network = network
+    path = tmp_path / "controller.bin"
+    controller.save(path)
+    loaded = LocalIKASDMController.load(path, env=env)
+    assert (loaded.step_mm, loaded.adaptive, loaded.gain) == (5.0, False, 0.2)
+    args = (pressures[0], np.array([0.0, 0.0, 0.25]), np.array([0.0, 0.01, 0.25]), np.zeros(6))
+    assert np.array_equal(loaded.network.predict(*args), network.predict(*args))
+    path.write_bytes(path.read_bytes()[:-7])
+    with pytest.raises(ValueError, match="controller.bin"):
+        LocalIKASDMController.load(path, env=env)

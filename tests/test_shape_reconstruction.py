@@ -16,10 +16,11 @@ import torch
 
 import soft_gym  # noqa: F401
 from soft_gym.robots.presets import get_preset
-from soft_gym.sensing.sfe_pd import KeyPointNetworks, SFEPDPredictor, sequences
+from soft_gym.sensing.sfe_pd import KeyPointNetworks, sequences
 from soft_gym.sensing.shape_exploration import (collect_exploration, key_point_arcs,
                                                 key_points_from_backbone)
-from soft_gym.sensing.shape_reconstruction import ReconstructionConfig, cached_reconstruction
+from soft_gym.sensing.shape_reconstruction import (ReconstructionConfig, cached_reconstruction,
+                                                   exploration_of)
 from soft_gym.sensors.strain_gauge import StrainGauges
 
 ZHAO = get_preset("zhao2021")
@@ -30,8 +31,10 @@ SMALL = {"n_free": 240, "n_loaded": 120, "max_iterations": 80, "batch_size": 64,
 
 @pytest.fixture(scope="module")
 def small_model():
+    """The small model and the exploration it learnt from."""
     config = ReconstructionConfig(**SMALL)
-    return cached_reconstruction(ZHAO, StrainGauges(), config, progress=False)
+    reconstructor, _ = cached_reconstruction(ZHAO, StrainGauges(), config, progress=False)
+    return reconstructor, exploration_of(ZHAO, StrainGauges(), config, progress=False)
 
 
 def test_key_points_lie_at_sixths_of_a_straight_arm():
@@ -48,8 +51,7 @@ def test_key_points_lie_at_sixths_of_a_straight_arm():
 
 
 def test_exploration_follows_the_papers_rules(small_model):
-    _, report = small_model
-    data = report["data"]
+    _, data = small_model
     p_max = ZHAO.p_max_pa
     assert len(data) == 360 and data.readings.shape == (360, 6)
     assert np.all(data.pressures_pa >= 0.0) and np.all(data.pressures_pa <= p_max + 1e-9)
@@ -100,8 +102,7 @@ def test_sequences_hold_the_last_six_steps():
 
 
 def test_small_model_beats_the_mean_and_reloads_identically(small_model, tmp_path):
-    reconstructor, report = small_model
-    data = report["data"]
+    reconstructor, data = small_model
     x = sequences(data.pressures_pa, data.readings)
     predicted = reconstructor.key_points(x[..., :6], x[..., 6:])
     errors_mm = np.linalg.norm(predicted - data.key_points_m, axis=-1).mean(axis=0) * 1000

@@ -77,9 +77,8 @@ def test_paper_patterns(seed, tmp_path):
     assert sway["steps"] is not None
     assert sway["step_mm_during_pull"] > sway["step_mm_before_pull"]
     circle = results["circle"]
-    for run in circle.values():
-        assert run["points_reached"] == zhao2021.CIRCLE_POINTS - 1 or \
-            run["steps"] < zhao2021.MAX_CIRCLE_STEPS
+    for run in circle.values():  # round the whole circle, free and loaded (seeds 0-2: 53-108 steps)
+        assert run["points_reached"] == zhao2021.CIRCLE_POINTS, run["points_reached"]
     assert circle["free"]["path_error_mean_mm"] < 5.0
     carried = circle["50 g, steps 29-60"]["recovery_steps"]
     assert carried["added"] is not None and carried["added"] <= 10  # seed 0: 4 steps

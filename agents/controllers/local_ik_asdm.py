@@ -34,7 +34,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -42,10 +41,12 @@ import numpy as np
 
 from agents.learners.local_ik import LocalIKNetwork
 from agents.policies import BaselinePolicy
+from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_in_range, require_integer, require_positive
 from soft_gym.robots.actuation import Actuation
 
 _MM = 1000.0
+_FORMAT = "soft-arm-gym local-ik-asdm 1"
 MIN_STEP_MM, MAX_STEP_MM = 2.0, 15.0
 """ASDM's limits on the step distance (zhao2021 Section IV-B: 2 mm <= d_n <= 15 mm)."""
 
@@ -131,11 +132,6 @@ class LocalIKASDMController(BaselinePolicy):
         self.step_distance_mm = self.step_mm
         self.history: list[dict[str, Any]] = []
 
-    @property
-    def decisions(self) -> int:
-        """Controller steps taken this episode (commands sent)."""
-        return len(self.history)
-
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """The action for ``observation``: a new command every ``settle_s``, else the held one."""
         if self.network is None:
@@ -192,16 +188,15 @@ class LocalIKASDMController(BaselinePolicy):
     def pretrain(self) -> dict[str, Any]:
         """Train the network on the exploration data (or take it from the cache); returns the
         training report."""
-        from soft_gym.sensing.calibration_cache import cached
-        from soft_gym.sensing.shape_reconstruction import cached_reconstruction
+        from soft_gym.sensing.calibration_cache import cached, sensor_description
+        from soft_gym.sensing.shape_exploration import GAUGE_SETTINGS
+        from soft_gym.sensing.shape_reconstruction import exploration_of
 
         spec = self.env.spec_arm
         gauges = self._gauges()
 
         def compute() -> dict[str, Any]:
-            _, report = cached_reconstruction(spec, gauges, self._config, use_cache=self.cache,
-                                              progress=False)
-            data = report["data"]
+            data = exploration_of(spec, gauges, self._config, self.cache, progress=False)
             network = LocalIKNetwork(spec.n_chambers, data.readings.shape[1], spec.p_max_pa,
                                      skip=self.skip, seed=self.seed)
             training = network.fit(data.pressures_pa, data.key_points_m[:, -1], data.readings,
@@ -211,8 +206,9 @@ class LocalIKASDMController(BaselinePolicy):
             return {"network": network.state(), "training": training}
 
         parts = {"kind": f"{self.name} network", "arm": repr(spec),
-                 "gauges": repr(sorted(vars(gauges).keys())),
-                 "exploration": asdict(self._config),
+                 "gauges": sensor_description(gauges, GAUGE_SETTINGS),
+                 "exploration": {k: getattr(self._config, k)
+                                 for k in ("n_free", "n_loaded", "load_kg", "seed")},
                  "settings": {k: getattr(self, k) for k in ("max_iterations", "batch_size",
                                                              "learning_rate", "skip", "seed")},
                  "learner": _learner_source_digest()}
@@ -229,41 +225,23 @@ class LocalIKASDMController(BaselinePolicy):
 
     # ------------------------------------------------------------------ persistence
     def save(self, path: str | Path) -> None:
-        """Write the settings and the network; :meth:`load` restores a controller that
-        predicts identically."""
+        """Write the settings and the network (a digest-checked model file); :meth:`load`
+        restores a controller that predicts identically."""
         if self.network is None:
             raise ValueError(f"{self.name} has no network to save yet: call pretrain() first")
-        state = self.network.state()
         settings = {k: getattr(self, k) for k in _SETTINGS}
-        np.savez(path, format=np.array(self.name), settings=np.array(json.dumps(settings)),
-                 training=np.array(json.dumps(self.training)),
-                 meta=np.array([state["n_chambers"], state["n_gauges"], state["seed"],
-                                int(state["skip"])]),
-                 hidden=np.array(state["hidden"]), p_max_pa=state["p_max_pa"],
-                 input_low=state["input_norm"][0], input_high=state["input_norm"][1],
-                 **{f"w:{k}": v for k, v in state["weights"].items()})
+        write_model_state(path, _FORMAT, {"settings": json.dumps(settings),
+                                          "training": json.dumps(self.training),
+                                          "network": self.network.state()})
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "LocalIKASDMController":
         """Read a controller written by :meth:`save` for ``env``; a corrupt or foreign file is
         refused with a ``ValueError`` naming the path."""
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                if str(data["format"]) != cls.name:
-                    raise ValueError(f"format {str(data['format'])!r}")
-                settings = json.loads(str(data["settings"]))
-                training = json.loads(str(data["training"]))
-                meta = data["meta"].astype(int)
-                state = {"n_chambers": int(meta[0]), "n_gauges": int(meta[1]),
-                         "seed": int(meta[2]), "skip": bool(meta[3]),
-                         "hidden": data["hidden"].astype(int).tolist(),
-                         "p_max_pa": data["p_max_pa"],
-                         "input_norm": (data["input_low"], data["input_high"]),
-                         "weights": {k[2:]: data[k] for k in data.files if k.startswith("w:")}}
-            network = LocalIKNetwork.from_state(state)
-        except (OSError, ValueError, KeyError, EOFError, RuntimeError) as error:
-            raise ValueError(f"path {str(path)!r} is not a saved {cls.name} controller "
-                             f"({error})") from None
+        settings, training, network = read_model_state(
+            path, _FORMAT, f"{cls.name} controller",
+            lambda state: (json.loads(state["settings"]), json.loads(state["training"]),
+                           LocalIKNetwork.from_state(state["network"])))
         controller = cls(env, **settings)
         if network.n_chambers != controller.env.spec_arm.n_chambers:
             raise ValueError(f"path {str(path)!r} holds a {cls.name} controller for another arm "

@@ -35,7 +35,7 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
-from soft_gym._model_files import read_model_file, write_model_file
+from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_integer, require_positive
 from soft_gym.sensing.sfe_pd import Normaliser
 
@@ -228,32 +228,13 @@ class LocalIKNetwork:
         return network
 
     def save(self, path: str | Path) -> None:
-        """Write the network to ``path`` (an ``.npz`` payload behind a digest line)."""
-        state = self.state()
-        arrays = {"meta": np.array([state["n_chambers"], state["n_gauges"], state["seed"],
-                                    int(state["skip"])]),
-                  "hidden": np.array(state["hidden"]), "p_max_pa": state["p_max_pa"],
-                  "input_low": state["input_norm"][0], "input_high": state["input_norm"][1]}
-        arrays.update({f"w:{k}": v for k, v in state["weights"].items()})
-        write_model_file(path, _FORMAT, arrays)
+        """Write the network and its normalisation to ``path`` (a digest-checked model file)."""
+        write_model_state(path, _FORMAT, self.state())
 
     @classmethod
     def load(cls, path: str | Path) -> "LocalIKNetwork":
         """Read a file written by :meth:`save`; a corrupt or foreign file is refused by name."""
-        arrays = read_model_file(path, _FORMAT, "local-IK network")
-        try:
-            meta = arrays["meta"].astype(int)
-            state = {"n_chambers": int(meta[0]), "n_gauges": int(meta[1]),
-                     "seed": int(meta[2]), "skip": bool(meta[3]),
-                     "hidden": arrays["hidden"].astype(int).tolist(),
-                     "p_max_pa": arrays["p_max_pa"],
-                     "input_norm": (arrays["input_low"], arrays["input_high"]),
-                     "weights": {k[2:]: arrays[k] for k in arrays
-                                 if k.startswith("w:")}}
-            return cls.from_state(state)
-        except (ValueError, KeyError, IndexError, RuntimeError) as error:
-            raise ValueError(f"{str(path)!r} is not a readable local-IK network file "
-                             f"({error})") from None
+        return read_model_state(path, _FORMAT, "local-IK network", cls.from_state)
 
 
 def _rmse(predicted: torch.Tensor, target: torch.Tensor) -> torch.Tensor:

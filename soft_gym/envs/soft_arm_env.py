@@ -497,7 +497,8 @@ class SoftArmEnv(gym.Env):
             current, upcoming = self.task.target(self._step)
             value = np.r_[current, upcoming]
         elif part == "shape":
-            value = np.asarray(self._estimate.shape_points_m, dtype=float).ravel()
+            value = np.asarray(self.feedback_source.shape_points(self._estimate, self.sim),
+                               dtype=float).ravel()
         else:
             value = self.sim.pressures_pa / self._p_high
         return value.astype(np.float32)

@@ -77,6 +77,11 @@ def cache_key(parts: dict[str, Any]) -> tuple[str, str]:
     return hashlib.sha256(description.encode()).hexdigest(), description
 
 
+def sensor_description(sensor, names: tuple[str, ...]) -> str:
+    """A sensor's settings ``names`` (not its noise generator or held sample), for cache keys."""
+    return repr([(name, repr(getattr(sensor, name, None))) for name in names])
+
+
 def cached(parts: dict[str, Any], compute: Callable[[], Any], use_cache: bool = True) -> Any:
     """The value for the key ``parts``: from memory, from disk, or ``compute()`` (then stored).
 

@@ -46,13 +46,15 @@ class GroundTruthFeedback(FeedbackSource):
     estimates_shape = True
 
     def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+        position, quaternion = sim.tip_pose()
+        return FeedbackEstimate(position, quaternion, shape_m=sim.backbone())
+
+    def shape_points(self, estimate: FeedbackEstimate, sim) -> np.ndarray:
+        """The base and the simulated key points (only when the env has a ``shape`` part)."""
         from soft_gym.sensing.shape_exploration import key_points_from_backbone
 
-        position, quaternion = sim.tip_pose()
-        backbone = sim.backbone()
-        return FeedbackEstimate(position, quaternion, shape_m=backbone,
-                                shape_points_m=np.vstack([backbone[0], key_points_from_backbone(
-                                    sim.spec, backbone)]))
+        return np.vstack([estimate.shape_m[0], key_points_from_backbone(sim.spec,
+                                                                         estimate.shape_m)])
 
 
 @register_feedback_source

@@ -62,7 +62,8 @@ class FeedbackSource:
     calibrates: ClassVar[bool] = False
     """Whether :meth:`calibrate` does anything (``reset(options={"recalibrate": True})``)."""
     estimates_shape: ClassVar[bool] = False
-    """Whether estimates carry ``shape_points_m`` (needed by the env's ``shape`` part)."""
+    """Whether the source gives the backbone points of the env's ``shape`` part
+    (:meth:`shape_points`)."""
 
     def __init__(self, options: dict | None = None) -> None:
         if options:
@@ -83,6 +84,11 @@ class FeedbackSource:
     def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
         """The estimate from one step's measurement."""
         raise NotImplementedError
+
+    def shape_points(self, estimate: FeedbackEstimate, sim) -> np.ndarray:
+        """``P_0..P_6`` (m, (7, 3)) of this step's ``estimate``, asked for only by an env with a
+        ``shape`` part (default: the estimate's ``shape_points_m``)."""
+        return estimate.shape_points_m
 
 
 FEEDBACK_SOURCES: dict[str, type[FeedbackSource]] = {}

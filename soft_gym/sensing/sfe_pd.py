@@ -37,7 +37,7 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
-from soft_gym._model_files import read_model_file, write_model_file
+from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_integer, require_positive
 
 WINDOW = 5
@@ -300,34 +300,13 @@ class SFEPDPredictor:
         return predictor
 
     def save(self, path: str | Path) -> None:
-        """Write the networks and their normalisation to ``path`` (``.npz`` with a digest)."""
-        state = self.state()
-        arrays = {"meta": np.array([state["n_key_points"], state["n_chambers"],
-                                    state["n_gauges"], state["window"], state["seed"],
-                                    state["hidden"]]),
-                  "dropout": np.array(state["dropout"]),
-                  "input_low": state["input_norm"][0], "input_high": state["input_norm"][1],
-                  "output_low": state["output_norm"][0], "output_high": state["output_norm"][1]}
-        arrays.update({f"w:{k}": v for k, v in state["weights"].items()})
-        write_model_file(path, _FORMAT, arrays)
+        """Write the networks and their normalisation to ``path`` (a digest-checked file)."""
+        write_model_state(path, _FORMAT, self.state())
 
     @classmethod
     def load(cls, path: str | Path) -> "SFEPDPredictor":
         """Read a file written by :meth:`save`; a corrupt or foreign file is refused by name."""
-        arrays = read_model_file(path, _FORMAT, "SFE-PD model")
-        try:
-            meta = arrays["meta"].astype(int)
-            state = {"n_key_points": int(meta[0]), "n_chambers": int(meta[1]),
-                     "n_gauges": int(meta[2]), "window": int(meta[3]), "seed": int(meta[4]),
-                     "hidden": int(meta[5]), "dropout": float(arrays["dropout"]),
-                     "input_norm": (arrays["input_low"], arrays["input_high"]),
-                     "output_norm": (arrays["output_low"], arrays["output_high"]),
-                     "weights": {k[2:]: arrays[k] for k in arrays
-                                 if k.startswith("w:")}}
-            return cls.from_state(state)
-        except (ValueError, KeyError, IndexError, RuntimeError) as error:
-            raise ValueError(f"{str(path)!r} is not a readable SFE-PD model file ({error})") \
-                from None
+        return read_model_state(path, _FORMAT, "SFE-PD model", cls.from_state)
 
     def _check_data(self, pressures_pa, readings, key_points_m):
         pressures = np.asarray(pressures_pa, dtype=float)

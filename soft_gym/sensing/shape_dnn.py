@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from soft_gym._model_files import read_model_file, write_model_file
+from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import (fields_from_options, require_in_range, require_integer,
                                   require_non_negative, require_positive)
 from soft_gym.robots.spec import ArmSpec
@@ -288,16 +288,11 @@ _STEREO_SETTINGS = ("intrinsics", "baseline_m", "distance_m", "target_m", "backd
 _ENCODER_SETTINGS = ("resolution_m", "noise_std_m")
 
 
-def sensor_description(sensor, names: tuple[str, ...]) -> str:
-    """A sensor's settings (not its generator or held sample), for cache keys."""
-    return repr([(name, repr(getattr(sensor, name, None))) for name in names])
-
-
 def cached_dataset(spec: ArmSpec, encoders, stereo=None,
                    config: ShapeDNNConfig = ShapeDNNConfig(), ases_config=None,
                    use_cache: bool = True, progress: bool = True) -> ZouDataset:
     """:func:`collect_dataset`, built once per recipe and kept in the calibration cache."""
-    from soft_gym.sensing.calibration_cache import cached
+    from soft_gym.sensing.calibration_cache import cached, sensor_description
     from soft_gym.sensing.stereo_shape import ASESConfig
 
     stereo = default_stereo() if stereo is None else stereo
@@ -496,33 +491,13 @@ class ShapeDNN:
         return dnn
 
     def save(self, path: str | Path) -> None:
-        """Write the network and its normalisation to ``path`` (``.npz`` after a header line
-        with the format and the payload's SHA-256)."""
-        state = self.state()
-        arrays = {"meta": np.array([state["n_inputs"], state["seed"], *state["hidden_widths"]]),
-                  "input_mean": state["input_mean"], "input_scale": state["input_scale"],
-                  "output_mean": state["output_mean"],
-                  "output_scale": np.array(state["output_scale"])}
-        arrays.update({f"w:{k}": v for k, v in state["weights"].items()})
-        write_model_file(path, _FORMAT, arrays)
+        """Write the network and its normalisation to ``path`` (a digest-checked model file)."""
+        write_model_state(path, _FORMAT, self.state())
 
     @classmethod
     def load(cls, path: str | Path) -> "ShapeDNN":
         """Read a file written by :meth:`save`; a corrupt or foreign file is refused by name."""
-        arrays = read_model_file(path, _FORMAT, "zou2022 shape-DNN")
-        try:
-            meta = arrays["meta"].astype(int)
-            state = {"n_inputs": int(meta[0]), "seed": int(meta[1]),
-                     "hidden_widths": tuple(int(w) for w in meta[2:]),
-                     "input_mean": arrays["input_mean"], "input_scale": arrays["input_scale"],
-                     "output_mean": arrays["output_mean"],
-                     "output_scale": float(arrays["output_scale"]),
-                     "weights": {k[2:]: arrays[k] for k in arrays
-                                 if k.startswith("w:")}}
-            return cls.from_state(state)
-        except (ValueError, KeyError, IndexError, RuntimeError) as error:
-            raise ValueError(f"{str(path)!r} is not a readable zou2022 shape-DNN file ({error})") \
-                from None
+        return read_model_state(path, _FORMAT, "zou2022 shape-DNN", cls.from_state)
 
     # ------------------------------------------------------------------ checks
     def _check_data(self, lengths_m, points_m) -> tuple[np.ndarray, np.ndarray]:
@@ -573,7 +548,7 @@ def cached_shape_dnn(spec: ArmSpec, encoders, stereo=None,
                      progress: bool = True) -> tuple[ShapeDNN, dict[str, Any]]:
     """:func:`train_shape_dnn`, from the calibration cache where run before with the same arm,
     sensors and configuration."""
-    from soft_gym.sensing.calibration_cache import cached
+    from soft_gym.sensing.calibration_cache import cached, sensor_description
     from soft_gym.sensing.stereo_shape import ASESConfig
 
     stereo = default_stereo() if stereo is None else stereo

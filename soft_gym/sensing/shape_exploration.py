@@ -34,6 +34,10 @@ paper's two equal segments: thirds of each segment). Any arm gets the same six."
 
 N_KEY_POINTS = 2 * N_SUBSEGMENTS
 
+GAUGE_SETTINGS = ("rate_hz", "arc_fraction", "angle_offset_rad", "radius_m", "gauge_length_m",
+                  "gain", "offset", "noise_std", "n_points")
+"""The strain-gauge settings that change the recorded readings (part of the cache key)."""
+
 
 @dataclass
 class ShapeDataset:
@@ -55,12 +59,6 @@ class ShapeDataset:
 
     def __len__(self) -> int:
         return int(self.pressures_pa.shape[0])
-
-    def subset(self, index) -> "ShapeDataset":
-        """The samples at ``index`` (a slice or index array)."""
-        return ShapeDataset(self.pressures_pa[index], self.readings[index],
-                            self.key_points_m[index], self.backbone_m[index],
-                            self.tip_load_kg[index])
 
 
 def key_point_arcs(spec: ArmSpec) -> np.ndarray:
@@ -162,3 +160,20 @@ def collect_exploration(spec: ArmSpec, gauges, n_free: int = 4000, n_loaded: int
     return ShapeDataset(pressures_pa=pressures, readings=np.array(readings),
                         key_points_m=key_points_from_backbone(spec, backbones),
                         backbone_m=backbones, tip_load_kg=np.array(loads))
+
+
+def cached_exploration(spec: ArmSpec, gauges, n_free: int = 4000, n_loaded: int = 2000,
+                       load_kg: float = 0.075, seed: int = 0, use_cache: bool = True,
+                       progress: bool = True) -> ShapeDataset:
+    """:func:`collect_exploration`, run once per arm, gauge model and recipe and kept in the
+    calibration cache: the shape reconstruction and the local-IK controller learn from the same
+    record."""
+    from soft_gym.sensing.calibration_cache import cached, sensor_description
+
+    parts = {"what": "zhao2021 exploration", "arm": repr(spec),
+             "gauges": sensor_description(gauges, GAUGE_SETTINGS), "n_free": n_free,
+             "n_loaded": n_loaded, "load_kg": load_kg, "seed": seed}
+    return cached(parts, lambda: collect_exploration(spec, gauges, n_free=n_free,
+                                                     n_loaded=n_loaded, load_kg=load_kg,
+                                                     seed=seed, progress=progress),
+                  use_cache=use_cache)

@@ -140,22 +140,31 @@ class ShapeReconstructor:
         return cls(SFEPDPredictor.load(path), n_points)
 
 
+def exploration_of(spec: ArmSpec, gauges, config: ReconstructionConfig, use_cache: bool = True,
+                   progress: bool = True):
+    """The exploration record ``config`` asks for (:func:`cached_exploration`)."""
+    from soft_gym.sensing.shape_exploration import cached_exploration
+
+    return cached_exploration(spec, gauges, n_free=config.n_free, n_loaded=config.n_loaded,
+                              load_kg=config.load_kg, seed=config.seed, use_cache=use_cache,
+                              progress=progress)
+
+
 def train_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig = ReconstructionConfig(),
+                         use_cache: bool = True,
                          progress: bool = True) -> tuple[ShapeReconstructor, dict[str, Any]]:
-    """Explore ``spec`` with ``gauges`` on and train the SFE-PD networks (zhao2021 VI-A).
+    """Explore ``spec`` with ``gauges`` on (or take the cached exploration) and train the SFE-PD
+    networks (zhao2021 VI-A).
 
     Returns the reconstructor and a report: the training's per-network validation RMSE
-    (normalised), its iterations, and the data set (:class:`ShapeDataset`) for evaluation.
+    (normalised) and its iterations.
     """
     import torch
 
     from soft_gym.sensing.sfe_pd import SFEPDPredictor
-    from soft_gym.sensing.shape_exploration import N_KEY_POINTS, collect_exploration
+    from soft_gym.sensing.shape_exploration import N_KEY_POINTS
 
-    if spec.n_segments < 1:
-        raise ValueError(f"spec must have segments, got {spec!r}")
-    data = collect_exploration(spec, gauges, n_free=config.n_free, n_loaded=config.n_loaded,
-                               load_kg=config.load_kg, seed=config.seed, progress=progress)
+    data = exploration_of(spec, gauges, config, use_cache, progress)
     predictor = SFEPDPredictor(N_KEY_POINTS, spec.n_chambers,
                                data.readings.shape[1], seed=config.seed, dropout=config.dropout)
     threads = torch.get_num_threads()
@@ -170,8 +179,7 @@ def train_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig = R
     return ShapeReconstructor(predictor, config.n_points), {
         "iterations": report.iterations,
         "validation_rmse": report.validation_rmse.tolist(),
-        "training_rmse": report.training_rmse.tolist(),
-        "data": data}
+        "training_rmse": report.training_rmse.tolist()}
 
 
 def cached_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig,
@@ -179,22 +187,15 @@ def cached_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig,
                           progress: bool = True) -> tuple[ShapeReconstructor, dict[str, Any]]:
     """:func:`train_reconstruction`, from the calibration cache where it has been run before
     with the same arm, gauges, configuration and ``key`` (anything else that matters)."""
-    from soft_gym.sensing.calibration_cache import cached
+    from soft_gym.sensing.calibration_cache import cached, sensor_description
+    from soft_gym.sensing.shape_exploration import GAUGE_SETTINGS
 
     def compute() -> dict[str, Any]:
-        reconstructor, report = train_reconstruction(spec, gauges, config, progress)
+        reconstructor, report = train_reconstruction(spec, gauges, config, use_cache, progress)
         return {"state": reconstructor.state(), "report": report}
 
     parts = {"what": "zhao2021 shape reconstruction", "arm": repr(spec),
-             "gauges": _gauge_description(gauges), "config": asdict(config), **(key or {})}
+             "gauges": sensor_description(gauges, GAUGE_SETTINGS), "config": asdict(config),
+             **(key or {})}
     result = cached(parts, compute, use_cache=use_cache)
     return ShapeReconstructor.from_state(result["state"]), result["report"]
-
-
-_GAUGE_SETTINGS = ("rate_hz", "arc_fraction", "angle_offset_rad", "radius_m", "gauge_length_m",
-                   "gain", "offset", "noise_std", "n_points")
-
-
-def _gauge_description(gauges) -> str:
-    """The gauge model's settings (not its noise generator or held sample)."""
-    return repr([(name, repr(getattr(gauges, name, None))) for name in _GAUGE_SETTINGS])

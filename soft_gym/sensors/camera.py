@@ -27,7 +27,7 @@ from gymnasium import spaces
 from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym._validation import as_finite_array
 from soft_gym.sensors.base import Sensor
-from soft_gym.sensors.faults import FrameContext, VisualFault, make_faults
+from soft_gym.sensors.faults import FrameContext, VisualFault, replace_faults
 from soft_gym.sensors.intrinsics import CameraIntrinsics, as_intrinsics
 from soft_gym.sensors.scene import build_scene
 
@@ -112,16 +112,9 @@ class EyeInHandCamera(Sensor):
     # ------------------------------------------------------------------ set-up
     def set_faults(self, faults: Any) -> None:
         """Replace the faults (any ``make_faults`` description); their bodies move along."""
-        new = make_faults(faults)
-        for fault in self.faults:
-            if fault.geometric and self._client is not None:
-                fault.detach(self._client)
-        self.faults = sorted(new, key=lambda fault: fault.stage)
-        if self._client is not None:
-            for fault in self.faults:
-                if fault.geometric:
-                    fault.attach(self._client, self.intrinsics)
-                fault.reset(self.rng)
+        self.faults = replace_faults(self.faults, faults, self._client,
+                                     lambda fault: fault.attach(self._client, self.intrinsics),
+                                     self.rng)
 
     def _setup(self, sim) -> None:
         """Build the scene and the faults' bodies once per simulator client."""

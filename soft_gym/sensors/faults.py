@@ -657,6 +657,25 @@ def make_faults(faults: Any) -> list[VisualFault]:
     return made
 
 
+def replace_faults(current: list[VisualFault], faults: Any, client,
+                   attach: Callable[[VisualFault], None],
+                   rng: np.random.Generator) -> list[VisualFault]:
+    """A camera's new faults for the description ``faults``, in stage order: the geometric ones
+    of ``current`` leave the simulator ``client`` and, where the camera is already built
+    (``client`` not ``None``), the new geometric ones are placed by ``attach`` and every new one
+    is reset with ``rng``."""
+    new = sorted(make_faults(faults), key=lambda fault: fault.stage)
+    if client is not None:
+        for fault in current:
+            if fault.geometric:
+                fault.detach(client)
+        for fault in new:
+            if fault.geometric:
+                attach(fault)
+            fault.reset(rng)
+    return new
+
+
 def faults_per_sensor(faults: Any) -> dict[str, Any] | None:
     """The per-camera form of a fault description, or ``None`` for one shared description.
 

@@ -47,7 +47,7 @@ from gymnasium import spaces
 from soft_gym._validation import as_finite_array, require_positive
 from soft_gym.sensors.base import Sensor
 from soft_gym.sensors.camera import render
-from soft_gym.sensors.faults import FrameContext, VisualFault, make_faults
+from soft_gym.sensors.faults import FrameContext, VisualFault, replace_faults
 from soft_gym.sensors.intrinsics import CameraIntrinsics, as_intrinsics
 
 OCCLUDER_FRACTION = 0.4
@@ -165,16 +165,7 @@ class StereoCamera(Sensor):
 
     def set_faults(self, faults: Any) -> None:
         """Replace the faults (any ``make_faults`` description); their bodies move along."""
-        new = make_faults(faults)
-        for fault in self.faults:
-            if fault.geometric and self._client is not None:
-                fault.detach(self._client)
-        self.faults = sorted(new, key=lambda fault: fault.stage)
-        if self._client is not None:
-            for fault in self.faults:
-                if fault.geometric:
-                    self._attach(fault)
-                fault.reset(self.rng)
+        self.faults = replace_faults(self.faults, faults, self._client, self._attach, self.rng)
 
     def _setup(self, sim) -> None:
         """Place the backdrop and the faults' bodies once per simulator client."""
