@@ -478,7 +478,7 @@ def report_tables(results: dict) -> str:
                   "distance | paper steps |", "|---|---|---|---|---|"]
         for label, run in p2p["runs"].items():
             if "refused" in run:
-                lines.append(f"| {label} | refused: {run['refused'].split(':')[0]} | | | |")
+                lines.append(_refused_row(label, run))
                 continue
             steps = "not reached" if run["steps"] is None else run["steps"]
             at = run["true_distance_at_reach_mm"]
@@ -495,12 +495,17 @@ def report_tables(results: dict) -> str:
                   "within E after the load change |", "|---|---|---|---|---|"]
         for label, run in results["circle"].items():
             if "refused" in run:
-                lines.append(f"| {label} | refused: {run['refused'].split(':')[0]} | | | |")
+                lines.append(_refused_row(label, run))
                 continue
             lines.append(f"| {label} | {run['steps']} | {run['points_reached']}/"
                          f"{CIRCLE_POINTS} | {run['path_error_mean_mm']:.1f} / "
                          f"{run['path_error_max_mm']:.1f} | {run['recovery_steps'] or ''} |")
     return "\n".join(lines)
+
+
+def _refused_row(label: str, run: dict) -> str:
+    """A five-column table row for a policy that refused the arm: the reason's first clause."""
+    return f"| {label} | refused: {run['refused'].split(':')[0]} | | | |"
 
 
 def _xyz(point) -> str:
