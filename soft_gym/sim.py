@@ -21,6 +21,7 @@ from soft_gym.robots.pneumatics import (
     PneumaticSupply,
     effective_pressure_pa,
     loads_of_effective_pressure,
+    twist_of_effective_pressure,
 )
 from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
 from soft_gym.robots.stops import STOP_STIFFNESS_FACTOR, THREAD_STIFFNESS_FACTOR, EndStops
@@ -459,7 +460,8 @@ class ArmSimulator:
             unit = np.zeros(self.spec.n_chambers)
             unit[chamber] = 1.0
             axial, moment = loads_of_effective_pressure(self.spec, unit)
-            per_kind = np.stack([moment[:, 0], moment[:, 1], np.zeros_like(axial), axial], axis=1)
+            twist = twist_of_effective_pressure(self.spec, unit)
+            per_kind = np.stack([moment[:, 0], moment[:, 1], twist, axial], axis=1)
             columns.append((self.arm.compliance_parts * per_kind[:, self._kind].T).sum(axis=1))
         return np.stack(columns, axis=1)
 

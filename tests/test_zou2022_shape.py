@@ -213,13 +213,13 @@ def test_dnn_learns_the_vision_labels(small_dnn):
     baseline = axis_errors_mm(np.broadcast_to(mean_label, predicted.shape),
                               data.labels_m[test])["mean_distance_mm"]
     assert to_labels < 0.25 * baseline
-    # against the truth: the DNN inherits ASES's error (~3 mm); on the simulated arm the CC
-    # shape itself is within ~1 mm (the sim bends nearly at constant curvature), so here the
-    # DNN does not beat RSES (measured on this test set: DNN 3.3 mm, RSES 0.6 mm, ASES 2.6 mm)
+    # against the truth: the DNN inherits ASES's error (~3 mm); the braid twist bends the arm
+    # off constant curvature, so even this small DNN beats RSES (measured on this test set: DNN
+    # 3.7 mm, RSES 5.2 mm; without the twist RSES was 0.6 mm)
     to_truth = axis_errors_mm(predicted, data.truth_m[test])["mean_distance_mm"]
     rses = axis_errors_mm(cc_shape_points(data.lengths_m[test], D),
                           data.truth_m[test])["mean_distance_mm"]
-    assert to_truth < 6.0 and rses < 2.0
+    assert to_truth < 6.0 and rses > 3.5 and to_truth < rses
 
 
 def test_dnn_save_load_identity_and_corrupt_file(small_dnn, tmp_path):

@@ -116,3 +116,13 @@ def loads_of_effective_pressure(spec: ArmSpec, effective_pa: np.ndarray
     moment = np.stack([(force * offset * np.sin(sigma)).sum(axis=1),
                        (-force * offset * np.cos(sigma)).sum(axis=1)], axis=1)
     return axial, moment
+
+
+def twist_of_effective_pressure(spec: ArmSpec, effective_pa: np.ndarray) -> np.ndarray:
+    """Torsion moment (N m) of every segment, (n_segments,), of already effective pressures:
+    ``sum_i r_t p_i A_c`` with ``r_t`` = :attr:`~soft_gym.robots.spec.SegmentSpec.braid_twist_m`
+    (zero for balanced braids); linear in ``effective_pa``."""
+    pressure = np.asarray(effective_pa, dtype=float).reshape(spec.n_segments, 3)
+    lever = np.array([segment.braid_twist_m * segment.chamber_area_m2
+                      for segment in spec.segments])
+    return lever * pressure.sum(axis=1)

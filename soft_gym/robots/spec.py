@@ -87,6 +87,12 @@ class SegmentSpec:
             silicone.
         torsion: whether links get a torsion joint (stiffness ``G J / ds``).
         extra_tip_mass_kg: mass fixed at this segment's distal end (connector, tip cap, camera).
+        braid_twist_m: torsion lever ``r_t`` (m) of an unbalanced braid: a braided (McKibben)
+            muscle whose braid is not balanced rotates as it extends, so each pressurised chamber
+            twists the segment about its axis with the moment ``r_t p A_c(p)`` (the same effective
+            force as its axial load), signed by ``r_t``. It acts through the torsion joints, so it
+            needs ``torsion=True``; 0 (default): no twist. With the bending plane turning along the
+            arm, a bend becomes a 3-D twisted curve that constant curvature cannot describe.
     """
 
     length_m: float
@@ -109,6 +115,7 @@ class SegmentSpec:
     damping_ratio: float = 0.7
     torsion: bool = False
     extra_tip_mass_kg: float = 0.0
+    braid_twist_m: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("length_m", "outer_radius_m", "chamber_offset_m", "chamber_area_m2",
@@ -117,6 +124,9 @@ class SegmentSpec:
             require_positive(name, getattr(self, name))
         for name in ("p_pre_pa", "bending_stiffening", "axial_stiffening", "extra_tip_mass_kg"):
             require_non_negative(name, getattr(self, name))
+        if not np.isfinite(self.braid_twist_m) or (self.braid_twist_m != 0.0 and not self.torsion):
+            raise ValueError(f"braid_twist_m must be finite, and 0 without torsion joints "
+                             f"(torsion=False), got {self.braid_twist_m!r}")
         require_in_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5)
         if self.axial_modulus_pa is not None:
             require_positive("axial_modulus_pa", self.axial_modulus_pa)

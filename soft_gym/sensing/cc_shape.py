@@ -49,6 +49,45 @@ def arc_parameters(lengths_m: np.ndarray, d_m: float | Sequence[float]
     return s, np.hypot(kx, ky), np.arctan2(ky, kx)
 
 
+def _first_bad(name: str, array: np.ndarray, bad: np.ndarray, allowed: str) -> None:
+    """Raise ``ValueError`` naming ``name`` and its first entry flagged in ``bad``, if any."""
+    if bad.any():
+        where = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"{name} must be {allowed}, got {float(array[where])!r} at index "
+                         f"{where}")
+
+
+def _as_real(name: str, value: object, what: str) -> np.ndarray:
+    if value is None or np.iscomplexobj(value):
+        raise ValueError(f"{name} must be real {what}, got {value!r}")
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name} must be {what} (numbers), got {value!r}") from error
+
+
+def _check_lengths(lengths_m: object) -> np.ndarray:
+    """``lengths_m`` as a float array (..., 3 n_segments) of finite lengths > 0 (m)."""
+    lengths = _as_real("lengths_m", lengths_m, "chamber lengths (m)")
+    if lengths.ndim == 0 or lengths.shape[-1] == 0 or lengths.shape[-1] % 3:
+        raise ValueError(f"lengths_m must have shape (..., 3 n_segments) (three chamber lengths "
+                         f"in m per segment), got shape {lengths.shape}")
+    _first_bad("lengths_m", lengths, ~(np.isfinite(lengths) & (lengths > 0.0)),
+               "finite chamber lengths > 0 (m)")
+    return lengths
+
+
+def _check_distance(d_m: object, n_segments: int) -> np.ndarray:
+    """``d_m`` as a float array of finite distances > 0 (m): one, or one per segment."""
+    distance = _as_real("d_m", d_m, "chamber distances from the axis (m)")
+    if distance.ndim and distance.shape[-1] not in (1, n_segments):
+        raise ValueError(f"d_m must be one chamber distance (m) or one per segment "
+                         f"({n_segments}), got shape {distance.shape}")
+    _first_bad("d_m", distance, ~(np.isfinite(distance) & (distance > 0.0)),
+               "finite distances > 0 (m)")
+    return distance
+
+
 def cc_shape_points(lengths_m: np.ndarray, d_m: float | Sequence[float],
                     rest_lengths_m: Sequence[float] | None = None,
                     n_points: int = N_POINTS) -> np.ndarray:
@@ -65,7 +104,8 @@ def cc_shape_points(lengths_m: np.ndarray, d_m: float | Sequence[float],
         Points (m, base frame), (..., n_points, 3); the first is the base, the last the tip.
     """
     n_points = require_integer("n_points", n_points, 2)
-    s, kx, ky = curvature_from_lengths(lengths_m, d_m)
+    lengths = _check_lengths(lengths_m)
+    s, kx, ky = curvature_from_lengths(lengths, _check_distance(d_m, lengths.shape[-1] // 3))
     n_segments = s.shape[-1]
     if rest_lengths_m is None:
         rest = np.ones(n_segments)

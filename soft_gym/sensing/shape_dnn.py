@@ -437,12 +437,21 @@ class ShapeDNN:
         (n, n_inputs) -> (n, 7, 3). numpy, float64, on the stored float32 weights."""
         if self.input_mean is None:
             raise ValueError("the DNN is not trained: call fit() or load() first")
-        x = np.asarray(lengths_m, dtype=np.float64)
+        if lengths_m is None or np.iscomplexobj(lengths_m):
+            raise ValueError(f"lengths_m must be real chamber lengths (m), got {lengths_m!r}")
+        try:
+            x = np.asarray(lengths_m, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"lengths_m must be chamber lengths (m, numbers), got "
+                             f"{lengths_m!r}") from error
         if x.shape[-1:] != (self.n_inputs,) or x.ndim not in (1, 2):
             raise ValueError(f"lengths_m must have shape ([n,] {self.n_inputs}) (chamber lengths "
                              f"in m), got {x.shape}")
-        if not np.all(np.isfinite(x)):
-            raise ValueError(f"lengths_m must be finite, got {x.tolist()}")
+        bad = ~(np.isfinite(x) & (x > 0.0))
+        if bad.any():
+            where = tuple(int(i) for i in np.argwhere(bad)[0])
+            raise ValueError(f"lengths_m must be finite chamber lengths > 0 (m), got "
+                             f"{float(x[where])!r} at index {where}")
         h = (x - self.input_mean) / self.input_scale
         last = len(self._layers) - 1
         for i, (weight, bias) in enumerate(self._layers):

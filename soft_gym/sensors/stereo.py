@@ -26,14 +26,19 @@ MotionBlur` (which models camera motion) leaves their images sharp. Self-occlusi
 no fault here: it happens when the simulated arm bends towards the cameras.
 
 What ASES (:func:`~soft_gym.sensing.stereo_shape.estimate_stereo_shape`) makes of them, measured
-on 20 random settled poses of the zou2022 arm in the 320 x 180 pair (clean: never lost, 2.8 mm
-mean point error): ``low_light`` at strength 0.85 or 1 is lost on every frame (no arm pixels),
-at 0.5 / 0.7 never (2.8 / 3.2 mm); ``led_glare`` at strength 1 is lost on 17 of 20; a neutral
-plate (``rgba`` grey) over the whole pair, or over 60 % of it from either side, is lost on every
-frame; 60 % from the top hides the base (lost: the base end is off); but 60 % from the bottom
-hides the tip half and is *not* flagged (the truncated arm gives 47 mm mean error). The default
-skin-coloured plate lies inside ASES's orange HSV range: where it is in view ASES takes it for
-the arm, which then touches the image border (lost).
+on 20 random settled poses of the zou2022 arm in the 320 x 180 pair (clean: never lost, 3.0 mm
+mean point error): ``low_light`` at strength 0.5 / 0.7 is never lost (3.0 / 3.1 mm), at 0.75 always
+(the dim tip drops out of the mask: a broken contour or a tip end that meets neither arm nor
+backdrop), at 0.85 or 1 always (no arm pixels); ``led_glare`` at strength 1 is lost on 17 of 20
+(9.0 mm on the other 3), at 0.5 on 13 of 20 (2.7 mm on the other 7; a tip washed out by the glare
+is caught by the occlusion check); a neutral plate (``rgba`` grey) over the whole pair, or over
+60 % of it from either side, from the top (the base hidden) or from the bottom (the tip half
+hidden: the occlusion check of :mod:`~soft_gym.sensing.stereo_shape` finds the plate at the
+visible arm's tip end, where the truncated arm gave 46 mm mean error before) is lost on every
+frame. From the bottom, 45 % is lost on 18 of 20 frames (3.1 mm on the other 2) and 30 % on 4 of
+20 (tips touching the plate's edge; 3.2 mm on the rest). The default skin-coloured plate lies
+inside ASES's orange HSV range: where it is in view ASES takes it for the arm, which then touches
+the image border (lost).
 """
 
 from __future__ import annotations
