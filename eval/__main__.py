@@ -208,6 +208,22 @@ def main(argv: list[str] | None = None) -> None:
                           help="further policies on the free point-to-point run and circle, "
                                "e.g. lwpr_rwr cc_model sb3:PATH")
     zhao2021.add_argument("--out", default="results/zhao2021", help="output directory")
+    from eval import zou2022 as zou2022_module
+
+    zou2022 = sub.add_parser("zou2022", help="zou2022 shape estimation (RSES, ASES, DNN) and "
+                             "control with each shape source", description=zou2022_module.__doc__,
+                             formatter_class=HelpFormatter)
+    zou2022.add_argument("--experiments", nargs="+", default=list(zou2022_module.EXPERIMENTS),
+                         choices=list(zou2022_module.EXPERIMENTS), help="which experiments")
+    zou2022.add_argument("--seeds", type=int, nargs="+", default=[0],
+                         help="seeds (exploration, training, sensor noise, poses)")
+    zou2022.add_argument("--samples", type=int, default=29791,
+                         help="exploration samples of the DNN's data set (paper: 31^3 = 29791, "
+                              "~25 min on one core, cached)")
+    zou2022.add_argument("--epochs", type=int, default=500, help="DNN training epochs (paper: 500)")
+    zou2022.add_argument("--poses", type=int, default=20,
+                         help="random poses of the ASES fault experiment")
+    zou2022.add_argument("--out", default="results/zou2022", help="output directory")
     compare = sub.add_parser(
         "compare", help="SB3 agents against the baselines, nominal and out of distribution",
         description=compare_module.__doc__, formatter_class=HelpFormatter)
@@ -257,6 +273,22 @@ def main(argv: list[str] | None = None) -> None:
                                       max_iterations=args.iterations)
         zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
                                        baselines=tuple(args.baselines))
+        print(f"output directory: {args.out}")
+        return
+    if args.command == "zou2022":
+        if args.samples < 20:
+            parser.error(f"--samples must be >= 20, got {args.samples}")
+        if args.epochs < 1:
+            parser.error(f"--epochs must be >= 1, got {args.epochs}")
+        if args.poses < 1:
+            parser.error(f"--poses must be >= 1, got {args.poses}")
+        if any(seed < 0 for seed in args.seeds):
+            parser.error(f"--seeds must be >= 0, got {args.seeds}")
+        from soft_gym.sensing.shape_dnn import ShapeDNNConfig
+
+        config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
+        zou2022_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
+                                      n_poses=args.poses)
         print(f"output directory: {args.out}")
         return
     if args.command == "compare":

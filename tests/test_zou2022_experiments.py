@@ -1,0 +1,100 @@
+"""The zou2022 experiments (``python -m eval zou2022``): Table 3 on the DNN's test set, Table 4's
+continuous bend, ASES under visual faults.
+
+References: the bend's pressure schedule from the paper's text (PMA2 1 -> 2.5 bar in 0.05 bar
+steps over 30 s); the simulator's true points; the paper's qualitative result (Table 4: the DNN
+several times more accurate than constant curvature from the same encoders). The slow test
+trains the DNN on 5000 exploration samples per seed (~8 min each on one core).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from eval import zou2022
+from eval.__main__ import main
+from soft_gym.sensing.shape_dnn import ShapeDNNConfig
+
+QUICK = ShapeDNNConfig(n_samples=150, settle_s=0.8, batch_size=16, epochs=200)
+"""A quick model (the default tests' size); the paper's has 29791 samples."""
+
+
+@pytest.fixture(scope="module")
+def quick_dnn():
+    return zou2022.shape_dnn(QUICK, progress=False)
+
+
+def test_the_bend_follows_the_papers_pressure_schedule():
+    bar = zou2022.BAR_PA
+    np.testing.assert_allclose(zou2022.bend_pressures_pa(0.0), [bar, bar, bar])
+    np.testing.assert_allclose(zou2022.bend_pressures_pa(0.99), [bar, bar, bar])
+    np.testing.assert_allclose(zou2022.bend_pressures_pa(1.0), [bar, 1.05 * bar, bar])
+    np.testing.assert_allclose(zou2022.bend_pressures_pa(15.5), [bar, 1.75 * bar, bar])
+    np.testing.assert_allclose(zou2022.bend_pressures_pa(30.0), [bar, 2.5 * bar, bar])
+    np.testing.assert_allclose(zou2022.bend_pressures_pa(45.0), [bar, 2.5 * bar, bar])
+
+
+def test_table3_reports_the_test_set_against_labels_and_truth(quick_dnn):
+    dnn, report = quick_dnn
+    result = zou2022.run_table3(dnn, report)
+    assert result["n_test"] == len(report["data"].test) > 0
+    for reference in ("ases", "truth"):
+        row = result[reference]
+        assert np.all(np.isfinite(row["rmse_mm"])) and np.all(row["rmse_mm"] > 0)
+        # RMSE >= MAE, and the mean per-sample RMSE lies between the smallest and largest
+        assert np.all(row["rmse_mm"] >= row["mae_mm"] - 1e-12)
+        assert np.all((row["within_2_5_mm"] >= 0) & (row["within_2_5_mm"] <= 1))
+    table = zou2022.report_tables({"table3": result})
+    assert "Table 3" in table and "paper (ASES)" in table
+
+
+def test_the_bend_bends_and_rses_starts_right_but_drifts_as_the_arm_twists(quick_dnn):
+    dnn, _ = quick_dnn
+    result = zou2022.run_table4(dnn, seed=0, progress=False)
+    series = result["_series"]
+    assert result["n_samples"] == 101 == len(series["time_s"])
+    assert result["ases_lost"] == 0
+    truth_tip = series["truth"][:, -1]
+    # PMA2 lengthens and the tip swings away from the axis
+    assert series["lengths_m"][-1, 1] - series["lengths_m"][0, 1] > 0.02
+    assert np.linalg.norm(truth_tip[-1, :2] - truth_tip[0, :2]) > 0.05
+    rses_tip_error = np.linalg.norm(series["rses"][:, -1] - truth_tip, axis=1) * 1e3
+    assert rses_tip_error[0] < 3.0 < 10.0 < rses_tip_error[-1]
+    for key in ("ratio_tip_vs_ases", "ratio_tip_vs_truth", "ratio_points_vs_ases"):
+        assert np.isfinite(result[key]) and result[key] > 0
+
+
+def test_ases_is_lost_in_darkness_and_accurate_when_clean():
+    result = zou2022.run_faults(n_poses=3, seed=1, progress=False, conditions={
+        "clean": None, "darkness": {"name": "low_light", "strength": 1.0}})
+    assert result["clean"]["lost_share"] == 0.0
+    assert result["clean"]["mean_point_error_mm"] < 6.0
+    assert result["darkness"]["lost_share"] == 1.0
+    assert result["darkness"]["mean_point_error_mm"] is None
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["zou2022", "--samples", "5"], "--samples"),
+    (["zou2022", "--epochs", "0"], "--epochs"),
+    (["zou2022", "--poses", "0"], "--poses"),
+    (["zou2022", "--seeds", "-1"], "--seeds"),
+    (["zou2022", "--experiments", "table9"], "--experiments"),
+])
+def test_bad_options_are_one_line_errors_before_any_work(argv, option, capsys):
+    with pytest.raises(SystemExit) as error:
+        main(argv)
+    assert error.value.code == 2
+    assert option in capsys.readouterr().err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_dnn_is_several_times_more_accurate_than_rses_on_the_bend(seed):
+    """zou2022 Table 4's pattern: RSES/DNN end-point RMSE ratio >= 2.5 against ASES (the paper's
+    reference; paper 4.9) and against the true tip."""
+    config = ShapeDNNConfig(n_samples=5000, seed=seed)
+    dnn, _ = zou2022.shape_dnn(config, progress=False)
+    result = zou2022.run_table4(dnn, seed=seed, progress=False)
+    assert result["ratio_tip_vs_ases"] >= 2.5, result
+    assert result["ratio_tip_vs_truth"] >= 2.5, result
