@@ -324,10 +324,19 @@ class ArmSimulator:
         return np.fromiter((s[1] for s in states), dtype=float, count=len(states))
 
     def reset(self, pressure_pa: np.ndarray | None = None, settle_s: float = 0.0) -> None:
-        """Straighten the arm at rest, set pressures, and optionally let it settle for ``settle_s``."""
-        for joint in self._joints:
-            self.client.resetJointState(self.arm.body_id, joint, 0.0, 0.0)
+        """Set pressures (Pa; ``None``: the pre-pressure), put the arm at rest (straight without
+        ``pressure_pa``, else in the shape those pressures hold against its springs alone), and
+        optionally let it settle under gravity and its loads for ``settle_s`` (s).
+
+        Starting pressurised arms in their weightless equilibrium, not straight, spares them the
+        jolt of the whole pressure load at once (an extensible arm such as zou2022's, stepped from
+        straight to 2-3 bar, can tear its joints apart in the first milliseconds).
+        """
         self.supply.reset(pressure_pa)
+        start = (np.zeros(len(self._joints)) if pressure_pa is None
+                 else self._weightless_equilibrium(self.supply.pressure_pa))
+        for joint, position in zip(self._joints, start):
+            self.client.resetJointState(self.arm.body_id, joint, float(position), 0.0)
         self._state[:] = 0.0
         self._previous_velocity_valid = False
         self._frames_substep = self._positions_substep = -1
@@ -450,6 +459,22 @@ class ArmSimulator:
             pass
 
     # ------------------------------------------------------------------ internals
+    def _weightless_equilibrium(self, pressure_pa: np.ndarray) -> np.ndarray:
+        """Joint positions where the springs balance the pressure load alone: per joint the real
+        root of ``q (1 + beta (s q)^2) = q_rest`` (the secant stiffening of
+        :meth:`_update_actuation`), kept inside 98 % of the joint's limits."""
+        rest = self._pressure_to_rest @ effective_pressure_pa(self.spec, pressure_pa)
+        a = self.arm.stiffening * self.arm.strain_scale ** 2
+        q = rest.copy()
+        stiff = a > 0
+        if np.any(stiff):
+            # Cardano for q^3 + q / a - rest / a = 0, which has one real root (increasing)
+            p3 = 1.0 / (3.0 * a[stiff])
+            half = 0.5 * rest[stiff] / a[stiff]
+            root = np.sqrt(half ** 2 + p3 ** 3)
+            q[stiff] = np.cbrt(half + root) + np.cbrt(half - root)
+        return np.clip(q, 0.98 * self.arm.lower_limit, 0.98 * self.arm.upper_limit)
+
     def _pressure_to_rest_matrix(self) -> np.ndarray:
         """Matrix (n_joints, n_chambers) from effective chamber pressures (Pa,
         :func:`~soft_gym.robots.pneumatics.effective_pressure_pa`) to each joint's rest

@@ -233,3 +233,28 @@ def test_loads_count_together_only_while_they_act():
     with pytest.raises(ValueError, match="at most 1.24 N"):
         sim.add_load(Push(force_n=(0.0, 0.2, 0.0), start_s=50.0, end_s=60.0))
     sim.close()
+
+
+@pytest.mark.parametrize("preset", ["zou2022", "wang2023", "zhao2021", "ho2018"])
+def test_a_reset_with_pressures_settles_where_the_lag_takes_the_arm(preset):
+    """``ArmSimulator.reset(pressure_pa, settle_s)`` starts the arm where those pressures hold it
+    (a straight zou2022 arm stepped to 3 bar in every chamber used to diverge): full pressure and
+    random draws stay physical and settles within 0.5 mm of the tip that the same pressures reach
+    through the supply's lag from rest."""
+    spec = get_preset(preset)
+    rng = np.random.default_rng(3)
+    stepped, lagged = ArmSimulator(spec), ArmSimulator(spec)
+    try:
+        draws = [spec.p_max_pa] + [spec.p_pre_pa + rng.uniform(0, 1, spec.n_chambers) * (
+            spec.p_max_pa - spec.p_pre_pa) for _ in range(3)]
+        for pressure in draws:  # p_max everywhere diverged on zou2022 from a straight start
+            # zhao2021's heavy arm takes ~8 s to settle within 0.1 mm
+            stepped.reset(pressure, settle_s=8.0)
+            lagged.reset(settle_s=0.2)
+            lagged.set_pressures(pressure)
+            lagged.step_physics(8.0 + 12 * spec.pneumatic_time_constant_s)
+            gap_mm = np.linalg.norm(stepped.tip_pose()[0] - lagged.tip_pose()[0]) * 1e3
+            assert gap_mm < 0.5, (pressure, gap_mm)
+    finally:
+        stepped.close()
+        lagged.close()
