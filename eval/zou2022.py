@@ -417,14 +417,13 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
         if "faults" in experiments:
             results["faults"] = run_faults(n_poses, seed, progress)
         if "control" in experiments:
-            from eval.zou2022_control import plot_control, run_control
+            from eval.zou2022_control import plot_control, run_control, strip_records
 
             dnn_options = {k: v for k, v in asdict(seeded).items()
                            if v != getattr(ShapeDNNConfig(), k) or k == "seed"}
-            rows, records = run_control(seed, dnn_options, progress=progress,
-                                        **(control_options or {}))
-            results["control"] = {"rows": rows}
-            plot_control(out / f"zou2022_control_seed{seed}.png", records)
+            rows = run_control(seed, dnn_options, progress=progress, **(control_options or {}))
+            results["control"] = {"rows": strip_records(rows)}
+            plot_control(out / f"zou2022_control_seed{seed}.png", rows)
         table = report_tables(results)
         print(f"\nzou2022, seed {seed}\n{table}")
         (out / f"zou2022_seed{seed}.md").write_text(table + "\n")

@@ -251,14 +251,15 @@ class LWPRRWRController(BaselinePolicy):
 
     def _collect_pretraining_data(self) -> tuple[np.ndarray, ...]:
         """Transitions ``(p, u, du, dp)`` along straight lines between random actuator-space
-        waypoints, on an unloaded copy of the env."""
+        waypoints, on an unloaded, fault-free copy of the env."""
         import gymnasium as gym
 
         if self.env.spec is None:
             raise ValueError("env has no spec (it was not made by gymnasium.make), so "
                              f"{self.name} cannot pre-train on a copy of it")
         kwargs = dict(self.env.spec.kwargs)
-        kwargs.update(scenario=None, randomization=None, task="reach",
+        # pre-training is the lab's calibration: no loads, no visual faults
+        kwargs.update(scenario=None, randomization=None, faults=None, task="reach",
                       episode_steps=10**7, obs=("pose", "target"), obs_format="flat",
                       action_mode="absolute")
         for key in ("path", "cycles", "speed_m_s", "waypoints_m"):
@@ -341,8 +342,9 @@ class LWPRRWRController(BaselinePolicy):
     # ------------------------------------------------------------------ cache
     def _cache_parts(self) -> dict[str, Any]:
         """Everything the pre-training depends on (the key of its cache entry)."""
-        ignored = ("scenario", "randomization", "path", "cycles", "speed_m_s", "waypoints_m",
-                   "episode_steps", "task", "obs", "obs_format", "action_mode", "delta_fraction")
+        ignored = ("scenario", "randomization", "faults", "path", "cycles", "speed_m_s",
+                   "waypoints_m", "episode_steps", "task", "obs", "obs_format", "action_mode",
+                   "delta_fraction")
         env_kwargs = {} if self.env.spec is None else {
             key: value for key, value in self.env.spec.kwargs.items() if key not in ignored}
         return {"kind": f"{self.name} pre-training", "format": _FORMAT,
