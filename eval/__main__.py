@@ -131,6 +131,54 @@ def _check_seeds_and_baselines(parser: argparse.ArgumentParser, args: argparse.N
                      f"got {unknown}")
 
 
+def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``suite``: check every option and the spec before any run, run, report."""
+    import sys
+
+    from eval import suite as suite_module
+    from eval import suite_report
+
+    if args.workers < 1:
+        parser.error(f"--workers must be >= 1, got {args.workers}")
+    if args.seeds is not None and (any(seed < 0 for seed in args.seeds)
+                                   or len(set(args.seeds)) != len(args.seeds)):
+        parser.error(f"--seeds must be distinct integers >= 0, got {args.seeds}")
+    if args.report_only and args.resume:
+        parser.error("--resume runs the missing runs; --report-only runs none: give one")
+    try:
+        suite_report.require_rliable()
+    except ImportError as error:
+        parser.error(str(error))
+    try:
+        spec = suite_module.load_suite(args.spec)
+        if args.seeds is not None:
+            spec = spec.with_seeds(args.seeds)
+        cells = (suite_module.expand(spec) if args.report_only
+                 else suite_module.check_suite(spec, progress=True))
+    except ValueError as error:
+        parser.error(f"spec: {error}")
+    out = Path(args.out or f"results/suite_{spec.name}")
+    if args.report_only and not suite_module.records_dir(out).is_dir():
+        parser.error(f"--report-only: no records under {out} (give the --out of a suite run)")
+    failure = None
+    if not args.report_only:
+        finished = (sum(suite_module.is_finished(out, cell.key) for cell in cells)
+                    if args.resume else 0)
+        print(f"{len(cells)} runs ({finished} already done) on {args.workers} worker(s)",
+              flush=True)
+        try:
+            suite_module.run_suite(spec, out, workers=args.workers, resume=args.resume,
+                                   progress=True, check=False)
+        except suite_module.SuiteRunError as error:
+            failure = error
+    print(suite_report.write_report(spec, out, cells=cells))
+    if failure is not None:
+        print(f"error: {failure}", file=sys.stderr)
+    print(f"output directory: {out}")
+    if failure is not None:
+        raise SystemExit(1)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m eval", description=__doc__,
                                      formatter_class=HelpFormatter)
@@ -243,7 +291,28 @@ def main(argv: list[str] | None = None) -> None:
     compare.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
                          help="runs in parallel processes (up to 2, one per core)")
     _add_video_flag(compare)
+    from eval import suite as suite_module
+
+    suite = sub.add_parser(
+        "suite", help="the four-arm benchmark suite of a YAML spec: leaderboard, IQM with "
+        "bootstrap CIs, performance profiles", description=suite_module.__doc__,
+        formatter_class=HelpFormatter)
+    suite.add_argument("spec", help="suite YAML file, or a bundled suite: "
+                       f"{', '.join(suite_module.bundled_suites())}")
+    suite.add_argument("--out", default=None,
+                       help="output directory; default: results/suite_<suite name>")
+    suite.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
+                       help="runs in parallel processes (up to 2, one per core)")
+    suite.add_argument("--resume", action="store_true",
+                       help="skip the runs whose record is already in the output directory")
+    suite.add_argument("--seeds", type=int, nargs="+", default=None,
+                       help="episode seeds replacing the suite's own")
+    suite.add_argument("--report-only", action="store_true",
+                       help="run nothing: write the report from the records there")
     args = parser.parse_args(argv)
+    if args.command == "suite":
+        _suite(suite, args)
+        return
     if args.command == "ho2018":
         for option, value, low in (("--cycle-s", args.cycle_s, 5.0),
                                    ("--lead-in-s", args.lead_in_s, 0.0)):

@@ -1,0 +1,598 @@
+"""Report of a benchmark suite (:mod:`eval.suite`) from its records.
+
+Score
+-----
+A run's score is its **last-cycle tracking error** ``e`` (mm): the mean, over the last path
+cycle, of the distance from the target presented at each step to the ground-truth tip after it
+(:func:`eval.metrics.tracking_error_mm`); the settled tracking after the first cycle's start-up
+and online learning. **Lower is better**; no normalisation, so scores compare only within one
+arm (the arms differ in size and the policies that can drive them): every aggregate is per arm.
+
+Outputs (under the suite's output directory)
+--------------------------------------------
+* ``leaderboard.md``: per arm, the aggregate table (below), then one leaderboard per condition:
+  the policies ranked by the mean of ``e`` over their runs (seeds, and paths when the arm has
+  several, each path's mean in its own column), with the mean, max and path deviation (mean
+  distance from the tip to the path, mm); ``n/a`` rows give the policy's refusal, and runs not
+  made yet are counted in the note.
+* ``runs.csv``: one row per cell: labels, status, metrics (mm), wall time (s), reason.
+* ``suite.json``: provenance (suite name, file, its text and SHA-256, seeds, cycles, the
+  versions and git revisions of the records, the report's bootstrap settings), counts, the
+  leaderboards, the aggregates and the performance profiles.
+* ``aggregate_iqm.png``: per arm and policy, the IQM of ``e`` with its 95 % CI and the mean.
+* ``performance_profiles.png``: per arm, the fraction of runs with ``e <= tau`` over a grid of
+  ``tau`` (mm), with 95 % CI bands.
+* ``plots/error_<arm>_<path>_<condition>.png``: tracking error and path deviation against time
+  of every policy, first seed; ``plots/trajectory_<arm>_<path>_<condition>.png``: their tips over
+  the path in the x-y plane (mm).
+
+Aggregates (per arm)
+--------------------
+A policy's scores on an arm form a matrix ``(runs = seeds) x (tasks = path x condition)``; only
+policies with a finite score in every cell of the arm enter (the others are listed with the
+reason). With ``rliable`` (Agarwal et al. 2021): the interquartile mean (IQM: the mean of the
+middle 50 % of all ``runs x tasks`` scores, ``scipy.stats.trim_mean(.., 0.25)``), the mean of
+the task means and the median of the task means, each with a 95 % percentile confidence
+interval from the stratified bootstrap (runs resampled with replacement within each task,
+``reps`` resamples); performance profiles ``P(e <= tau)`` over all runs and tasks, their CIs
+from the same bootstrap. With one seed every resample is the data and the CIs collapse to the
+point. The bootstrap draws from numpy's global generator (as ``rliable`` does), seeded with
+``seed`` and restored afterwards, so a report is reproducible.
+
+``rliable`` is needed for the report (``pip install rliable``); without it :func:`write_report`
+raises an ``ImportError`` saying so.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import math
+import os
+import re
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from eval.suite import Cell, SuiteSpec, expand, read_record, read_steps
+
+SCORE = "last_cycle_error_mm"
+"""The metric of a run that the leaderboard ranks and the aggregates summarise (mm)."""
+
+DEFAULT_REPS = 10_000
+"""Bootstrap resamples of the aggregate CIs."""
+
+PROFILE_REPS = 2_000
+"""Bootstrap resamples of the performance-profile CIs."""
+
+PROFILE_POINTS = 101
+"""Thresholds ``tau`` of a performance profile: ``linspace(0, 1.05 max e, PROFILE_POINTS)``."""
+
+_CSV_METRICS = ("last_cycle_error_mm", "mean_error_mm", "max_error_mm", "final_error_mm",
+                "path_deviation_mm", "last_cycle_path_deviation_mm", "feedback_error_mm",
+                "n_steps")
+_REASON_CHARS = 160
+
+
+def require_rliable():
+    """``(rliable.library, rliable.metrics)``, or an ``ImportError`` saying how to install it."""
+    try:
+        from rliable import library, metrics
+    except ImportError as error:
+        raise ImportError("the suite report needs the rliable package (aggregate IQM, "
+                          "stratified-bootstrap CIs, performance profiles): pip install "
+                          f"rliable ({error})") from None
+    return library, metrics
+
+
+@contextlib.contextmanager
+def _global_seed(seed: int) -> Iterator[None]:
+    """Seed numpy's global generator (rliable's bootstrap draws from it), then restore it."""
+    state = np.random.get_state()
+    np.random.seed(seed)
+    try:
+        yield
+    finally:
+        np.random.set_state(state)
+
+
+# ------------------------------------------------------------------------------ the rows
+def collect_rows(cells: Sequence[Cell], out: str | os.PathLike) -> list[dict[str, Any]]:
+    """One flat row per cell: labels, ``key``, ``status`` (``done``, ``n/a`` or ``missing``),
+    ``reason``, the metrics (mm) and ``wall_s``; plus the record's versions and git revision."""
+    rows = []
+    for cell in cells:
+        record = read_record(out, cell.key)
+        row: dict[str, Any] = {"key": cell.key, **cell.labels}
+        if record is None:
+            row.update(status="missing", reason=None, wall_s=None)
+            row.update({name: math.nan for name in _CSV_METRICS})
+        else:
+            metrics = record.get("metrics") or {}
+            row.update(status=record["status"], reason=record.get("reason"),
+                       wall_s=record.get("wall_s"))
+            row.update({name: _number(metrics.get(name)) for name in _CSV_METRICS})
+            row["versions"] = record.get("versions")
+            row["git_revision"] = record.get("git_revision")
+        rows.append(row)
+    return rows
+
+
+def _number(value: Any) -> float:
+    return math.nan if value is None else float(value)
+
+
+def _mean(values: Sequence[float]) -> float:
+    array = np.asarray(values, dtype=float)
+    return float(np.mean(array)) if array.size else math.nan
+
+
+def _std(values: Sequence[float]) -> float:
+    array = np.asarray(values, dtype=float)
+    return float(np.std(array, ddof=1)) if array.size > 1 else math.nan
+
+
+def leaderboards(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, str], list[dict]]:
+    """``(arm, condition)`` -> the policies ranked by the mean last-cycle error of their runs.
+
+    Each entry: ``rank`` (None for a policy without a finished run), ``policy``, ``runs``
+    (finished), ``of`` (cells), ``last_cycle_error_mm`` (mean over runs), its sample std
+    ``last_cycle_error_std_mm``, ``mean_error_mm``, ``max_error_mm`` (the largest),
+    ``path_deviation_mm``, ``per_path`` (path -> mean last-cycle error), ``status`` (``done``,
+    ``n/a`` or ``missing``) and ``note`` (a refusal's reason, missing runs).
+    """
+    groups: dict[tuple[str, str], dict[str, list[Mapping[str, Any]]]] = {}
+    for row in rows:
+        groups.setdefault((row["preset"], row["condition"]), {}).setdefault(
+            row["policy"], []).append(row)
+    boards = {}
+    for group, by_policy in groups.items():
+        entries = []
+        for policy, runs in by_policy.items():
+            done = [r for r in runs if r["status"] == "done"]
+            refused = [r for r in runs if r["status"] == "n/a"]
+            missing = [r for r in runs if r["status"] == "missing"]
+            notes = []
+            if refused:
+                reason = str(refused[0]["reason"] or "")
+                short = reason if len(reason) <= _REASON_CHARS else \
+                    reason[:_REASON_CHARS - 1].rstrip() + "…"
+                prefix = "" if len(refused) == len(runs) else f"{len(refused)} run(s) n/a: "
+                notes.append(prefix + short)
+            if missing:
+                notes.append(f"{len(missing)} of {len(runs)} run(s) not made yet")
+            paths = list(dict.fromkeys(r["path"] for r in runs))
+            entry = {
+                "policy": policy, "runs": len(done), "of": len(runs),
+                "last_cycle_error_mm": _mean([r[SCORE] for r in done]),
+                "last_cycle_error_std_mm": _std([r[SCORE] for r in done]),
+                "mean_error_mm": _mean([r["mean_error_mm"] for r in done]),
+                "max_error_mm": float(np.max([r["max_error_mm"] for r in done]))
+                if done else math.nan,
+                "path_deviation_mm": _mean([r["path_deviation_mm"] for r in done]),
+                "per_path": {path: _mean([r[SCORE] for r in done if r["path"] == path])
+                             for path in paths},
+                "status": "done" if done else ("n/a" if refused else "missing"),
+                "note": "; ".join(notes),
+            }
+            entries.append(entry)
+        ranked = sorted([e for e in entries if e["runs"]],
+                        key=lambda e: (not math.isfinite(e["last_cycle_error_mm"]),
+                                       e["last_cycle_error_mm"]))
+        for rank, entry in enumerate(ranked, start=1):
+            entry["rank"] = rank
+        rest = [dict(e, rank=None) for e in entries if not e["runs"]]
+        boards[group] = ranked + rest
+    return boards
+
+
+# ---------------------------------------------------------------------------- aggregates
+def score_matrices(rows: Sequence[Mapping[str, Any]], preset: str
+                   ) -> tuple[dict[str, np.ndarray], list[tuple[str, str]], dict[str, str]]:
+    """The scores of every complete policy on ``preset``.
+
+    Returns:
+        ``(matrices, tasks, excluded)``: policy -> ``(n_seeds, n_tasks)`` array of last-cycle
+        errors (mm), rows in seed order and columns in the order of ``tasks``
+        (``(path, condition)`` pairs); ``excluded``: policy -> why it has no matrix (a run n/a,
+        not made yet or not finite).
+    """
+    arm_rows = [r for r in rows if r["preset"] == preset]
+    tasks = list(dict.fromkeys((r["path"], r["condition"]) for r in arm_rows))
+    seeds = sorted({r["seed"] for r in arm_rows})
+    matrices, excluded = {}, {}
+    for policy in dict.fromkeys(r["policy"] for r in arm_rows):
+        runs = {(r["seed"], r["path"], r["condition"]): r for r in arm_rows
+                if r["policy"] == policy}
+        statuses = [r["status"] for r in runs.values()]
+        if "n/a" in statuses:
+            excluded[policy] = ("n/a" if statuses.count("n/a") == len(statuses)
+                                else f"n/a in {statuses.count('n/a')} of {len(statuses)} runs")
+            continue
+        if "missing" in statuses:
+            excluded[policy] = f"{statuses.count('missing')} of {len(statuses)} runs not made yet"
+            continue
+        matrix = np.array([[runs[(seed, path, condition)][SCORE] for path, condition in tasks]
+                           for seed in seeds], dtype=float)
+        if not np.all(np.isfinite(matrix)):
+            excluded[policy] = "a run has no finite last-cycle error"
+            continue
+        matrices[policy] = matrix
+    return matrices, tasks, excluded
+
+
+def aggregate_scores(matrices: Mapping[str, np.ndarray], reps: int = DEFAULT_REPS,
+                     seed: int = 0) -> dict[str, dict[str, Any]]:
+    """IQM, mean and median of each policy's scores with 95 % stratified-bootstrap CIs (mm).
+
+    Args:
+        matrices: policy -> ``(n_runs, n_tasks)`` last-cycle errors (mm).
+        reps: bootstrap resamples.
+        seed: seed of the bootstrap.
+
+    Returns:
+        policy -> ``{"iqm_mm", "iqm_ci_mm": [low, high], "mean_mm", "mean_ci_mm", "median_mm",
+        "median_ci_mm", "n_runs", "n_tasks"}``.
+    """
+    library, metrics = require_rliable()
+    if not matrices:
+        return {}
+
+    def statistics(scores: np.ndarray) -> np.ndarray:
+        return np.array([metrics.aggregate_iqm(scores), metrics.aggregate_mean(scores),
+                         metrics.aggregate_median(scores)])
+
+    with _global_seed(seed):
+        points, intervals = library.get_interval_estimates(dict(matrices), statistics,
+                                                           reps=reps)
+    out = {}
+    for policy, matrix in matrices.items():
+        point, interval = points[policy], intervals[policy]
+        out[policy] = {"n_runs": int(matrix.shape[0]), "n_tasks": int(matrix.shape[1])}
+        for i, name in enumerate(("iqm", "mean", "median")):
+            out[policy][f"{name}_mm"] = float(point[i])
+            out[policy][f"{name}_ci_mm"] = [float(interval[0, i]), float(interval[1, i])]
+    return out
+
+
+def profile_taus(matrices: Mapping[str, np.ndarray], points: int = PROFILE_POINTS) -> np.ndarray:
+    """The thresholds of the performance profiles (mm): 0 to 1.05 times the largest score."""
+    top = max((float(np.max(m)) for m in matrices.values()), default=1.0)
+    return np.linspace(0.0, 1.05 * top if top > 0 else 1.0, points)
+
+
+def fraction_within(scores: np.ndarray, taus: Sequence[float]) -> np.ndarray:
+    """Fraction of all ``scores`` (runs x tasks) with ``score <= tau``, for every ``tau``."""
+    flat = np.asarray(scores, dtype=float).ravel()
+    return np.mean(flat[None, :] <= np.asarray(taus, dtype=float)[:, None], axis=1)
+
+
+def performance_profiles(matrices: Mapping[str, np.ndarray], taus: Sequence[float],
+                         reps: int = PROFILE_REPS, seed: int = 0) -> dict[str, dict[str, list]]:
+    """``P(e <= tau)`` over all runs and tasks of each policy, with 95 % stratified-bootstrap
+    CIs: policy -> ``{"fraction", "ci_low", "ci_high"}`` (lists over ``taus``)."""
+    library, _ = require_rliable()
+    if not matrices:
+        return {}
+    taus = np.asarray(taus, dtype=float)
+    with _global_seed(seed):
+        profiles, intervals = library.create_performance_profile(
+            dict(matrices), taus, custom_profile_func=fraction_within, reps=reps)
+    return {policy: {"fraction": [float(v) for v in profiles[policy]],
+                     "ci_low": [float(v) for v in intervals[policy][0]],
+                     "ci_high": [float(v) for v in intervals[policy][1]]}
+            for policy in matrices}
+
+
+# ---------------------------------------------------------------------------- the report
+def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] | None = None,
+                 reps: int = DEFAULT_REPS, profile_reps: int = PROFILE_REPS, seed: int = 0,
+                 plots: bool = True) -> str:
+    """Write the report of ``spec``'s records under ``out`` (see the module docstring).
+
+    Args:
+        spec: the suite (its cells name the records read; other records in ``out`` are left
+            out).
+        out: the suite's output directory.
+        cells: the cells (default: ``expand(spec)``).
+        reps, profile_reps: bootstrap resamples of the aggregate and profile CIs.
+        seed: bootstrap seed.
+        plots: also draw the PNGs.
+
+    Returns:
+        The leaderboard (Markdown), as written to ``leaderboard.md``.
+    """
+    from eval.report import package_version, write_json
+    from eval.suite import git_revision, library_versions
+
+    require_rliable()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    cells = list(expand(spec) if cells is None else cells)
+    rows = collect_rows(cells, out)
+    boards = leaderboards(rows)
+    arms = list(dict.fromkeys(arm.preset for arm in spec.arms))
+    per_arm: dict[str, dict[str, Any]] = {}
+    for index, preset in enumerate(arms):
+        matrices, tasks, excluded = score_matrices(rows, preset)
+        taus = profile_taus(matrices)
+        per_arm[preset] = {
+            "tasks": [list(task) for task in tasks],
+            "aggregates": aggregate_scores(matrices, reps=reps, seed=seed + index),
+            "excluded": excluded,
+            "profile_taus_mm": taus.tolist(),
+            "profiles": performance_profiles(matrices, taus, reps=profile_reps,
+                                             seed=seed + index),
+            "scores_mm": {policy: matrix.tolist() for policy, matrix in matrices.items()},
+        }
+    counts = {status: sum(r["status"] == status for r in rows)
+              for status in ("done", "n/a", "missing")}
+    text = leaderboard_markdown(spec, rows, boards, per_arm, counts)
+    (out / "leaderboard.md").write_text(text, encoding="utf-8")
+    _write_runs_csv(out / "runs.csv", rows)
+    record_versions = [r["versions"] for r in rows if r.get("versions")]
+    write_json(out / "suite.json", {
+        "suite": spec.name,
+        "description": spec.description,
+        "spec_file": spec.source,
+        "spec_sha256": spec.sha256,
+        "spec_text": spec.text,
+        "seeds": list(spec.seeds),
+        "cycles": {arm.preset: arm.cycles for arm in spec.arms},
+        "score": f"{SCORE}: mean tracking error over the last path cycle (mm), lower is better",
+        "bootstrap": {"reps": reps, "profile_reps": profile_reps, "seed": seed,
+                      "confidence": 0.95, "method": "percentile, stratified over tasks"},
+        "soft_arm_gym_version": package_version(),
+        "report_versions": library_versions(),
+        "report_git_revision": git_revision(),
+        "record_versions": _distinct(record_versions),
+        "record_git_revisions": sorted({str(r["git_revision"]) for r in rows
+                                        if r.get("git_revision")}),
+        "counts": {"cells": len(rows), **counts},
+        "missing": [r["key"] for r in rows if r["status"] == "missing"],
+        "leaderboards": [{"preset": preset, "condition": condition, "entries": entries}
+                         for (preset, condition), entries in boards.items()],
+        "arms": per_arm,
+    })
+    if plots:
+        _plot_aggregates(out / "aggregate_iqm.png", per_arm)
+        _plot_profiles(out / "performance_profiles.png", per_arm)
+        _plot_first_seed(out / "plots", cells, rows, out, spec.seeds[0])
+    return text
+
+
+def _distinct(items: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
+    seen, distinct = set(), []
+    for item in items:
+        key = tuple(sorted(item.items()))
+        if key not in seen:
+            seen.add(key)
+            distinct.append(item)
+    return distinct
+
+
+def _fmt(value: float, digits: int = 2) -> str:
+    return f"{value:.{digits}f}" if isinstance(value, (int, float)) and math.isfinite(value) \
+        else ""
+
+
+def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
+                         boards: Mapping[tuple[str, str], list[dict]],
+                         per_arm: Mapping[str, Mapping[str, Any]],
+                         counts: Mapping[str, int]) -> str:
+    """The text of ``leaderboard.md``."""
+    from eval.report import markdown_table
+
+    lines = [f"# Suite {spec.name}", ""]
+    if spec.description:
+        lines += [spec.description.strip(), ""]
+    lines += [f"{len(rows)} runs: {counts['done']} done, {counts['n/a']} n/a, "
+              f"{counts['missing']} not made yet; seeds {list(spec.seeds)}; suite file "
+              f"`{Path(spec.source).name}` (sha256 {spec.sha256[:12]}).", "",
+              "Score: the last-cycle tracking error (mm; mean distance from the target to the "
+              "true tip over the last path cycle), lower is better. Aggregates per arm over "
+              "paths x conditions x seeds: IQM, mean and median with 95 % stratified-bootstrap "
+              "CIs.", ""]
+    for arm in spec.arms:
+        preset = arm.preset
+        info = per_arm[preset]
+        lines += [f"## {preset}", "",
+                  f"{len(arm.paths)} path(s) {list(arm.paths)}, {len(arm.conditions)} "
+                  f"condition(s), {arm.cycles} cycle(s) per run, feedback "
+                  f"{arm.feedback or 'the env default'} unless a condition sets it.", ""]
+        aggregate_rows = []
+        for policy, stats in sorted(info["aggregates"].items(),
+                                    key=lambda item: item[1]["iqm_mm"]):
+            aggregate_rows.append({
+                "policy": policy,
+                "IQM (mm)": _fmt(stats["iqm_mm"]),
+                "IQM 95% CI": "[" + ", ".join(_fmt(v) for v in stats["iqm_ci_mm"]) + "]",
+                "mean (mm)": _fmt(stats["mean_mm"]),
+                "mean 95% CI": "[" + ", ".join(_fmt(v) for v in stats["mean_ci_mm"]) + "]",
+                "median (mm)": _fmt(stats["median_mm"]),
+                "runs x tasks": f"{stats['n_runs']} x {stats['n_tasks']}",
+            })
+        for policy, reason in info["excluded"].items():
+            aggregate_rows.append({"policy": policy, "IQM (mm)": "n/a" if reason == "n/a"
+                                   else "", "runs x tasks": reason})
+        if aggregate_rows:
+            lines += ["Aggregate (last-cycle error):", "",
+                      markdown_table(aggregate_rows, columns=[
+                          "policy", "IQM (mm)", "IQM 95% CI", "mean (mm)", "mean 95% CI",
+                          "median (mm)", "runs x tasks"])]
+        for condition in arm.conditions:
+            entries = boards.get((preset, condition), [])
+            table = []
+            for entry in entries:
+                row = {"rank": entry["rank"] if entry["rank"] is not None else "—",
+                       "policy": entry["policy"],
+                       "last cycle (mm)": _pm(entry["last_cycle_error_mm"],
+                                              entry["last_cycle_error_std_mm"]),
+                       "mean (mm)": _fmt(entry["mean_error_mm"]),
+                       "max (mm)": _fmt(entry["max_error_mm"]),
+                       "path dev. (mm)": _fmt(entry["path_deviation_mm"]),
+                       "runs": f"{entry['runs']}/{entry['of']}",
+                       "note": entry["note"] or ("n/a" if entry["status"] == "n/a" else "")}
+                if len(arm.paths) > 1:
+                    for path in arm.paths:
+                        row[f"{path} (mm)"] = _fmt(entry["per_path"].get(path, math.nan))
+                table.append(row)
+            columns = ["rank", "policy", "last cycle (mm)"]
+            if len(arm.paths) > 1:
+                columns += [f"{path} (mm)" for path in arm.paths]
+            columns += ["mean (mm)", "max (mm)", "path dev. (mm)", "runs", "note"]
+            lines += [f"### {preset}: {condition}", "", markdown_table(table, columns=columns)]
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def _pm(mean: float, std: float) -> str:
+    if not math.isfinite(mean):
+        return ""
+    return f"{mean:.2f} ± {std:.2f}" if math.isfinite(std) else f"{mean:.2f}"
+
+
+def _write_runs_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
+    columns = ["key", "preset", "path", "condition", "policy", "seed", "status",
+               *_CSV_METRICS, "wall_s", "reason"]
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns, extrasaction="ignore")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({key: ("" if isinstance(row.get(key), float)
+                                   and not math.isfinite(row[key]) else row.get(key))
+                             for key in columns})
+
+
+# ---------------------------------------------------------------------------------- plots
+def _figure(width_in: float, height_in: float, nrows: int, ncols: int = 1):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(width_in, height_in), dpi=120, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(nrows, ncols, squeeze=False)
+    return figure, axes
+
+
+def _colors(policies: Mapping[str, Any]) -> dict[str, str]:
+    """One colour per policy of an arm, in the suite's order (the same in every plot)."""
+    return {policy: f"C{i % 10}" for i, policy in enumerate(policies)}
+
+
+def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> None:
+    """Per arm and policy: the IQM (dot) with its 95 % CI (bar) and the mean (cross)."""
+    from eval.report import save_figure
+
+    arms = [preset for preset, info in per_arm.items() if info["aggregates"]]
+    if not arms:
+        return
+    heights = [max(1, len(per_arm[preset]["aggregates"])) for preset in arms]
+    figure, axes = _figure(7.0, 0.9 + 0.38 * sum(heights) + 0.5 * len(arms), len(arms))
+    for ax, preset in zip(axes[:, 0], arms):
+        colors = _colors(per_arm[preset]["aggregates"])
+        stats = sorted(per_arm[preset]["aggregates"].items(), key=lambda item: item[1]["iqm_mm"])
+        for y, (policy, values) in enumerate(stats):
+            low, high = values["iqm_ci_mm"]
+            ax.plot([low, high], [y, y], "-", color=colors[policy], lw=5, alpha=0.45,
+                    solid_capstyle="butt")
+            ax.plot(values["iqm_mm"], y, "o", color=colors[policy], ms=6)
+            ax.plot(values["mean_mm"], y, "x", color="k", ms=6)
+        ax.set_yticks(range(len(stats)), [policy for policy, _ in stats])
+        ax.set_ylim(len(stats) - 0.3, -0.7)  # the best on top
+        ax.set_xlim(left=0.0)
+        ax.set_title(f"{preset}: IQM of the last-cycle error, 95% CI (bar); mean (x)",
+                     fontsize=9)
+        ax.grid(axis="x", alpha=0.3)
+    axes[-1, 0].set_xlabel("last-cycle tracking error (mm), lower is better")
+    save_figure(figure, path)
+
+
+def _plot_profiles(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> None:
+    """Per arm: the fraction of runs with last-cycle error <= tau, with 95 % CI bands."""
+    from eval.report import save_figure
+
+    arms = [preset for preset, info in per_arm.items() if info["profiles"]]
+    if not arms:
+        return
+    ncols = 2 if len(arms) > 1 else 1
+    nrows = math.ceil(len(arms) / ncols)
+    figure, axes = _figure(5.0 * ncols, 3.6 * nrows, nrows, ncols)
+    for k, ax in enumerate(axes.ravel()):
+        if k >= len(arms):
+            ax.set_visible(False)
+            continue
+        info = per_arm[arms[k]]
+        taus = np.asarray(info["profile_taus_mm"])
+        colors = _colors(info["profiles"])
+        for policy, profile in info["profiles"].items():
+            color = colors[policy]
+            ax.step(taus, profile["fraction"], where="post", color=color, lw=1.4, label=policy)
+            ax.fill_between(taus, profile["ci_low"], profile["ci_high"], step="post",
+                            color=color, alpha=0.18, lw=0)
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_xlim(taus[0], taus[-1])
+        ax.set_xlabel("tau: last-cycle error (mm)")
+        ax.set_ylabel("fraction of runs with error <= tau")
+        ax.set_title(arms[k], fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="lower right")
+    save_figure(figure, path)
+
+
+def _file_part(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", str(text)).strip("_") or "x"
+
+
+def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapping[str, Any]],
+                     out: Path, seed: int) -> None:
+    """Error against time and trajectories of every policy, per arm/path/condition, one seed."""
+    from eval.report import plot_error_time
+
+    status = {row["key"]: row["status"] for row in rows}
+    groups: dict[tuple[str, str, str], dict[str, str]] = {}
+    for cell in cells:
+        labels = cell.labels
+        if labels["seed"] == seed and status.get(cell.key) == "done":
+            groups.setdefault((labels["preset"], labels["path"], labels["condition"]),
+                              {})[labels["policy"]] = cell.key
+    for (preset, path, condition), keys in groups.items():
+        records = {policy: read_steps(out, key) for policy, key in keys.items()}
+        records = {policy: record for policy, record in records.items() if record is not None}
+        if not records:
+            continue
+        stem = f"{_file_part(preset)}_{_file_part(path)}_{_file_part(condition)}"
+        title = f"{preset} {path}, {condition} (seed {seed})"
+        plot_error_time(directory / f"error_{stem}.png", records, title)
+        _plot_trajectories(directory / f"trajectory_{stem}.png", records, title)
+
+
+def _plot_trajectories(path: Path, records: Mapping[str, Mapping[str, np.ndarray]],
+                       title: str) -> None:
+    """Every policy's true tip over the path, x-y plane (mm)."""
+    from eval.metrics import MM_PER_M
+    from eval.report import save_figure
+
+    figure, axes = _figure(6.4, 5.4, 1)
+    ax = axes[0, 0]
+    first = next(iter(records.values()))
+    if first.get("polyline_m") is not None:
+        line = np.asarray(first["polyline_m"], dtype=float) * MM_PER_M
+        closed = np.vstack((line, line[:1]))
+        ax.plot(closed[:, 0], closed[:, 1], color="0.6", lw=3, alpha=0.6, label="path")
+    for i, (policy, record) in enumerate(records.items()):
+        tip = np.asarray(record["tip_m"], dtype=float) * MM_PER_M
+        ax.plot(tip[:, 0], tip[:, 1], "-", color=f"C{i % 10}", lw=1.1, label=policy)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
+    save_figure(figure, path)
+
+
+__all__ = ["DEFAULT_REPS", "PROFILE_REPS", "SCORE", "aggregate_scores", "collect_rows",
+           "fraction_within", "leaderboard_markdown", "leaderboards", "performance_profiles",
+           "profile_taus", "require_rliable", "score_matrices", "write_report"]
