@@ -140,6 +140,21 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
 
     if args.workers < 1:
         parser.error(f"--workers must be >= 1, got {args.workers}")
+    backend = args.backend
+    if args.address is not None and args.backend != "ray":
+        parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
+                     f"{args.backend}")
+    if args.address is not None and not args.address.strip():
+        parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
+                     "got ''")
+    if args.backend == "ray":
+        from eval import suite_ray
+
+        try:
+            suite_ray.require_ray()
+        except ImportError as error:
+            parser.error(f"--backend ray: {error}")
+        backend = suite_ray.make_ray_map(args.address)
     if args.seeds is not None and (any(seed < 0 for seed in args.seeds)
                                    or len(set(args.seeds)) != len(args.seeds)):
         parser.error(f"--seeds must be distinct integers >= 0, got {args.seeds}")
@@ -168,7 +183,7 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
               flush=True)
         try:
             suite_module.run_suite(spec, out, workers=args.workers, resume=args.resume,
-                                   progress=True, check=False)
+                                   progress=True, check=False, backend=backend)
         except suite_module.SuiteRunError as error:
             failure = error
     print(suite_report.write_report(spec, out, cells=cells))
@@ -309,6 +324,14 @@ def main(argv: list[str] | None = None) -> None:
                        help="episode seeds replacing the suite's own")
     suite.add_argument("--report-only", action="store_true",
                        help="run nothing: write the report from the records there")
+    suite.add_argument("--backend", default="process", choices=["process", "serial", "ray"],
+                       help="where the runs go: --workers spawned processes, this process, or "
+                            "Ray tasks (a local Ray of --workers CPUs, or the cluster at "
+                            "--address; optional extra: pip install \"soft-arm-gym[ray]\")")
+    suite.add_argument("--address", default=None, metavar="ADDR",
+                       help="with --backend ray: an existing Ray cluster (auto, "
+                            "ray://host:10001, host:6379); the package must be importable on "
+                            "every node. Default: a local Ray")
     args = parser.parse_args(argv)
     if args.command == "suite":
         _suite(suite, args)

@@ -946,7 +946,8 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
         out: output directory (records under ``out/records``).
         workers: parallel runs (>= 1).
         resume: skip the cells whose record is there; without it every cell runs again.
-        backend: a name from :data:`BACKENDS` or a map function (:data:`MapFunction`).
+        backend: a name from :data:`BACKENDS` or a map function (:data:`MapFunction`);
+            ``"ray"`` is there once :mod:`eval.suite_ray` is imported (it imports this module).
         progress: show a progress bar over the runs.
         check: run :func:`check_suite` first (the command line has already done so).
 

@@ -3,6 +3,8 @@
     python -m train --algo sac --env SoftArmTrackWang2023-v0 --timesteps 200000 --seed 0
     python -m train --algo td3 --preset wang2023 --env-kwargs feedback=em 'path=[circle,pentagram]' --randomize
     python -m train --resume results/train/sac_SoftArmTrackWang2023-v0_seed0 --timesteps 50000
+    python -m train sweep --env SoftArmTrackWang2023-v0 --trials 8 --steps 20000   (Ray Tune;
+        python -m train sweep --help, train/sweep.py)
 
 Hyperparameters come from train/configs/<algo>.yml (rl-baselines3-zoo's format: the same file
 works with ``python -m rl_zoo3.train --conf-file ...``); ``-hp KEY=VALUE`` overrides single
@@ -64,6 +66,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> None:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["sweep"]:  # the one subcommand; every other form trains as before
+        from train.sweep import main as sweep_main
+
+        sweep_main(argv[1:])
+        return
     parser = build_parser()
     args = parser.parse_args(argv)
     from train.trainer import TrainRequest, train

@@ -1,0 +1,172 @@
+"""``python -m train sweep`` (train/sweep.py): a two-trial Ray Tune search on a local Ray (two
+CPUs) writes the best trial's hyperparameters as a zoo-format YAML that the trainer loads, a
+trial's score on Ray equals the same trial run in this process, and bad options fail in one
+line before any trial. ``python -m train --algo ...`` is unchanged."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import pytest
+import yaml
+
+from train import sweep
+from train.__main__ import build_parser as train_parser
+from train.__main__ import main as train_main
+from train.config import read_hyperparameters, split_hyperparameters
+from train.trainer import TrainRequest, resolve
+
+RAY_REASON = 'Ray Tune is an optional extra: pip install "soft-arm-gym[ray]"'
+ENV_ID = "SoftArmTrackWang2023-v0"
+FAST_ENV = ["feedback=ground_truth", "path=circle", "speed_m_s=0.05", "randomization=false"]
+"""A 26-step circle with the true tip pose: training and evaluation take seconds."""
+FIXED = ["learning_starts=100", "buffer_size=10000"]
+
+
+@pytest.fixture(scope="module")
+def local_ray():
+    """A local Ray with two CPUs for the module's sweeps (started once, shut down after)."""
+    ray = pytest.importorskip("ray", reason=RAY_REASON)
+    pytest.importorskip("ray.tune", reason=RAY_REASON)
+    started = not ray.is_initialized()
+    if started:
+        ray.init(num_cpus=2, include_dashboard=False)
+    yield ray
+    if started:
+        ray.shutdown()
+
+
+def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, local_ray,
+                                                                     capsys):
+    out = tmp_path / "sweep"
+    train_main(["sweep", "--env", ENV_ID, "--env-kwargs", *FAST_ENV, "-hp", *FIXED,
+                "--trials", "2", "--steps", "300", "--eval-episodes", "2", "--out", str(out),
+                "--no-progress"])
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[-2:] == [f"best config: {out / 'sac.yml'}", f"trials: {out / 'trials.json'}"]
+    assert local_ray.is_initialized()  # a Ray the sweep did not start is left running
+
+    summary = json.loads((out / "trials.json").read_text())
+    trials = summary["trials"]
+    assert len(trials) == 2 and all(t["status"] == "done" for t in trials)
+    for trial in trials:
+        assert set(trial["hyperparameters"]) == set(sweep.SEARCH_SPACE)
+        assert trial["score"] == trial["error_mm"] > 0 and trial["reward"] < 0
+        assert trial["episodes"] == 2 and trial["eval_steps"] == 52
+    # the first trial is the config entry's own values (they lie in the space)
+    assert trials[0]["hyperparameters"] == {"learning_rate": 3e-4, "gamma": 0.9, "tau": 0.005,
+                                            "batch_size": 256}
+    best = min(trials, key=lambda t: t["score"])
+    assert summary["best"] == best and summary["mode"] == "min"
+
+    # sac.yml: {env id: entry} loading through the trainer's own reader
+    text = (out / "sac.yml").read_text()
+    assert text.startswith("# Best of 2 SAC trials")
+    table = yaml.safe_load(text)
+    assert list(table) == [ENV_ID]
+    entry = read_hyperparameters("sac", ENV_ID, out / "sac.yml")
+    for name, value in best["hyperparameters"].items():
+        assert entry[name] == value, name
+    assert entry["learning_starts"] == 100 and entry["buffer_size"] == 10000
+    assert entry["env_kwargs"] == {"feedback": "ground_truth", "path": "circle",
+                                   "speed_m_s": 0.05, "randomization": False}
+    reference = read_hyperparameters("sac", ENV_ID)
+    assert entry["n_timesteps"] == reference["n_timesteps"]  # the full budget, not the trials'
+    assert entry["policy_kwargs"] == reference["policy_kwargs"]
+    settings, _ = resolve(TrainRequest(algo="sac", env_id=ENV_ID,
+                                       config_file=str(out / "sac.yml")))
+    assert settings.algo_kwargs["batch_size"] == best["hyperparameters"]["batch_size"]
+    assert settings.algo_kwargs["tau"] == best["hyperparameters"]["tau"]
+    split_hyperparameters("sac", entry)
+
+    # the Ray trial's score is the same trial's score in this process
+    context = {"env_id": ENV_ID, "entry": summary["base_entry"], "steps": 300, "seed": 0,
+               "eval_episodes": 2, "metric": "error_mm"}
+    local = sweep.run_trial(best["hyperparameters"], context)
+    assert local["score"] == best["score"] and local["reward"] == best["reward"]
+
+
+def test_a_sweep_whose_trials_all_fail_exits_1_naming_the_error(tmp_path, local_ray, capsys):
+    out = tmp_path / "failed"
+    with pytest.raises(SystemExit) as exit_info:
+        train_main(["sweep", "--env", ENV_ID, "--env-kwargs", "feedback=gps", "-hp",
+                    "learning_starts=10", "--trials", "1", "--steps", "20", "--out", str(out),
+                    "--no-progress"])
+    assert exit_info.value.code == 1
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert error.startswith("error: all 1 trials failed") and "got 'gps'" in error
+    trial, = json.loads((out / "trials.json").read_text())["trials"]
+    assert trial["status"] == "error" and trial["error"].startswith("ValueError: feedback")
+    assert not (out / "sac.yml").exists()
+
+
+@pytest.mark.slow
+def test_an_optuna_search_runs_and_keeps_the_baseline_trial(tmp_path, local_ray):
+    pytest.importorskip("optuna")
+    request = sweep.SweepRequest(
+        env_id=ENV_ID, env_kwargs={"feedback": "ground_truth", "path": "circle",
+                                   "speed_m_s": 0.05, "randomization": False},
+        hyperparameters={"learning_starts": 100, "buffer_size": 10000}, trials=3, steps=300,
+        eval_episodes=1, search="optuna", out=str(tmp_path / "optuna"), progress=False)
+    result = sweep.run_sweep(request)
+    assert len(result.trials) == 3 and all(t["status"] == "done" for t in result.trials)
+    assert any(t["hyperparameters"]["batch_size"] == 256 and t["hyperparameters"]["gamma"] == 0.9
+               for t in result.trials)
+    assert yaml.safe_load(result.config_path.read_text())[ENV_ID]["batch_size"] in (64, 128, 256)
+
+
+# ----------------------------------------------------------------------- command line
+@pytest.mark.parametrize("argv, option", [
+    (["--trials", "0"], "--trials"),
+    (["--steps", "-5"], "--steps"),
+    (["--eval-episodes", "0"], "--eval-episodes"),
+    (["--workers", "0"], "--workers"),
+    (["--seed", "-1"], "--seed"),
+    (["--address", " "], "--address"),
+    (["-hp", "gamma=0.95"], "--hyperparams"),
+    (["-hp", "n_timesteps=1000"], "--hyperparams"),
+    (["-hp", "novalue"], "--hyperparams"),
+    (["--env", "NoSuchEnv-v0"], "--env"),
+    (["--metric", "accuracy"], "--metric"),
+    (["--search", "grid"], "--search"),
+    (["--trials", "two"], "--trials"),
+])
+def test_cli_bad_options_exit_2_with_one_line(argv, option, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        train_main(["sweep", "--out", str(tmp_path / "o"), "--steps", "2000"] + argv)
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert error.startswith("python -m train sweep: error:") and option in error, error
+    assert not (tmp_path / "o").exists()
+
+
+def test_cli_steps_below_learning_starts_is_refused(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        train_main(["sweep", "--out", str(tmp_path / "o"), "--steps", "500"])
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "--steps" in error and "learning_starts (1000)" in error
+
+
+def test_cli_without_ray_names_the_extra(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray raises ImportError
+    with pytest.raises(SystemExit) as exit_info:
+        train_main(["sweep", "--out", str(tmp_path / "o")])
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert 'pip install "soft-arm-gym[ray]"' in error
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_sweep_help_shows_the_space_and_the_training_cli_is_unchanged(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        train_main(["sweep", "--help"])
+    assert exit_info.value.code == 0
+    text = capsys.readouterr().out
+    assert "learning_rate" in text and "(default: 8)" in text
+    args = train_parser().parse_args(["--algo", "td3", "--timesteps", "10"])
+    assert (args.algo, args.timesteps) == ("td3", 10)
+    with pytest.raises(SystemExit):
+        train_main(["--algo", "nope"])  # still the training parser's own error
+    assert "invalid choice" in capsys.readouterr().err
