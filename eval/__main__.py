@@ -131,6 +131,18 @@ def _check_seeds_and_baselines(parser: argparse.ArgumentParser, args: argparse.N
                      f"got {unknown}")
 
 
+def _paper_parser(sub, name: str, module, help_text: str,
+                  seeds_help: str) -> argparse.ArgumentParser:
+    """The subcommand of one paper's experiments: ``--experiments`` among the module's
+    ``EXPERIMENTS`` (default all) and ``--seeds``; its description is the module's docstring."""
+    paper = sub.add_parser(name, help=help_text, description=module.__doc__,
+                           formatter_class=HelpFormatter)
+    paper.add_argument("--experiments", nargs="+", default=list(module.EXPERIMENTS),
+                       choices=list(module.EXPERIMENTS), help="which experiments")
+    paper.add_argument("--seeds", type=int, nargs="+", default=[0], help=seeds_help)
+    return paper
+
+
 def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``suite``: check every option and the spec before any run, run, report."""
     import sys
@@ -237,12 +249,9 @@ def main(argv: list[str] | None = None) -> None:
     _add_video_flag(track)
     from eval import ho2018 as ho2018_module
 
-    ho2018 = sub.add_parser("ho2018", help="ho2018 static and varying tip-load experiments",
-                            description=ho2018_module.__doc__, formatter_class=HelpFormatter)
-    ho2018.add_argument("--experiments", nargs="+", default=list(ho2018_module.EXPERIMENTS),
-                        choices=list(ho2018_module.EXPERIMENTS), help="which experiments")
-    ho2018.add_argument("--seeds", type=int, nargs="+", default=[0], help="seeds (pre-training "
-                        "waypoints and episode)")
+    ho2018 = _paper_parser(sub, "ho2018", ho2018_module,
+                           "ho2018 static and varying tip-load experiments",
+                           "seeds (pre-training waypoints and episode)")
     ho2018.add_argument("--cycle-s", type=float, default=None,
                         help="seconds per rectangle cycle (s); default: the experiment's own "
                              "(40 s static, 30 s varying)")
@@ -254,13 +263,9 @@ def main(argv: list[str] | None = None) -> None:
     ho2018.add_argument("--out", default="results/ho2018", help="output directory")
     from eval import zhao2021 as zhao2021_module
 
-    zhao2021 = sub.add_parser("zhao2021", help="zhao2021 shape reconstruction and local-IK "
-                              "control experiments", description=zhao2021_module.__doc__,
-                              formatter_class=HelpFormatter)
-    zhao2021.add_argument("--experiments", nargs="+", default=list(zhao2021_module.EXPERIMENTS),
-                          choices=list(zhao2021_module.EXPERIMENTS), help="which experiments")
-    zhao2021.add_argument("--seeds", type=int, nargs="+", default=[0],
-                          help="seeds (exploration, training and episodes)")
+    zhao2021 = _paper_parser(sub, "zhao2021", zhao2021_module,
+                             "zhao2021 shape reconstruction and local-IK control experiments",
+                             "seeds (exploration, training and episodes)")
     zhao2021.add_argument("--samples", type=int, nargs=2, default=[4000, 2000],
                           metavar=("FREE", "LOADED"),
                           help="exploration samples free and with the 75 g tip (paper: 4000 "
@@ -273,13 +278,9 @@ def main(argv: list[str] | None = None) -> None:
     zhao2021.add_argument("--out", default="results/zhao2021", help="output directory")
     from eval import zou2022 as zou2022_module
 
-    zou2022 = sub.add_parser("zou2022", help="zou2022 shape estimation (RSES, ASES, DNN) and "
-                             "control with each shape source", description=zou2022_module.__doc__,
-                             formatter_class=HelpFormatter)
-    zou2022.add_argument("--experiments", nargs="+", default=list(zou2022_module.EXPERIMENTS),
-                         choices=list(zou2022_module.EXPERIMENTS), help="which experiments")
-    zou2022.add_argument("--seeds", type=int, nargs="+", default=[0],
-                         help="seeds (exploration, training, sensor noise, poses)")
+    zou2022 = _paper_parser(sub, "zou2022", zou2022_module,
+                            "zou2022 shape estimation (RSES, ASES, DNN) and control with each "
+                            "shape source", "seeds (exploration, training, sensor noise, poses)")
     zou2022.add_argument("--samples", type=int, default=29791,
                          help="exploration samples of the DNN's data set (paper: 31^3 = 29791, "
                               "~25 min on one core, cached)")
@@ -368,12 +369,10 @@ def main(argv: list[str] | None = None) -> None:
         print(f"output directory: {args.out}")
         return
     if args.command == "zou2022":
-        if args.samples < 20:
-            parser.error(f"--samples must be >= 20, got {args.samples}")
-        if args.epochs < 1:
-            parser.error(f"--epochs must be >= 1, got {args.epochs}")
-        if args.poses < 1:
-            parser.error(f"--poses must be >= 1, got {args.poses}")
+        for option, value, low in (("--samples", args.samples, 20), ("--epochs", args.epochs, 1),
+                                   ("--poses", args.poses, 1)):
+            if value < low:
+                parser.error(f"{option} must be >= {low}, got {value}")
         if any(seed < 0 for seed in args.seeds):
             parser.error(f"--seeds must be >= 0, got {args.seeds}")
         from soft_gym.sensing.shape_dnn import ShapeDNNConfig

@@ -21,6 +21,7 @@ import argparse
 import sys
 
 from soft_gym._cli import HelpFormatter
+from train.cli_options import add_env_options
 from train.config import ALGORITHMS, parse_key_values
 
 
@@ -28,14 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m train", description=__doc__,
                                      formatter_class=HelpFormatter)
     parser.add_argument("--algo", default="sac", choices=ALGORITHMS, help="SB3 algorithm")
-    parser.add_argument("--env", default=None,
-                        help="Gymnasium id (default SoftArmTrack<Preset>-v0, e.g. "
-                             "SoftArmTrackWang2023-v0)")
-    parser.add_argument("--preset", default="wang2023",
-                        help="arm preset when --env is not given (wang2023, zhao2021, zou2022, "
-                             "ho2018)")
-    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
-                        help="env keyword arguments over the config's (e.g. feedback=em)")
+    add_env_options(parser)
     parser.add_argument("--randomize", action="store_true",
                         help="turn domain randomisation on (env kwarg randomization=true)")
     parser.add_argument("--randomization-config", default=None, metavar="YAML",

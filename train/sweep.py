@@ -500,17 +500,11 @@ def run_sweep(request: SweepRequest) -> SweepResult:
 # ------------------------------------------------------------------------------ command line
 def build_parser() -> argparse.ArgumentParser:
     from soft_gym._cli import HelpFormatter
+    from train.cli_options import add_env_options
 
     parser = argparse.ArgumentParser(prog="python -m train sweep", description=__doc__,
                                      formatter_class=HelpFormatter)
-    parser.add_argument("--env", default=None,
-                        help="Gymnasium id (default SoftArmTrack<Preset>-v0, e.g. "
-                             "SoftArmTrackWang2023-v0)")
-    parser.add_argument("--preset", default="wang2023",
-                        help="arm preset when --env is not given (wang2023, zhao2021, zou2022, "
-                             "ho2018)")
-    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
-                        help="env keyword arguments over the config's (e.g. feedback=em)")
+    add_env_options(parser)
     parser.add_argument("-hp", "--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",
                         help="fixed hyperparameters of every trial, not searched (e.g. "
                              "learning_starts=500)")
