@@ -18,31 +18,11 @@ import scipy.stats
 import eval.__main__ as eval_main
 from eval import suite
 from eval import suite_report
+from suite_specs import tiny_suite
 
 pytest.importorskip("rliable")
 
-TINY = """\
-name: tiny
-seeds: [0]
-cycles: 1
-arms:
-  wang2023:
-    paths: [circle]
-    feedback: ground_truth
-    env: {speed_m_s: 0.05}
-    conditions:
-      nominal: {}
-      load_10g: {scenario: {name: tip_mass, mass_kg: 0.01}}
-    policies:
-      - {name: cc_model, params: {probe_steps: 5}}
-  ho2018:
-    paths: [rectangle]
-    feedback: ground_truth
-    env: {speed_m_s: 0.05}
-    conditions:
-      nominal: {}
-    policies: [cc_model]
-"""
+TINY = tiny_suite()
 """Two quick wang2023 runs (a 26-step circle) and one n/a (cc_model refuses two segments)."""
 
 

@@ -16,32 +16,12 @@ import pytest
 
 import eval.__main__ as eval_main
 from eval import suite
+from suite_specs import tiny_suite
 from eval import suite_ray
 
 RAY_REASON = 'Ray is an optional extra: pip install "soft-arm-gym[ray]"'
 
-GRID = """\
-name: ray_grid
-seeds: [0, 1]
-cycles: 1
-arms:
-  wang2023:
-    paths: [circle]
-    feedback: ground_truth
-    env: {speed_m_s: 0.05}
-    conditions:
-      nominal: {}
-      load_10g: {scenario: {name: tip_mass, mass_kg: 0.01}}
-    policies:
-      - {name: cc_model, params: {probe_steps: 5}}
-  ho2018:
-    paths: [rectangle]
-    feedback: ground_truth
-    env: {speed_m_s: 0.05}
-    conditions:
-      nominal: {}
-    policies: [cc_model]
-"""
+GRID = tiny_suite("ray_grid", (0, 1))
 """Four quick wang2023 runs (a 26-step circle, one cycle) and two n/a (cc_model refuses
 ho2018's two segments)."""
 

@@ -21,8 +21,8 @@ import argparse
 import sys
 
 from soft_gym._cli import HelpFormatter
-from train.cli_options import add_env_options
-from train.config import ALGORITHMS, parse_key_values
+from train.cli_options import add_env_options, parse_env_and_hyperparameters
+from train.config import ALGORITHMS
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -70,11 +70,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     from train.trainer import TrainRequest, train
 
-    try:
-        env_kwargs = parse_key_values(args.env_kwargs, "--env-kwargs")
-        hyperparameters = parse_key_values(args.hyperparams, "--hyperparams")
-    except ValueError as error:
-        parser.error(str(error))
+    env_kwargs, hyperparameters = parse_env_and_hyperparameters(parser, args)
     if args.randomization_config is not None:
         env_kwargs["randomization"] = args.randomization_config
     elif args.randomize:

@@ -15,3 +15,16 @@ def add_env_options(parser: argparse.ArgumentParser) -> None:
                              "ho2018)")
     parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
                         help="env keyword arguments over the config's (e.g. feedback=em)")
+
+
+def parse_env_and_hyperparameters(parser: argparse.ArgumentParser,
+                                  args: argparse.Namespace) -> tuple[dict, dict]:
+    """``--env-kwargs`` and ``-hp`` as dicts; a malformed entry is a one-line CLI error."""
+    from train.config import parse_key_values
+
+    try:
+        return (parse_key_values(args.env_kwargs, "--env-kwargs"),
+                parse_key_values(args.hyperparams, "--hyperparams"))
+    except ValueError as error:
+        parser.error(str(error))
+        raise  # parser.error exits; this keeps the return type honest

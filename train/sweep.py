@@ -537,15 +537,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> None:
     """``python -m train sweep``: one-line errors exit 2 before any trial."""
-    from train.config import parse_key_values
+    from train.cli_options import parse_env_and_hyperparameters
 
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        env_kwargs = parse_key_values(args.env_kwargs, "--env-kwargs")
-        hyperparameters = parse_key_values(args.hyperparams, "--hyperparams")
-    except ValueError as error:
-        parser.error(str(error))
+    env_kwargs, hyperparameters = parse_env_and_hyperparameters(parser, args)
     if args.env is None:
         from soft_gym.envs.registration import preset_env_id
 
