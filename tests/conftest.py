@@ -22,3 +22,20 @@ def make_sim():
     yield factory
     for sim in made:
         sim.close()
+
+
+RAY_REASON = 'Ray (with Tune) is an optional extra: pip install "soft-arm-gym[ray]"'
+
+
+@pytest.fixture(scope="module")
+def local_ray():
+    """A local Ray with two CPUs for a test module (started once, shut down after; one started
+    by someone else is left running)."""
+    ray = pytest.importorskip("ray", reason=RAY_REASON)
+    pytest.importorskip("ray.tune", reason=RAY_REASON)
+    started = not ray.is_initialized()
+    if started:
+        ray.init(num_cpus=2, include_dashboard=False)
+    yield ray
+    if started:
+        ray.shutdown()

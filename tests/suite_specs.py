@@ -4,6 +4,10 @@ ho2018's two segments)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import pytest
+
 _ARMS = """\
 cycles: 1
 arms:
@@ -29,3 +33,16 @@ arms:
 def tiny_suite(name: str = "tiny", seeds: tuple[int, ...] = (0,)) -> str:
     """The spec's YAML text with this ``name`` and these ``seeds``."""
     return f"name: {name}\nseeds: {list(seeds)}\n" + _ARMS
+
+
+def assert_suite_cli_error(argv: list[str], option: str, tmp_path: Path, capsys) -> None:
+    """``python -m eval suite small`` with ``argv`` exits 2 with one line naming ``option``,
+    before writing anything."""
+    import eval.__main__ as eval_main
+
+    with pytest.raises(SystemExit) as exit_info:
+        eval_main.main(["suite", "small", "--out", str(tmp_path / "o")] + argv)
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert error.startswith("python -m eval suite: error:") and option in error
+    assert not (tmp_path / "o").exists()

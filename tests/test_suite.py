@@ -18,7 +18,7 @@ import scipy.stats
 import eval.__main__ as eval_main
 from eval import suite
 from eval import suite_report
-from suite_specs import tiny_suite
+from suite_specs import assert_suite_cli_error, tiny_suite
 
 pytest.importorskip("rliable")
 
@@ -335,12 +335,7 @@ def test_single_seed_intervals_collapse_to_the_point():
     (["--report-only"], "--report-only"),
 ])
 def test_cli_bad_options_exit_2_with_one_line(argv, option, tmp_path, capsys):
-    with pytest.raises(SystemExit) as exit_info:
-        eval_main.main(["suite", "small", "--out", str(tmp_path / "o")] + argv)
-    assert exit_info.value.code == 2
-    error = capsys.readouterr().err.strip().splitlines()[-1]
-    assert error.startswith("python -m eval suite: error:") and option in error
-    assert not (tmp_path / "o").exists()
+    assert_suite_cli_error(argv, option, tmp_path, capsys)
 
 
 def test_cli_bad_spec_exits_2_naming_the_file_and_key(tmp_path, capsys):

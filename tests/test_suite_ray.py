@@ -16,26 +16,13 @@ import pytest
 
 import eval.__main__ as eval_main
 from eval import suite
-from suite_specs import tiny_suite
+from suite_specs import assert_suite_cli_error, tiny_suite
 from eval import suite_ray
 
-RAY_REASON = 'Ray is an optional extra: pip install "soft-arm-gym[ray]"'
 
 GRID = tiny_suite("ray_grid", (0, 1))
 """Four quick wang2023 runs (a 26-step circle, one cycle) and two n/a (cc_model refuses
 ho2018's two segments)."""
-
-
-@pytest.fixture(scope="module")
-def local_ray():
-    """A local Ray with two CPUs for the module's tests (started once, shut down after)."""
-    ray = pytest.importorskip("ray", reason=RAY_REASON)
-    started = not ray.is_initialized()
-    if started:
-        ray.init(num_cpus=2, include_dashboard=False)
-    yield ray
-    if started:
-        ray.shutdown()
 
 
 def _write(tmp_path: Path, text: str) -> Path:
@@ -200,12 +187,7 @@ def test_without_ray_the_map_names_the_extra(monkeypatch):
     (["--backend", "dask"], "--backend"),
 ])
 def test_cli_bad_backend_options_exit_2_with_one_line(argv, option, tmp_path, capsys):
-    with pytest.raises(SystemExit) as exit_info:
-        eval_main.main(["suite", "small", "--out", str(tmp_path / "o")] + argv)
-    assert exit_info.value.code == 2
-    error = capsys.readouterr().err.strip().splitlines()[-1]
-    assert error.startswith("python -m eval suite: error:") and option in error
-    assert not (tmp_path / "o").exists()
+    assert_suite_cli_error(argv, option, tmp_path, capsys)
 
 
 def test_cli_backend_ray_without_ray_names_the_extra(tmp_path, capsys, monkeypatch):

@@ -17,24 +17,10 @@ from train.__main__ import main as train_main
 from train.config import read_hyperparameters, split_hyperparameters
 from train.trainer import TrainRequest, resolve
 
-RAY_REASON = 'Ray Tune is an optional extra: pip install "soft-arm-gym[ray]"'
 ENV_ID = "SoftArmTrackWang2023-v0"
 FAST_ENV = ["feedback=ground_truth", "path=circle", "speed_m_s=0.05", "randomization=false"]
 """A 26-step circle with the true tip pose: training and evaluation take seconds."""
 FIXED = ["learning_starts=100", "buffer_size=10000"]
-
-
-@pytest.fixture(scope="module")
-def local_ray():
-    """A local Ray with two CPUs for the module's sweeps (started once, shut down after)."""
-    ray = pytest.importorskip("ray", reason=RAY_REASON)
-    pytest.importorskip("ray.tune", reason=RAY_REASON)
-    started = not ray.is_initialized()
-    if started:
-        ray.init(num_cpus=2, include_dashboard=False)
-    yield ray
-    if started:
-        ray.shutdown()
 
 
 def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, local_ray,
