@@ -21,7 +21,9 @@ decide chamber pressures turn them into actions with the env's own map,
 from __future__ import annotations
 
 import importlib
+import inspect
 import re
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -38,10 +40,100 @@ BASELINES: dict[str, str] = {
 """Baseline names and the classes implementing them."""
 
 
+def _describe(value: Any) -> str:
+    """A short description of ``value`` for error messages (no full dump of large arrays)."""
+    if isinstance(value, Mapping):
+        return f"a dict with keys {list(value)}"
+    if isinstance(value, np.ndarray) and value.size > 8:
+        return f"an array of dtype {value.dtype} and shape {value.shape}"
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def check_observation(space: Any, observation: Any, name: str = "observation",
+                      batch: bool = False) -> Any:
+    """``observation`` checked against the observation ``space`` it should come from.
+
+    A ``Box`` space wants a real array (integer or float dtype; no strings, objects, booleans or
+    complex numbers) of the space's shape, with no NaN or inf; a ``Dict`` space a dict with
+    exactly its parts, each checked the same way (``observation['pose']``, ...). With ``batch``
+    a stack of observations, shape ``(n, *space.shape)``, is accepted too (what an SB3 model
+    predicts on). Other spaces are not checked.
+
+    Returns:
+        The observation as an array (a dict of arrays for a ``Dict`` space), its dtype kept.
+
+    Raises:
+        ValueError: naming ``name``, the shape wanted and what was given, e.g. ``observation
+            must be a finite float array of shape (19,), got shape (7,)``.
+    """
+    from gymnasium import spaces
+
+    if isinstance(space, spaces.Dict):
+        parts = list(space.spaces)
+        if not isinstance(observation, Mapping):
+            raise ValueError(f"{name} must be a dict of the parts {parts}, got "
+                             f"{_describe(observation)}")
+        if set(observation) != set(parts):
+            raise ValueError(f"{name} must be a dict of the parts {parts}, got the parts "
+                             f"{list(observation)}")
+        return {part: check_observation(space.spaces[part], observation[part],
+                                        f"{name}[{part!r}]", batch) for part in parts}
+    if not isinstance(space, spaces.Box):
+        return observation
+    shape = tuple(space.shape)
+    kind = "float" if np.issubdtype(space.dtype, np.floating) else str(space.dtype)
+    wanted = f"{name} must be a finite {kind} array of shape {shape}"
+    if isinstance(observation, Mapping) or observation is None:
+        raise ValueError(f"{wanted}, got {_describe(observation)}")
+    try:
+        array = np.asarray(observation)
+    except (TypeError, ValueError) as error:  # ragged nesting
+        raise ValueError(f"{wanted}, got {_describe(observation)} ({error})") from None
+    if np.iscomplexobj(array):
+        raise ValueError(f"{wanted}, got complex values ({_describe(observation)})")
+    if array.dtype.kind not in "iuf":
+        raise ValueError(f"{wanted}, got dtype {array.dtype} ({_describe(observation)})")
+    batched = batch and array.ndim == len(shape) + 1 and array.shape[1:] == shape
+    if array.shape != shape and not batched:
+        raise ValueError(f"{wanted}, got shape {array.shape}")
+    if array.dtype.kind == "f":
+        bad = np.argwhere(~np.isfinite(array))
+        if len(bad):
+            index = tuple(int(i) for i in bad[0])
+            raise ValueError(f"{wanted}, got {array[index]} at index "
+                             f"{index[0] if len(index) == 1 else index} ({len(bad)} non-finite "
+                             "entries)")
+    return array
+
+
+def require_soft_arm_env(env: Any, policy: str) -> Any:
+    """The unwrapped :class:`~soft_gym.envs.SoftArmEnv` under ``env``; anything else (``None``,
+    a string, another gymnasium env) raises ``ValueError`` naming ``env`` and ``policy``."""
+    from soft_gym.envs import SoftArmEnv
+
+    unwrapped = getattr(env, "unwrapped", None)
+    if not isinstance(unwrapped, SoftArmEnv):
+        raise ValueError(f"env must be the soft-arm environment {policy} controls (made by "
+                         f"gymnasium.make('SoftArmTrack-v0', ...) or a SoftArmEnv), got "
+                         f"{_describe(env)}")
+    return unwrapped
+
+
 class BaselinePolicy:
-    """Base class of the baselines (see the module docstring)."""
+    """Base class of the baselines (see the module docstring).
+
+    Baselines that control an env keep its unwrapped :class:`~soft_gym.envs.SoftArmEnv` as
+    ``self.env``; their :meth:`predict` calls :meth:`check_observation` before anything else,
+    so a malformed observation is refused and leaves the policy's state as it was.
+    """
 
     name = "baseline"
+
+    def check_observation(self, observation: Any, name: str = "observation") -> Any:
+        """``observation`` checked against the controlled env's observation space (see
+        :func:`check_observation`); ``ValueError`` naming ``name`` where it does not fit."""
+        return check_observation(self.env.observation_space, observation, name)
 
     def reset(self) -> None:
         """Start of an episode; learned state persists, episode state is cleared."""
@@ -128,6 +220,129 @@ def _trained_with_normalization(model_path: Path, config: dict) -> bool:
     return any(any(directory.glob("*vecnormalize*.pkl")) for directory in directories)
 
 
+SB3_ALGORITHMS = ("A2C", "DDPG", "PPO", "SAC", "TD3")
+"""The stable-baselines3 algorithms an ``sb3:`` model may be (``python -m train``'s)."""
+
+
+def _space_shapes(space: Any) -> Any:
+    """What an agent's interface depends on in a space: its kind and shape (for a ``Dict``, those
+    of every part), so that spaces differing only in bounds still match."""
+    from gymnasium import spaces
+
+    if isinstance(space, spaces.Dict):
+        return {key: _space_shapes(part) for key, part in space.spaces.items()}
+    return type(space).__name__, tuple(getattr(space, "shape", None) or ())
+
+
+def _read_run_config(config_path: Path | None) -> dict:
+    """The run's ``config.yaml`` as a dict (``{}`` without one); ``ValueError`` naming the file
+    where it is not YAML or not a mapping."""
+    import yaml
+
+    if config_path is None:
+        return {}
+    try:
+        config = yaml.safe_load(config_path.read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        detail = " ".join(str(error).split())
+        raise ValueError(f"sb3 run config {str(config_path)!r} is not readable YAML "
+                         f"({type(error).__name__}: {detail})") from None
+    config = {} if config is None else config
+    if not isinstance(config, dict):
+        raise ValueError(f"sb3 run config {str(config_path)!r} must hold a mapping (algo, "
+                         f"env_kwargs, ...), got {_describe(config)}")
+    if not isinstance(config.get("env_kwargs", {}), dict):
+        raise ValueError(f"sb3 run config {str(config_path)!r}: env_kwargs must be a mapping, "
+                         f"got {_describe(config['env_kwargs'])}")
+    return config
+
+
+def _check_model_archive(model_path: Path) -> dict:
+    """The attributes (``data`` entry) of a stable-baselines3 model ``.zip``; ``ValueError``
+    naming the file where it is no zip, a damaged one, or a zip SB3 did not write."""
+    import json
+    import zipfile
+    import zlib
+
+    what = f"sb3 model file {str(model_path)!r}"
+    try:
+        with zipfile.ZipFile(model_path) as archive:
+            names = archive.namelist()
+            missing = [name for name in ("data", "policy.pth") if name not in names]
+            if missing:
+                raise ValueError(f"{what} is not a stable-baselines3 model (truncated, or a "
+                                 f"zip SB3 did not write): it lacks the entries {missing} "
+                                 f"(it holds {names[:4]}{' ...' if len(names) > 4 else ''})")
+            damaged = archive.testzip()
+            if damaged is not None:
+                raise ValueError(f"{what} is damaged: its entry {damaged!r} fails its CRC check")
+            data = json.loads(archive.read("data").decode())
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:  # before ValueError: subclasses
+        raise ValueError(f"{what} has a corrupt 'data' entry ({error})") from None
+    except ValueError:
+        raise
+    except (OSError, EOFError, zipfile.BadZipFile, zlib.error, NotImplementedError,
+            RuntimeError) as error:
+        size = model_path.stat().st_size if model_path.is_file() else 0
+        raise ValueError(f"{what} is not a stable-baselines3 model: "
+                         f"{'it is empty' if size == 0 else 'not a readable zip archive'} "
+                         f"({type(error).__name__}: {error})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{what} has a 'data' entry that is not a mapping of attributes")
+    return data
+
+
+def _algorithm(model_path: Path, config: dict, data: dict) -> str:
+    """The SB3 algorithm class name of a model: the run config's ``algo``, else guessed from the
+    attributes it saved; ``ValueError`` naming the file where neither gives a known one."""
+    algorithm = config.get("algo")
+    if algorithm is None:
+        return _guess_algorithm(model_path, data)
+    if not isinstance(algorithm, str) or algorithm.upper() not in SB3_ALGORITHMS:
+        raise ValueError(f"sb3 model file {str(model_path)!r}: its run config names the algo "
+                         f"{algorithm!r}, not one of {[a.lower() for a in SB3_ALGORITHMS]}")
+    return algorithm.upper()
+
+
+def _load_normalization(path: Path, model) -> Any:
+    """The VecNormalize statistics in ``path`` for ``model``, ready to normalise (not training);
+    ``ValueError`` naming the file where it is unreadable, not VecNormalize statistics, or
+    statistics of other observations."""
+    import pickle
+
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    what = f"VecNormalize statistics {str(path)!r}"
+    try:
+        with open(path, "rb") as handle:
+            normalization = pickle.load(handle)
+    except Exception as error:  # a damaged pickle raises almost anything
+        raise ValueError(f"{what} cannot be read: "
+                         f"{'the file is empty' if path.stat().st_size == 0 else 'not a pickle'} "
+                         f"or damaged ({type(error).__name__}: {error})") from None
+    if not isinstance(normalization, VecNormalize):
+        raise ValueError(f"{what} hold a {type(normalization).__name__}, not a pickled "
+                         "stable-baselines3 VecNormalize")
+    space = getattr(normalization, "observation_space", None)
+    if _space_shapes(space) != _space_shapes(model.observation_space):
+        raise ValueError(f"{what} are for observations {space}, the model reads "
+                         f"{model.observation_space}")
+    if getattr(normalization, "norm_obs", False):
+        rms = getattr(normalization, "obs_rms", None)
+        mean = getattr(rms, "mean", None)
+        if isinstance(mean, np.ndarray) and (
+                mean.shape != tuple(model.observation_space.shape or mean.shape)
+                or not np.all(np.isfinite(mean)) or not np.all(np.isfinite(rms.var))
+                or np.any(rms.var < 0)):
+            raise ValueError(f"{what} hold a running mean of shape {mean.shape} or non-finite "
+                             f"or negative statistics, for observations of shape "
+                             f"{model.observation_space.shape}")
+    normalization.training = False
+    # what VecNormalize drops when pickled, so that this copy can be saved again
+    normalization.class_attributes, normalization.returns = {}, np.zeros(1)
+    return normalization
+
+
 class SB3Policy(BaselinePolicy):
     """A stable-baselines3 model behind the baseline face (loaded from ``sb3:PATH``).
 
@@ -138,14 +353,21 @@ class SB3Policy(BaselinePolicy):
     normalisation whose statistics are missing is refused with a ``ValueError`` naming the file.
     The run's ``config.yaml`` (beside the model, or above ``checkpoints/``) gives the env
     interface the agent was trained with (:data:`SB3_INTERFACE_KEYS`).
+
+    A path that does not exist, a directory without ``model.zip``, a model file that is not one
+    (empty, truncated, random bytes, a zip SB3 did not write), a damaged ``config.yaml`` and
+    VecNormalize statistics that are not (or are for other observations) are each refused with
+    one ``ValueError`` naming the file and what is wrong with it.
     """
 
     name = "sb3"
 
-    def __init__(self, model, normalization=None, config: dict | None = None) -> None:
+    def __init__(self, model, normalization=None, config: dict | None = None,
+                 model_path: str | Path | None = None) -> None:
         self.model = model
         self.normalization = normalization
         self.config = dict(config or {})
+        self.model_path = None if model_path is None else Path(model_path)
 
     @property
     def env_interface(self) -> dict:
@@ -153,7 +375,13 @@ class SB3Policy(BaselinePolicy):
         env_kwargs = self.config.get("env_kwargs", {})
         return {key: env_kwargs[key] for key in SB3_INTERFACE_KEYS if key in env_kwargs}
 
+    def check_observation(self, observation: Any, name: str = "observation") -> Any:
+        """``observation`` (or a stack of them) checked against the observation space the model
+        reads (see :func:`check_observation`)."""
+        return check_observation(self.model.observation_space, observation, name, batch=True)
+
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        observation = self.check_observation(observation)
         if self.normalization is not None:
             observation = self.normalization.normalize_obs(observation)
         return self.model.predict(observation, state=state, episode_start=episode_start,
@@ -175,54 +403,67 @@ class SB3Policy(BaselinePolicy):
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "SB3Policy":
-        import pickle
-
-        import yaml
-
+        """Load ``path`` (see the class docstring); with ``env``, check that the agent reads its
+        observations and writes its actions (:meth:`check_env`)."""
+        if not isinstance(path, (str, Path)) or str(path) == "":
+            raise ValueError(f"sb3 path must be a model .zip, a directory holding model.zip or a "
+                             f"shipped agent {sorted(shipped_agents())}, got {path!r}")
         path = resolve_sb3_path(path)
+        if not path.exists():
+            raise ValueError(f"sb3 path {str(path)!r} does not exist and is no shipped agent "
+                             f"{sorted(shipped_agents())}")
         model_path = path / "model.zip" if path.is_dir() else path
         if not model_path.is_file():
-            raise ValueError(f"sb3 path {str(path)!r} is neither a model .zip, a directory "
-                             f"holding model.zip, nor a shipped agent {sorted(shipped_agents())}")
-        config_path = _run_config_file(model_path)
-        config = (yaml.safe_load(config_path.read_text()) or {}) if config_path else {}
+            raise ValueError(f"sb3 path {str(path)!r} is a directory without model.zip: give a "
+                             "run directory of python -m train, a model .zip or a shipped agent "
+                             f"{sorted(shipped_agents())}")
+        config = _read_run_config(_run_config_file(model_path))
         normalization_path = normalization_file(model_path)
         if not normalization_path.is_file() and _trained_with_normalization(model_path, config):
             raise ValueError(
                 f"sb3 path {str(path)!r}: the model was trained on normalised observations but "
                 f"its VecNormalize statistics {str(normalization_path)!r} are missing")
-        algorithm = str(config.get("algo") or _guess_algorithm(model_path)).upper()
+        data = _check_model_archive(model_path)
+        algorithm = _algorithm(model_path, config, data)
         module = importlib.import_module("stable_baselines3")
-        model = getattr(module, algorithm).load(model_path, device="cpu")
+        try:
+            model = getattr(module, algorithm).load(model_path, device="cpu")
+        except Exception as error:  # SB3 and torch raise many kinds on a damaged model
+            raise ValueError(f"sb3 model file {str(model_path)!r} does not load as a "
+                             f"stable-baselines3 {algorithm} model "
+                             f"({type(error).__name__}: {error})") from None
         normalization = None
         if normalization_path.is_file():
-            with open(normalization_path, "rb") as handle:
-                normalization = pickle.load(handle)
-            normalization.training = False
-            # what VecNormalize drops when pickled, so that this copy can be saved again
-            normalization.class_attributes, normalization.returns = {}, np.zeros(1)
-        policy = cls(model, normalization, config)
+            normalization = _load_normalization(normalization_path, model)
+        policy = cls(model, normalization, config, model_path=model_path)
         if env is not None:
             policy.check_env(env)
         return policy
 
     def check_env(self, env) -> None:
-        """Raise ``ValueError`` unless ``env`` gives observations of the shape the agent reads."""
-        expected = self.model.observation_space.shape
-        if env.observation_space.shape != expected:
+        """Raise ``ValueError`` unless ``env`` gives observations of the shape the agent reads
+        and takes actions of the shape it writes, naming the model file and both spaces."""
+        if not (hasattr(env, "observation_space") and hasattr(env, "action_space")):
+            raise ValueError(f"env must be a gymnasium environment, got {_describe(env)}")
+        model_spaces = (self.model.observation_space, self.model.action_space)
+        env_spaces = (env.observation_space, env.action_space)
+        wrong = [what for what, ours, theirs in zip(("observations", "actions"), model_spaces,
+                                                    env_spaces)
+                 if _space_shapes(ours) != _space_shapes(theirs)]
+        if wrong:
+            source = "" if self.model_path is None else f" {str(self.model_path)!r}"
             raise ValueError(
-                f"the agent reads observations of shape {expected}, the env gives "
-                f"{env.observation_space.shape}: make the env with the agent's interface "
-                f"{self.env_interface}")
+                f"the sb3 model{source} does not fit the env's {' and '.join(wrong)}: the agent "
+                f"reads observations {model_spaces[0]} and writes actions {model_spaces[1]}, the "
+                f"env gives observations {env_spaces[0]} and takes actions {env_spaces[1]}: make "
+                f"the env with the agent's interface {self.env_interface}")
 
 
-def _guess_algorithm(model_path: Path) -> str:
-    """The SB3 algorithm of a bare model ``.zip`` from the attributes it saved."""
-    import json
-    import zipfile
-
-    with zipfile.ZipFile(model_path) as archive:
-        data = json.loads(archive.read("data").decode())
+def _guess_algorithm(model_path: Path, data: dict | None = None) -> str:
+    """The SB3 algorithm of a bare model ``.zip`` from the attributes it saved (its ``data``
+    entry, read from the file unless given)."""
+    if data is None:
+        data = _check_model_archive(model_path)
     if "n_epochs" in data:
         return "PPO"
     if "target_entropy" in data:
@@ -231,18 +472,41 @@ def _guess_algorithm(model_path: Path) -> str:
         return "TD3"  # DDPG is TD3 with a delay of 1 and no target noise: it loads the same
     if "normalize_advantage" in data:
         return "A2C"
-    raise ValueError(f"path {str(model_path)!r} holds no stable-baselines3 model this loader knows")
+    raise ValueError(f"sb3 model file {str(model_path)!r} holds no stable-baselines3 model this "
+                     f"loader knows (one of {list(SB3_ALGORITHMS)}) and no run config names "
+                     "its algo")
+
+
+def _constructor_parameters(cls: type) -> list[str]:
+    """The keyword parameters a baseline class takes besides ``env``."""
+    return [name for name, parameter in inspect.signature(cls.__init__).parameters.items()
+            if name not in ("self", "env") and parameter.kind in (
+                inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)]
 
 
 def make_policy(name: str, env=None, **params: Any) -> BaselinePolicy:
     """Build a baseline by name (see :data:`BASELINES`), or load ``"sb3:PATH"``.
 
-    ``name`` is parsed by :func:`soft_gym._registry.parse_spec` (a name string only).
+    ``name`` is parsed by :func:`soft_gym._registry.parse_spec` (a name string only). A baseline
+    needs ``env``, the soft-arm env it controls; ``params`` are its constructor's keyword
+    arguments (unknown ones are refused, listing the known ones). An ``sb3:`` agent takes no
+    ``params`` (it acts as trained); with ``env`` its interface is checked against the env's.
+
+    Raises:
+        ValueError: naming the parameter, the value and what is allowed.
     """
     if isinstance(name, str) and name.startswith("sb3:"):
+        if params:
+            raise ValueError(f"policy {name!r} takes no parameters (an sb3 agent acts as it was "
+                             f"trained), got {sorted(params)}")
         return SB3Policy.load(name[4:], env=env)
     (spec,) = parse_spec(name, "policy", BASELINES, forms=("name",), also=("sb3:PATH",))
     module_name, class_name = BASELINES[spec.name].split(":")
     cls = getattr(importlib.import_module(module_name), class_name)
+    require_soft_arm_env(env, f"policy {spec.name!r}")
+    known = _constructor_parameters(cls)
+    unknown = sorted(key for key in params if key not in known)
+    if unknown:
+        raise ValueError(f"policy {spec.name!r} parameters must be among {known}, got unknown "
+                         f"{unknown}")
     return build("policy", spec.name, lambda **kwargs: cls(env, **kwargs), params)
-

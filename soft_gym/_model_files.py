@@ -2,6 +2,10 @@
 and the payload's SHA-256, so that a file is loaded back identically and a corrupt or foreign one is
 refused by name (the learned estimators and controllers save this way).
 
+Models kept as plain ``.npz`` archives use :func:`write_npz` (exactly the path given, no ``.npz``
+appended) and :func:`read_npz` (one ``ValueError`` naming the file for anything that is not a
+readable archive of plain arrays).
+
 A state is a dict whose values are numbers, strings, arrays, tuples of them, or dicts of the same
 (e.g. a torch ``state_dict`` as arrays); :func:`write_model_state` flattens it to named arrays
 (``a/b`` for nesting, ``a#0`` for tuple items) and :func:`read_model_state` rebuilds it, numbers and
@@ -12,6 +16,8 @@ from __future__ import annotations
 
 import hashlib
 import io
+import zipfile
+import zlib
 from pathlib import Path
 from typing import Any, Callable, TypeVar
 
@@ -79,6 +85,39 @@ def read_model_state(path: str | Path, format_name: str, what: str,
         with np.load(io.BytesIO(payload), allow_pickle=False) as arrays:
             state = _unflatten({key: arrays[key] for key in arrays.files})
         return build(state)
-    except (OSError, ValueError, KeyError, IndexError, TypeError, RuntimeError,
-            UnicodeDecodeError, EOFError) as error:
+    except (OSError, ValueError, KeyError, IndexError, TypeError, AttributeError, RuntimeError,
+            UnicodeDecodeError, EOFError, zipfile.BadZipFile, zlib.error) as error:
         raise ValueError(f"{str(path)!r} is not a readable {what} file ({error})") from None
+
+
+def write_npz(path: str | Path, arrays: dict[str, Any]) -> None:
+    """Write ``arrays`` as an ``.npz`` archive to exactly ``path`` (``numpy.savez`` given a name
+    would append ``.npz`` to one without it, and the file would not load back by that name)."""
+    with open(path, "wb") as handle:
+        np.savez(handle, **arrays)
+
+
+def read_npz(path: str | Path, what: str) -> dict[str, np.ndarray]:
+    """The arrays of the ``.npz`` archive ``path`` (no pickled objects); a missing file, or one
+    that is no such archive (empty, truncated, a single ``.npy`` array, text, damaged), raises
+    one ``ValueError`` naming ``what`` and ``path`` and what is wrong."""
+    label = f"{what} file {str(path)!r}"
+    try:
+        with open(path, "rb") as handle:
+            start = handle.read(6)
+            if start and not start.startswith((b"PK", b"\x93NUMPY")):
+                raise ValueError(f"it is neither an .npz archive nor a .npy array (it starts "
+                                 f"with {start!r})")
+            handle.seek(0)
+            archive = np.load(handle, allow_pickle=False)
+            if not isinstance(archive, np.lib.npyio.NpzFile):
+                raise ValueError("it holds a single .npy array, not an .npz archive")
+            with archive:
+                return {name: archive[name] for name in archive.files}
+    except FileNotFoundError:
+        raise ValueError(f"{label} does not exist") from None
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as error:
+        empty = Path(path).is_file() and Path(path).stat().st_size == 0
+        raise ValueError(f"{label} is not a readable .npz archive"
+                         f"{' (the file is empty)' if empty else ''} "
+                         f"({type(error).__name__}: {error})") from None

@@ -39,14 +39,17 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any, Callable, TypeVar
 
 import numpy as np
 
-from agents.policies import BaselinePolicy
-from soft_gym._validation import require_non_negative, require_positive
+from agents.policies import BaselinePolicy, require_soft_arm_env
+from soft_gym._validation import (require_integer, require_non_negative, require_number,
+                                  require_positive)
 from soft_gym.kinematics import cc_jacobian
 from soft_gym.robots.actuation import Actuation
 
+T = TypeVar("T")
 
 class CCModelController(BaselinePolicy):
     """CC model-based controller (wang2023 eqs. (19)-(27)).
@@ -70,23 +73,16 @@ class CCModelController(BaselinePolicy):
     def __init__(self, env, kp: float = 0.06, null_space_gain: float = 0.1,
                  probe_fraction: float = 0.3, probe_steps: int = 30,
                  damping: float = 1e-4, controlled_axes: tuple[int, ...] = (0, 1, 2)) -> None:
-        if env is None:
-            raise ValueError("env must be the environment to control, got None")
+        unwrapped = require_soft_arm_env(env, self.name)
         self.kp = require_positive("kp", kp)
         self.null_space_gain = require_non_negative("null_space_gain", null_space_gain)
-        if not 0 < probe_fraction <= 1:
+        self.probe_fraction = require_number("probe_fraction", probe_fraction)
+        if not 0.0 < self.probe_fraction <= 1.0:  # NaN fails too
             raise ValueError(f"probe_fraction must be in (0, 1], got {probe_fraction!r}")
-        if not isinstance(probe_steps, int) or probe_steps < 1:
-            raise ValueError(f"probe_steps must be an integer >= 1, got {probe_steps!r}")
-        self.probe_fraction = float(probe_fraction)
-        self.probe_steps = probe_steps
+        self.probe_steps = require_integer("probe_steps", probe_steps, 1)
         self.damping = require_positive("damping", damping)
-        axes = tuple(int(a) for a in controlled_axes)
-        if not axes or len(set(axes)) != len(axes) or not set(axes) <= {0, 1, 2}:
-            raise ValueError(f"controlled_axes must be distinct axes from (0, 1, 2), got "
-                             f"{controlled_axes!r}")
-        self.controlled_axes = axes
-        self.env = env.unwrapped
+        self.controlled_axes = _axes(controlled_axes)
+        self.env = unwrapped
         spec = self.env.spec_arm
         if spec.n_segments != 1:
             raise ValueError(
@@ -179,6 +175,7 @@ class CCModelController(BaselinePolicy):
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """The action for ``observation`` (SB3's signature); calibrates first if it has not
         been (on a private copy of the env, see :meth:`calibrate_on_copy`)."""
+        observation = self.check_observation(observation)  # before any state changes
         if self.alpha is None:
             self.calibrate_on_copy()
         position = self._pose(observation)
@@ -215,11 +212,13 @@ class CCModelController(BaselinePolicy):
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "CCModelController":
-        data = json.loads(Path(path).read_text())
+        """Read a controller written by :meth:`save` for ``env``; a missing, corrupt or foreign
+        file is refused with one ``ValueError`` naming the path and what is wrong."""
+        require_soft_arm_env(env, cls.name)
+        data = read_settings(path, cls.name)
         alpha = data.pop("alpha")
-        data.pop("name")
-        controller = cls(env, **data)
-        controller.alpha = None if alpha is None else np.array(alpha)
+        controller = _build_from_file(path, cls.name, lambda: cls(env, **data))
+        controller.alpha = _saved_alpha(path, alpha, len(controller.rest_lengths))
         return controller
 
     # ------------------------------------------------------------------ helpers
@@ -240,3 +239,64 @@ class CCModelController(BaselinePolicy):
 
     def _next_target(self, observation) -> np.ndarray:
         return np.asarray(self.env.observation_part(observation, "target"), dtype=float)[3:6]
+
+
+def _axes(value: Any) -> tuple[int, ...]:
+    """``controlled_axes`` checked: distinct integers from (0, 1, 2) (no bools or floats)."""
+    allowed = f"a non-empty sequence of distinct axes from (0, 1, 2), got {value!r}"
+    if not isinstance(value, (tuple, list, np.ndarray)):
+        raise ValueError(f"controlled_axes must be {allowed}")
+    axes = tuple(value)
+    if (not axes or len(set(axes)) != len(axes)
+            or any(isinstance(a, (bool, np.bool_)) or not isinstance(a, (int, np.integer))
+                   or a not in (0, 1, 2) for a in axes)):
+        raise ValueError(f"controlled_axes must be {allowed}")
+    return tuple(int(a) for a in axes)
+
+
+def read_settings(path: str | Path, name: str, file_name: str | None = None) -> dict[str, Any]:
+    """The settings a controller's :meth:`~CCModelController.save` wrote to the JSON file
+    ``path``, less their ``"name"`` (which must be ``name``); ``ValueError`` naming the file
+    where it is missing, not JSON, not a mapping, or another controller's."""
+    path = Path(path)
+    what = f"{name} controller file {str(path)!r}"
+    try:
+        data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ValueError(f"{what} does not exist") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise ValueError(f"{what} is not readable JSON ({type(error).__name__}: {error})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{what} must hold a JSON object of settings, got "
+                         f"{type(data).__name__}")
+    saved_name = data.pop("name", None)
+    if saved_name != name:
+        found = "no controller name" if saved_name is None else f"a {saved_name!r} controller"
+        raise ValueError(f"{what} holds {found}, not the settings of a {name} controller")
+    if "alpha" not in data:
+        raise ValueError(f"{what} has no 'alpha' entry (the calibrated gains or null)")
+    return data
+
+
+def _build_from_file(path: str | Path, name: str, build: Callable[[], T]) -> T:
+    """``build()``, with a ``ValueError`` or ``TypeError`` (an unknown or bad setting) raised as
+    one ``ValueError`` naming the file the settings came from."""
+    try:
+        return build()
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name} controller file {str(path)!r} holds invalid settings "
+                         f"({error})") from None
+
+
+def _saved_alpha(path: str | Path, alpha: Any, n_chambers: int) -> np.ndarray | None:
+    """The saved gains ``alpha`` (Pa/m) checked: ``None`` (not calibrated) or ``n_chambers``
+    finite numbers > 0; ``ValueError`` naming the file otherwise."""
+    if alpha is None:
+        return None
+    ok = isinstance(alpha, list) and len(alpha) == n_chambers and all(
+        isinstance(a, (int, float)) and not isinstance(a, bool) for a in alpha)
+    array = np.array(alpha, dtype=float) if ok else None
+    if array is None or not np.all(np.isfinite(array)) or not np.all(array > 0):
+        raise ValueError(f"controller file {str(path)!r}: alpha must be null or {n_chambers} "
+                         f"finite gains > 0 (Pa/m), got {alpha!r}")
+    return array

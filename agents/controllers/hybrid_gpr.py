@@ -24,9 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.controllers.cc_model import CCModelController
+from agents.controllers.cc_model import (CCModelController, _build_from_file, _saved_alpha,
+                                         read_settings)
 from agents.learners.sliding_gp import SlidingWindowGP
-from soft_gym._validation import require_positive
+from agents.policies import require_soft_arm_env
+from soft_gym._validation import require_integer, require_number, require_positive
 
 _MM = 1000.0
 
@@ -66,24 +68,24 @@ class HybridGPRController(CCModelController):
         super().__init__(env, kp=kp, null_space_gain=null_space_gain,
                          probe_fraction=probe_fraction, probe_steps=probe_steps, damping=damping,
                          controlled_axes=controlled_axes)
-        if not isinstance(n_init, int) or not 1 <= n_init <= window:
+        window = require_integer("window", window, 1)
+        if isinstance(n_init, (bool, np.bool_)) or not isinstance(n_init, (int, np.integer)) \
+                or not 1 <= n_init <= window:
             raise ValueError(f"n_init must be an integer in [1, window={window}], got {n_init!r}")
-        self.n_init = n_init
+        self.n_init = int(n_init)
         self.min_displacement_m = require_positive("min_displacement_m", min_displacement_m)
         self.max_effective_gain = require_positive("max_effective_gain", max_effective_gain)
         if max_effective_gain <= kp:
             raise ValueError(f"max_effective_gain must exceed kp={kp}, got {max_effective_gain!r}")
         # eq. (29) scales the command by (1 + e): cap it so K_p (1 + e) <= max_effective_gain
         self.max_relative_error = max_effective_gain / kp - 1.0
-        if not -1.0 < min_relative_error <= 0.0:
+        if not -1.0 < require_number("min_relative_error", min_relative_error) <= 0.0:
             raise ValueError(f"min_relative_error must be in (-1, 0], got {min_relative_error!r}")
         self.min_relative_error = float(min_relative_error)
-        if not 0.0 <= max_turn_deg < 90.0:
+        if not 0.0 <= require_number("max_turn_deg", max_turn_deg) < 90.0:
             raise ValueError(f"max_turn_deg must be in [0, 90), got {max_turn_deg!r}")
         self.max_turn_deg = float(max_turn_deg)
-        if not isinstance(learning_horizon, int) or learning_horizon < 1:
-            raise ValueError(f"learning_horizon must be an integer >= 1, got {learning_horizon!r}")
-        self.learning_horizon = learning_horizon
+        self.learning_horizon = require_integer("learning_horizon", learning_horizon, 1)
         self._history: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
         self.gp = SlidingWindowGP(window=window, length_scales=length_scale,
                                   signal_variance=signal_variance, noise_variance=noise_variance)
@@ -132,7 +134,11 @@ class HybridGPRController(CCModelController):
 
         With ``learning_horizon = h > 1`` the commands, desired and achieved motions are summed
         over ``h`` steps before the ratio is taken, so that the achieved motion outgrows the
-        feedback's noise (one control step moves the tip a fraction of a millimetre)."""
+        feedback's noise (one control step moves the tip a fraction of a millimetre).
+
+        Malformed observations are refused (``ValueError``) before the window is touched."""
+        observation = self.check_observation(observation)
+        next_observation = self.check_observation(next_observation, "next_observation")
         if self._pending is None:
             return
         features, desired, command = self._pending
@@ -165,15 +171,42 @@ class HybridGPRController(CCModelController):
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "HybridGPRController":
+        """Read a controller written by :meth:`save` (a directory) for ``env``; a missing
+        directory or file, or a corrupt or foreign one, is refused with one ``ValueError``
+        naming it and what is wrong."""
+        require_soft_arm_env(env, cls.name)
         directory = Path(path)
-        base = json.loads((directory / "cc_model.json").read_text())
-        extra = json.loads((directory / "hybrid.json").read_text())
+        if not directory.is_dir():
+            raise ValueError(f"{cls.name} controller directory {str(directory)!r} "
+                             f"{'is a file, not' if directory.exists() else 'does not exist:'} "
+                             "a directory written by save() (cc_model.json, hybrid.json, gp.npz)")
+        base = read_settings(directory / "cc_model.json", cls.name)
         alpha = base.pop("alpha")
-        base.pop("name")
-        samples = extra.pop("samples")
+        extra = _read_json_object(directory / "hybrid.json", cls.name)
+        samples = extra.pop("samples", None)
+        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 0:
+            raise ValueError(f"{cls.name} controller file {str(directory / 'hybrid.json')!r}: "
+                             f"samples must be an integer >= 0, got {samples!r}")
         gp = SlidingWindowGP.load(directory / "gp.npz")
-        controller = cls(env, window=gp.window, **base, **extra)
+        controller = _build_from_file(directory, cls.name,
+                                      lambda: cls(env, window=gp.window, **base, **extra))
         controller.gp = gp
         controller.samples = samples
-        controller.alpha = None if alpha is None else np.array(alpha)
+        controller.alpha = _saved_alpha(directory / "cc_model.json", alpha,
+                                        len(controller.rest_lengths))
         return controller
+
+
+def _read_json_object(path: Path, name: str) -> dict:
+    """The JSON object in ``path``; ``ValueError`` naming the file where it is missing, not JSON
+    or not an object."""
+    what = f"{name} controller file {str(path)!r}"
+    try:
+        data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ValueError(f"{what} does not exist") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise ValueError(f"{what} is not readable JSON ({type(error).__name__}: {error})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{what} must hold a JSON object, got {type(data).__name__}")
+    return data

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from agents.learners.local_ik import LocalIKNetwork
-from agents.policies import BaselinePolicy
+from agents.policies import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_in_range, require_integer, require_positive
 from soft_gym.robots.actuation import Actuation
@@ -90,8 +90,7 @@ class LocalIKASDMController(BaselinePolicy):
                  exploration: dict | None = None, seed: int = 0, cache: bool = True) -> None:
         from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
 
-        if env is None:
-            raise ValueError("env must be the environment to control, got None")
+        unwrapped = require_soft_arm_env(env, self.name)
         self.step_mm = require_in_range("step_mm", step_mm, MIN_STEP_MM, MAX_STEP_MM)
         for name, value in (("adaptive", adaptive), ("skip", skip), ("cache", cache)):
             if not isinstance(value, (bool, np.bool_)):
@@ -109,7 +108,7 @@ class LocalIKASDMController(BaselinePolicy):
                              f"{exploration!r}")
         self.exploration = dict(exploration or {})
         self._config = ReconstructionConfig.from_options(self.exploration)
-        self.env = env.unwrapped
+        self.env = unwrapped
         missing = [part for part in _REQUIRED_PARTS if part not in self.env.obs_parts]
         if missing:
             raise ValueError(f"the env's obs must include {list(_REQUIRED_PARTS)} for "
@@ -133,7 +132,9 @@ class LocalIKASDMController(BaselinePolicy):
         self.history: list[dict[str, Any]] = []
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
-        """The action for ``observation``: a new command every ``settle_s``, else the held one."""
+        """The action for ``observation``: a new command every ``settle_s``, else the held one
+        (a malformed observation is refused before anything, training included)."""
+        observation = self.check_observation(observation)
         if self.network is None:
             self.pretrain()
         env = self.env
@@ -238,14 +239,28 @@ class LocalIKASDMController(BaselinePolicy):
     def load(cls, path: str | Path, env=None) -> "LocalIKASDMController":
         """Read a controller written by :meth:`save` for ``env``; a corrupt or foreign file is
         refused with a ``ValueError`` naming the path."""
+        require_soft_arm_env(env, cls.name)
         settings, training, network = read_model_state(
             path, _FORMAT, f"{cls.name} controller",
-            lambda state: (json.loads(state["settings"]), json.loads(state["training"]),
+            lambda state: (_json_object("settings", state["settings"]),
+                           _json_object("training", state["training"]),
                            LocalIKNetwork.from_state(state["network"])))
-        controller = cls(env, **settings)
+        try:
+            controller = cls(env, **settings)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"{cls.name} controller file {str(path)!r} holds invalid settings "
+                             f"({type(error).__name__}: {error})") from None
         if network.n_chambers != controller.env.spec_arm.n_chambers:
             raise ValueError(f"path {str(path)!r} holds a {cls.name} controller for another arm "
                              f"({network.n_chambers} chambers, this env has "
                              f"{controller.env.spec_arm.n_chambers})")
         controller.network, controller.training = network, training
         return controller
+
+
+def _json_object(name: str, text: Any) -> dict:
+    """The JSON object ``text`` (a saved file's ``name`` entry); ``ValueError`` otherwise."""
+    value = json.loads(str(text))
+    if not isinstance(value, dict):
+        raise ValueError(f"{name} must be a JSON object, got {type(value).__name__}")
+    return value

@@ -56,7 +56,8 @@ import numpy as np
 
 from agents.learners.lwpr import LWPR
 from agents.learners.rwr_inverse import RewardWeightedInverse
-from agents.policies import BaselinePolicy
+from agents.policies import BaselinePolicy, require_soft_arm_env
+from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import (as_finite_array, require_in_range, require_integer,
                                   require_non_negative, require_positive)
 from soft_gym.robots.actuation import Actuation
@@ -116,8 +117,7 @@ class LWPRRWRController(BaselinePolicy):
                  leg_decisions: int = 30, max_epochs: int = 15, init_d: float = 0.25,
                  w_gen: float = 0.2, waypoint_range: float = 0.6, min_step_mm: float = 1.0,
                  seed: int = 0, cache: bool = True) -> None:
-        if env is None:
-            raise ValueError("env must be the environment to control, got None")
+        unwrapped = require_soft_arm_env(env, self.name)
         if not isinstance(online, (bool, np.bool_)):
             raise ValueError(f"online must be True or False, got {online!r}")
         self.online = bool(online)
@@ -141,7 +141,7 @@ class LWPRRWRController(BaselinePolicy):
         if not isinstance(cache, (bool, np.bool_)):
             raise ValueError(f"cache must be True or False, got {cache!r}")
         self.cache = bool(cache)
-        self.env = env.unwrapped
+        self.env = unwrapped
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:
                 raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
@@ -172,6 +172,7 @@ class LWPRRWRController(BaselinePolicy):
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """The action for ``observation`` (SB3's signature); pre-trains first if it has not
         been (on a private copy of the env, see the module docstring)."""
+        observation = self.check_observation(observation)  # before any state changes
         position = self._pose(observation)
         target = self._next_target(observation)
         return self.action_for(position, target), state
@@ -355,7 +356,8 @@ class LWPRRWRController(BaselinePolicy):
     # ------------------------------------------------------------------ persistence
     def save(self, path: str | Path) -> None:
         """Write the settings, the forward LWPR and the inverse (with its window) to ``path``
-        (``.npz``); :meth:`load` restores a controller that predicts identically."""
+        (``.npz`` format, exactly that name); :meth:`load` restores a controller that predicts
+        identically."""
         if self.forward is None or self.inverse is None:
             raise ValueError(f"{self.name} has no model to save yet: call pretrain() first")
         buffer = io.BytesIO()
@@ -365,40 +367,55 @@ class LWPRRWRController(BaselinePolicy):
             "rest_actuation", "ridge", "pretrain_waypoints", "leg_decisions", "max_epochs",
             "init_d", "w_gen", "waypoint_range", "min_step_mm", "seed", "cache")}
         arrays = {f"inverse_{k}": v for k, v in self.inverse.state().items()}
-        np.savez(path, format=np.array(_FORMAT), settings=np.array(json.dumps(settings)),
-                 pretraining=np.array(json.dumps(self.pretraining)),
-                 pretraining_tips_mm=self._pretraining_tips_mm,
-                 forward=np.frombuffer(buffer.getvalue(), dtype=np.uint8), **arrays)
+        write_npz(path, dict(format=np.array(_FORMAT), settings=np.array(json.dumps(settings)),
+                             pretraining=np.array(json.dumps(self.pretraining)),
+                             pretraining_tips_mm=self._pretraining_tips_mm,
+                             forward=np.frombuffer(buffer.getvalue(), dtype=np.uint8), **arrays))
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "LWPRRWRController":
-        """Read a controller written by :meth:`save` for ``env``; a corrupt or foreign file
-        raises ``ValueError`` naming the path."""
+        """Read a controller written by :meth:`save` for ``env``; a missing, corrupt or foreign
+        file raises one ``ValueError`` naming the path and what is wrong."""
+        require_soft_arm_env(env, cls.name)
+        data = _read_saved(path, cls.name)
         try:
-            with np.load(path, allow_pickle=False) as data:
-                settings = json.loads(str(data["settings"]))
-        except (OSError, ValueError, KeyError, EOFError) as error:
-            raise ValueError(f"path {str(path)!r} is not a saved {cls.name} controller "
-                             f"({error})") from None
-        controller = cls(env, **settings)
-        controller._restore(path)
+            settings = json.loads(str(data["settings"]))
+            if not isinstance(settings, dict):
+                raise ValueError(f"settings must be a JSON object, got {type(settings).__name__}")
+            controller = cls(env, **settings)
+        except (KeyError, TypeError, ValueError) as error:
+            raise ValueError(f"{cls.name} controller file {str(path)!r} holds invalid settings "
+                             f"({type(error).__name__}: {error})") from None
+        controller._restore(path, data)
         return controller
 
-    def _restore(self, path: str | Path) -> None:
+    def _restore(self, path: str | Path, data: dict[str, np.ndarray] | None = None) -> None:
+        """Take the models of the file ``path`` (its arrays ``data``, read if not given)."""
+        data = _read_saved(path, self.name) if data is None else data
+        what = f"{self.name} controller file {str(path)!r}"
         try:
-            with np.load(path, allow_pickle=False) as data:
-                if str(data["format"]) != _FORMAT:
-                    raise ValueError(f"format {str(data['format'])!r}")
-                forward_bytes = data["forward"].tobytes()
-                inverse_state = {key[len("inverse_"):]: data[key] for key in data.files
-                                 if key.startswith("inverse_")}
-                pretraining = json.loads(str(data["pretraining"]))
-                tips = np.array(data["pretraining_tips_mm"], dtype=float)
-        except (OSError, ValueError, KeyError, EOFError) as error:
-            raise ValueError(f"path {str(path)!r} is not a saved {self.name} controller "
-                             f"({error})") from None
-        forward = LWPR.load(io.BytesIO(forward_bytes))
-        inverse = RewardWeightedInverse.from_state(inverse_state, source=f"path {str(path)!r}")
+            forward_bytes = io.BytesIO(data["forward"].tobytes())
+        except KeyError as error:
+            raise ValueError(f"{what} is not a saved {self.name} controller (no {error} entry)") \
+                from None
+        try:
+            forward = LWPR.load(forward_bytes)
+        except ValueError as error:
+            raise ValueError(f"{what}: its 'forward' entry is not a readable LWPR model "
+                             f"({str(error).rsplit(': ', 1)[-1]})") from None
+        try:
+            inverse_state = {key[len("inverse_"):]: value for key, value in data.items()
+                             if key.startswith("inverse_")}
+            pretraining = json.loads(str(data["pretraining"]))
+            tips = as_finite_array("pretraining_tips_mm", data["pretraining_tips_mm"])
+            if tips.ndim != 2 or tips.shape[1] != 3:
+                raise ValueError(f"pretraining_tips_mm must have shape (n, 3), got {tips.shape}")
+            if not isinstance(pretraining, dict):
+                raise ValueError("pretraining must be a JSON object")
+        except (KeyError, TypeError, ValueError) as error:
+            raise ValueError(f"{what} is not a saved {self.name} controller "
+                             f"({type(error).__name__}: {error})") from None
+        inverse = RewardWeightedInverse.from_state(inverse_state, source=what)
         if forward.input_dim != 3 + 2 * self.n_chambers or inverse.actuator_dim != self.n_chambers:
             raise ValueError(f"path {str(path)!r} holds a {self.name} controller for another arm "
                              f"({inverse.actuator_dim} chambers, this env has {self.n_chambers})")
@@ -412,3 +429,15 @@ class LWPRRWRController(BaselinePolicy):
 
     def _next_target(self, observation) -> np.ndarray:
         return np.asarray(self.env.observation_part(observation, "target"), dtype=float)[3:6]
+
+
+def _read_saved(path: str | Path, name: str) -> dict[str, np.ndarray]:
+    """The arrays of a file :meth:`LWPRRWRController.save` wrote, its format marker checked;
+    ``ValueError`` naming the file otherwise."""
+    data = read_npz(path, f"{name} controller")
+    marker = data.get("format")
+    if marker is None or marker.shape != () or str(marker) != _FORMAT:
+        raise ValueError(f"{name} controller file {str(path)!r} is not a saved {name} controller "
+                         f"(format marker {None if marker is None else str(marker)!r}, expected "
+                         f"{_FORMAT!r}): a foreign or truncated .npz")
+    return data

@@ -88,6 +88,7 @@ one vectorised computation, and the activated fields are updated together.
 from __future__ import annotations
 
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -420,7 +421,7 @@ class LWPR:
             else:
                 with open(path, "rb") as handle:
                     data = _read_npz(handle)
-        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as error:
             raise ValueError(f"cannot read an LWPR model from {str(path)!r}: {error}") from error
         if "format" not in data or str(data["format"]) != _FORMAT:
             raise ValueError(f"{str(path)!r} is not an LWPR model file (no {_FORMAT!r} marker)")
@@ -446,7 +447,7 @@ class LWPR:
                     fields.append()
                 for name, array in stored.items():
                     fields.a[name][:n] = array
-        except (KeyError, ValueError, TypeError) as error:
+        except (KeyError, IndexError, ValueError, TypeError, AttributeError) as error:
             raise ValueError(f"{str(path)!r} is not a valid LWPR model file: {error}") from error
         return model
 

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import (as_finite_array, require_integer, require_non_negative,
                                   require_positive)
 
@@ -231,31 +232,27 @@ class RewardWeightedInverse:
             model.prior_betas = np.array(state["prior_betas"], dtype=float)
             model._data = np.array(state["data"], dtype=float)
             n, d, r, a = model.n_fields, model.config_dim, model.regressor_dim, model.actuator_dim
-            if (model.metrics.shape != (n, d, d) or model.betas.shape != (n, r, a)
+            if (model.centres.shape != (n, d) or model.metrics.shape != (n, d, d)
+                    or model.betas.shape != (n, r, a)
                     or model.prior_betas.shape != (n, r, a)
                     or model._data.ndim != 2 or model._data.shape[1] != model.task_dim + d + a
                     or not all(np.isfinite(arr).all() for arr in (
                         model.centres, model.metrics, model.betas, model.prior_betas,
                         model._data))):
                 raise ValueError("inconsistent arrays")
-        except (KeyError, TypeError, ValueError) as error:
+        except (KeyError, IndexError, TypeError, ValueError, AttributeError) as error:
             raise ValueError(f"{source} is not a saved reward-weighted inverse ({error})") from None
         return model
 
     def save(self, path: str | Path) -> None:
-        """Write the model to ``path`` (``.npz``)."""
-        np.savez(path, **self.state())
+        """Write the model to ``path`` (``.npz`` format, exactly that name)."""
+        write_npz(path, self.state())
 
     @classmethod
     def load(cls, path: str | Path) -> "RewardWeightedInverse":
-        """Read a model written by :meth:`save`; a corrupt or foreign file raises ``ValueError``
-        naming the path."""
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                state = {key: data[key] for key in data.files}
-        except (OSError, ValueError, EOFError) as error:
-            raise ValueError(f"path {str(path)!r} is not a saved reward-weighted inverse "
-                             f"({error})") from None
+        """Read a model written by :meth:`save`; a missing, corrupt or foreign file raises one
+        ``ValueError`` naming the path."""
+        state = read_npz(path, "reward-weighted inverse")
         return cls.from_state(state, source=f"path {str(path)!r}")
 
     # ------------------------------------------------------------------ internals

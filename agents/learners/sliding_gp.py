@@ -51,6 +51,7 @@ import scipy.optimize
 from scipy.linalg.blas import drot, dtrsm, dtrsv
 from scipy.spatial.distance import cdist
 
+from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import as_finite_array, require_choice, require_positive
 
 __all__ = ["SlidingWindowGP", "cholesky_rank1_update"]
@@ -432,7 +433,8 @@ class SlidingWindowGP:
 
     # ------------------------------------------------------------------ persistence
     def save(self, path: str | Path) -> None:
-        """Write the model and its window to ``path`` (``.npz``); :meth:`load` restores it."""
+        """Write the model and its window to ``path`` (``.npz`` format, exactly that name);
+        :meth:`load` restores it."""
         n = self._n
         arrays = {
             "window": self.window, "length_scales": self._length_scales, "ard": self._ard,
@@ -448,34 +450,74 @@ class SlidingWindowGP:
         if self._alpha is not None:
             arrays["alpha"] = self._alpha
             arrays["mu"] = self._mu
-        np.savez(path, **arrays)
+        write_npz(path, arrays)
 
     @classmethod
     def load(cls, path: str | Path) -> "SlidingWindowGP":
-        """Read a model written by :meth:`save`; its predictions equal the saved model's."""
-        with np.load(path) as data:
-            scales = data["length_scales"]
-            model = cls(window=int(data["window"]),
-                        length_scales=scales.copy() if bool(data["ard"]) else float(scales[0]),
-                        signal_variance=float(data["signal_variance"]),
-                        noise_variance=float(data["noise_variance"]), mean=str(data["mean"]),
-                        refactor_every=int(data["refactor_every"]))
-            model.input_dim = None if int(data["input_dim"]) < 0 else int(data["input_dim"])
-            model.output_dim = None if int(data["output_dim"]) < 0 else int(data["output_dim"])
-            model.adds_since_refactor = int(data["adds_since_refactor"])
-            model.samples_seen = int(data["samples_seen"])
-            n = int(data["n"])
-            if model.input_dim is not None and model.output_dim is not None:
-                model._allocate()
-            if n:
-                model._X[:n] = data["X"]
-                np.divide(model._X[:n], model._length_scales, out=model._Xs[:n])
-                model._Y[:n] = data["Y"]
-                model._R[:n, :n] = data["R"]
-                model._n = n
-                if bool(data["has_alpha"]):
-                    model._alpha = data["alpha"].copy()
-                    model._mu = data["mu"].copy()
+        """Read a model written by :meth:`save`; its predictions equal the saved model's.
+
+        A missing, corrupt or foreign file (or one whose arrays do not fit together) raises one
+        ``ValueError`` naming ``path``.
+        """
+        data = read_npz(path, "sliding-window GP")
+        try:
+            return cls._from_arrays(data)
+        except (KeyError, IndexError, TypeError, ValueError) as error:
+            raise ValueError(f"sliding-window GP file {str(path)!r} does not hold a model saved "
+                             f"by SlidingWindowGP.save ({type(error).__name__}: {error})") from None
+
+    @classmethod
+    def _from_arrays(cls, data: dict[str, np.ndarray]) -> "SlidingWindowGP":
+        """The model :meth:`save` wrote as ``data``, every array checked."""
+        def integer(name: str, low: int) -> int:
+            value = data[name]
+            if value.shape != () or value.dtype.kind not in "iu" or int(value) < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+            return int(value)
+
+        def array(name: str, shape: tuple[int, ...]) -> np.ndarray:
+            value = as_finite_array(name, data[name])
+            if value.shape != shape:
+                raise ValueError(f"{name} must have shape {shape}, got shape {value.shape}")
+            return value
+
+        scales = as_finite_array("length_scales", data["length_scales"])
+        ard = data["ard"]
+        if ard.shape != () or ard.dtype.kind != "b" or scales.ndim != 1 or scales.size == 0:
+            raise ValueError(f"ard and length_scales are inconsistent: {ard!r}, {scales!r}")
+        model = cls(window=integer("window", 1),
+                    length_scales=scales.copy() if bool(ard) else float(scales[0]),
+                    signal_variance=float(data["signal_variance"]),
+                    noise_variance=float(data["noise_variance"]), mean=str(data["mean"]),
+                    refactor_every=integer("refactor_every", 1))
+        input_dim, output_dim = integer("input_dim", -1), integer("output_dim", -1)
+        model.input_dim = None if input_dim < 0 else input_dim
+        model.output_dim = None if output_dim < 0 else output_dim
+        if model._ard and model.input_dim != scales.size:
+            raise ValueError(f"input_dim {input_dim} does not match {scales.size} length scales")
+        model.adds_since_refactor = integer("adds_since_refactor", 0)
+        model.samples_seen = integer("samples_seen", 0)
+        n = integer("n", 0)
+        if n > model.window or n > model.samples_seen:
+            raise ValueError(f"n = {n} exceeds the window ({model.window}) or the samples seen "
+                             f"({model.samples_seen})")
+        if model.input_dim is not None and model.output_dim is not None:
+            model._allocate()
+        elif n:
+            raise ValueError(f"n = {n} samples but no input_dim/output_dim")
+        if n:
+            d, m = model.input_dim, model.output_dim
+            model._X[:n] = array("X", (n, d))
+            np.divide(model._X[:n], model._length_scales, out=model._Xs[:n])
+            model._Y[:n] = array("Y", (n, m))
+            model._R[:n, :n] = array("R", (n, n))
+            model._n = n
+            has_alpha = data["has_alpha"]
+            if has_alpha.shape != () or has_alpha.dtype.kind != "b":
+                raise ValueError(f"has_alpha must be a bool, got {has_alpha!r}")
+            if bool(has_alpha):
+                model._alpha = array("alpha", (n, m)).copy()
+                model._mu = array("mu", (m,)).copy()
         return model
 
     # ------------------------------------------------------------------ internals
