@@ -20,27 +20,50 @@ def require_number(name: str, value: Any) -> float:
     return float(value)
 
 
-def require_integer(name: str, value: Any, minimum: int) -> int:
-    """Return ``value`` as int if it is an integer (not a bool) and at least ``minimum``."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
-            or value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+def require_integer(name: str, value: Any, minimum: int, maximum: int | None = None) -> int:
+    """Return ``value`` as int if it is an integer (not a bool, not a float such as 2.5 or 2.0)
+    within ``[minimum, maximum]`` (``maximum=None``: no upper bound)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an integer >= {minimum}"
+                         f"{'' if maximum is None else f' and <= {maximum}'}, got {value!r} "
+                         f"({type(value).__name__})")
+    if value < minimum or (maximum is not None and value > maximum):
+        raise ValueError(f"{name} must be an integer >= {minimum}"
+                         f"{'' if maximum is None else f' and <= {maximum}'}, got {value!r}")
     return int(value)
 
 
-def require_positive(name: str, value: float) -> float:
-    """Return ``value`` as float if it is finite and > 0, else raise ``ValueError``."""
+def require_bool(name: str, value: Any) -> bool:
+    """Return ``value`` if it is a bool (``True``/``False``, numpy's included): no truthy
+    strings or numbers."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {value!r} ({type(value).__name__})")
+    return bool(value)
+
+
+def require_positive(name: str, value: float, maximum: float | None = None,
+                     unit: str | None = None) -> float:
+    """Return ``value`` as float if it is finite and > 0 (and <= ``maximum`` when given), else
+    raise ``ValueError``; ``unit`` (e.g. ``"kg"``) is named in the message."""
     value = require_number(name, value)
-    if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    what = "a finite number > 0" + ("" if maximum is None else f" and <= {maximum:g}")
+    if unit:
+        what += f" ({unit})"
+    if not np.isfinite(value) or value <= 0 or (maximum is not None and value > maximum):
+        raise ValueError(f"{name} must be {what}, got {value!r}")
     return float(value)
 
 
-def require_non_negative(name: str, value: float) -> float:
-    """Return ``value`` as float if it is finite and >= 0, else raise ``ValueError``."""
+def require_non_negative(name: str, value: float, maximum: float | None = None,
+                         unit: str | None = None) -> float:
+    """Return ``value`` as float if it is finite and >= 0 (and <= ``maximum`` when given), else
+    raise ``ValueError``; ``unit`` (e.g. ``"seconds"``) is named in the message."""
     value = require_number(name, value)
-    if not np.isfinite(value) or value < 0:
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    what = "a finite number >= 0" + ("" if maximum is None else f" and <= {maximum:g}")
+    if unit:
+        what += f" ({unit})"
+    if not np.isfinite(value) or value < 0 or (maximum is not None and value > maximum):
+        raise ValueError(f"{name} must be {what}, got {value!r}")
     return float(value)
 
 
@@ -53,26 +76,43 @@ def require_in_range(name: str, value: float, low: float, high: float) -> float:
 
 
 def require_choice(name: str, value: Any, allowed: Iterable[Any]) -> Any:
-    """Return ``value`` if it is one of ``allowed``."""
+    """Return ``value`` if it is one of ``allowed`` (a value of another type, an array or an
+    unhashable one is simply not allowed)."""
     allowed = tuple(allowed)
-    if value not in allowed:
+    if not any(isinstance(value, type(choice)) and value == choice for choice in allowed):
         raise ValueError(f"{name} must be one of {sorted(map(str, allowed))}, got {value!r}")
     return value
 
 
 def as_finite_array(name: str, value: Any, shape: tuple[int, ...] | None = None) -> np.ndarray:
     """Convert to a float64 array, checking shape (if given) and that every entry is finite."""
-    if np.iscomplexobj(value):
-        raise ValueError(f"{name} must be real, got complex values {value!r}")
     try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"{name} must be numeric, got {value!r}") from error
+        complex_values = np.iscomplexobj(value)
+        if not complex_values:
+            array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:  # strings, ragged nesting, None, objects
+        raise ValueError(f"{name} must be numeric (real numbers), got {value!r}") from error
+    if complex_values:
+        raise ValueError(f"{name} must be real, got complex values {value!r}")
     if shape is not None and array.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got shape {array.shape}")
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be finite (no NaN or inf), got {array.tolist()}")
     return array
+
+
+def require_names(name: str, value: Any, allowed: Iterable[str]) -> tuple[str, ...]:
+    """Return ``value`` (one name or a list/tuple of names) as a tuple of distinct names, each one
+    of ``allowed``."""
+    allowed = tuple(allowed)
+    names = (value,) if isinstance(value, str) else value
+    if not isinstance(names, (list, tuple)) or not all(isinstance(n, str) for n in names):
+        raise ValueError(f"{name} must be a name or a list/tuple of names from "
+                         f"{sorted(allowed)}, got {value!r} ({type(value).__name__})")
+    unknown = [n for n in names if n not in allowed]
+    if unknown or len(set(names)) != len(names):
+        raise ValueError(f"{name} must be distinct names from {sorted(allowed)}, got {value!r}")
+    return tuple(names)
 
 
 def fields_from_options(cls: type, options: Any, what: str) -> dict[str, Any]:

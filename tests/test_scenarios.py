@@ -105,3 +105,47 @@ def test_loads_and_camera_faults_share_one_time_window():
         TimeWindow(-1.0)
     with pytest.raises(ValueError, match="end_s"):
         LowLight(end_s="soon")
+
+
+def test_obstacle_rod_clearance_from_the_arm():
+    """The gap between the rod's surface and the arm's: wang2023's rod 20 mm beside the straight
+    arm's axis (radius 4 mm) clears it; one through the axis, along it or too thick is refused
+    when attached, naming the parameters that place it."""
+    spec = get_preset("wang2023")
+    arm_radius = max(segment.outer_radius_m for segment in spec.segments)
+    straight = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, spec.length_m]])
+    rod = ObstacleRod(point_m=(-0.02, 0.0, 0.07), axis=(0, 1, 0), radius_m=0.004)
+    assert rod.clearance_m(straight, arm_radius) == pytest.approx(0.02 - 0.004 - arm_radius)
+    beyond = ObstacleRod(point_m=(0.0, 0.0, spec.length_m + 0.03), axis=(1, 0, 0),
+                         radius_m=0.01)  # across, 30 mm past the tip
+    assert beyond.clearance_m(straight, arm_radius) == pytest.approx(0.03 - 0.01 - arm_radius)
+    sim = ArmSimulator(spec)
+    try:
+        for bad in (ObstacleRod(point_m=(0.0, 0.0, 0.05)),
+                    ObstacleRod(point_m=(0.0, 0.0, 0.05), axis=(0, 0, 1)),
+                    ObstacleRod(point_m=(-0.02, 0.0, 0.07), radius_m=0.05)):
+            with pytest.raises(ValueError, match="point_m, axis and radius_m put the obstacle "
+                                                 "rod through the wang2023 arm"):
+                sim.add_load(bad)
+        sim.add_load(rod)
+        sim.reset(settle_s=0.5)
+        assert np.isfinite(sim.tip_pose()[0]).all()
+    finally:
+        sim.close()
+
+
+@pytest.mark.parametrize("build, name", [
+    (lambda: FillingLoad(rate_kg_s=2.0), "rate_kg_s"),
+    (lambda: SwayingMass(length_m=0.6), "length_m"),
+    (lambda: SwayingMass(radius_m=0.06), "radius_m"),
+    (lambda: SwayingMass(radius_m=1e-4), "radius_m"),
+    (lambda: Push(link=1.0), "link"),
+    (lambda: Push(link="tip"), "link"),
+    (lambda: Push(on_tip_cap="yes"), "on_tip_cap"),
+    (lambda: Flick(link=True), "link"),
+    (lambda: ObstacleRod(radius_m=0.2), "radius_m"),
+    (lambda: ObstacleRod(length_m=3.0), "length_m"),
+])
+def test_loads_refuse_unphysical_or_mistyped_parameters(build, name):
+    with pytest.raises(ValueError, match=name):
+        build()

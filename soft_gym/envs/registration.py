@@ -3,10 +3,13 @@ shorter alias per preset, e.g. ``SoftArmReachWang2023-v0``.
 
 An alias fixes its preset: ``gym.make("SoftArmReachWang2023-v0", preset="ho2018")`` raises
 ``ValueError`` (the same preset passed again is accepted); the generic ids take any preset.
+Every id refuses a keyword argument the env does not take with a ``ValueError`` naming it and
+listing the ones it takes (rather than Python's ``TypeError``).
 """
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 from gymnasium.envs.registration import register, registry
@@ -15,7 +18,7 @@ from soft_gym.envs.soft_arm_env import SoftArmEnv
 from soft_gym.robots.presets import PRESETS, get_preset
 from soft_gym.robots.spec import ArmSpec
 
-ENTRY_POINT = "soft_gym.envs.soft_arm_env:SoftArmEnv"
+ENTRY_POINT = "soft_gym.envs.registration:make_env"
 ALIAS_ENTRY_POINT = "soft_gym.envs.registration:make_alias_env"
 TASK_IDS = {"reach": "SoftArmReach-v0", "track": "SoftArmTrack-v0"}
 
@@ -30,6 +33,24 @@ def registered_ids() -> list[str]:
     return list(TASK_IDS.values()) + [preset_env_id(t, p) for t in TASK_IDS for p in PRESETS]
 
 
+def _check_keywords(kwargs: dict[str, Any]) -> None:
+    """Refuse keyword arguments :class:`SoftArmEnv` does not take, naming them."""
+    known = [name for name in inspect.signature(SoftArmEnv.__init__).parameters if name != "self"]
+    unknown = sorted(name for name in kwargs if name not in known)
+    if unknown:
+        raise ValueError(f"unknown env keyword argument(s) {unknown}: the env takes {known}")
+
+
+def make_env(**kwargs: Any) -> SoftArmEnv:
+    """The entry point of the generic ids: ``SoftArmEnv(**kwargs)``, refusing unknown keyword
+    arguments with a ``ValueError`` that names them."""
+    _check_keywords(kwargs)
+    return SoftArmEnv(**kwargs)
+
+
+make_env.metadata = SoftArmEnv.metadata  # what gymnasium.make reads of an entry point
+
+
 def make_alias_env(alias_preset: str, **kwargs: Any) -> SoftArmEnv:
     """The entry point of the alias ids: a :class:`SoftArmEnv` on the alias's preset.
 
@@ -41,8 +62,10 @@ def make_alias_env(alias_preset: str, **kwargs: Any) -> SoftArmEnv:
     Raises:
         ValueError: ``preset`` names another arm than the alias.
     """
+    _check_keywords(kwargs)
     preset = kwargs.pop("preset", alias_preset)
-    if not (preset == alias_preset or preset == get_preset(alias_preset)):
+    if not (isinstance(preset, (str, ArmSpec))
+            and (preset == alias_preset or preset == get_preset(alias_preset))):
         task = kwargs.get("task", "reach")
         shown = (f"an ArmSpec named {preset.name!r}" if isinstance(preset, ArmSpec)
                  else repr(preset))

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import weakref
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import cv2
 import numpy as np
@@ -191,6 +191,21 @@ def _hide_bodies(client, keep: list[int]) -> list[tuple[int, int, list[float]]]:
     return hidden
 
 
+MAX_RENDER_PX = 4096
+"""Largest frame side (px) a renderer draws."""
+
+
+def check_render_size(size: Any, name: str = "render_size") -> tuple[int, int]:
+    """``size`` as ``(width, height)``: two integers (not bools or floats) in
+    ``[1, MAX_RENDER_PX]`` pixels, else a ``ValueError`` naming ``name``."""
+    if (not isinstance(size, (tuple, list)) or len(size) != 2
+            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
+                       and 1 <= v <= MAX_RENDER_PX for v in size)):
+        raise ValueError(f"{name} must be (width, height) in pixels, each an integer in "
+                         f"[1, {MAX_RENDER_PX}], got {size!r}")
+    return int(size[0]), int(size[1])
+
+
 class SceneRenderer:
     """Frames of one arm's scene at ``size`` = (width, height) px.
 
@@ -204,7 +219,7 @@ class SceneRenderer:
 
     def __init__(self, spec, size: tuple[int, int], workspace_m: np.ndarray,
                  overlays: bool = True) -> None:
-        self.width, self.height = int(size[0]), int(size[1])
+        self.width, self.height = check_render_size(size, "size")
         self.overlays = overlays
         self.up = up_direction(spec.gravity_base)
         radius = max(segment.outer_radius_m for segment in spec.segments)

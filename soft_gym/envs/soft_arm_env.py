@@ -7,7 +7,8 @@
 * ``action_mode="absolute"`` (default): ``p = p_pre + (a + 1) / 2 (p_max - p_pre)`` (Pa).
 * ``action_mode="delta"``: ``p_cmd <- clip(p_cmd + a * delta_fraction * p_max, p_pre, p_max)``.
 
-Actions outside [-1, 1], non-finite or of the wrong shape raise ``ValueError``.
+Actions outside [-1, 1], non-finite, complex, boolean, non-numeric or of the wrong shape raise
+``ValueError``.
 
 ## Observation space
 ``obs_format="flat"`` (default): a ``Box(float32)`` concatenating the parts named in ``obs`` in
@@ -65,6 +66,28 @@ holds the draw under ``randomization``. Off by default.
 Reach: truncated after ``episode_steps`` (default 100, 5 s). Track: truncated when the path's
 last target has been presented.
 
+## Bad input
+Every argument is checked when the env is made: a wrong type or value raises ``ValueError``
+naming the argument, the value and what is allowed (never a ``TypeError`` from deep inside, a
+silent truncation or clip, a NaN reward, a hang or a runaway). Beyond types, the physical bounds:
+``settle_s`` at most :data:`MAX_SETTLE_S`, ``action_rate_weight`` at most
+:data:`MAX_ACTION_RATE_WEIGHT`, track episodes at most
+:data:`~soft_gym.tasks.tasks.MAX_TRACK_STEPS` steps, targets, starts and waypoints within the arm's
+reach (:attr:`~soft_gym.robots.spec.ArmSpec.max_reach_m`), loads within
+:mod:`soft_gym.scenarios.loads`' bounds and the arm's
+:attr:`~soft_gym.robots.spec.ArmSpec.max_load_n`. The track-only arguments (``path``, ``cycles``,
+``speed_m_s``, ``waypoints_m``) are refused on the reach task, the reach-only ones (``target_m``,
+``start_m``, ``tolerance_mm``) on the track task, and ``sensor_config`` for a sensor the env does
+not simulate. ``reset`` takes ``seed`` (``None`` or an integer >= 0) and ``options`` (``None`` or a
+dict with the only key ``"recalibrate"``, a bool).
+
+## Copies
+``pickle`` and ``copy.deepcopy`` make an independent env of the same configuration, rebuilt from
+the constructor's arguments (its own simulator: closing either leaves the other running). The copy
+starts as a freshly made env, un-reset: call ``reset()`` on it before stepping. Arguments that
+cannot be copied (e.g. an object without copy support in ``scenario=``) make pickling raise a
+``ValueError`` naming them.
+
 ## Info
 Ground truth: ``tip_position_m``, ``tip_quaternion``, ``target_m``, ``error_mm``, ``backbone_m``,
 ``chamber_lengths_m``, ``pressures_pa``, ``time_s``; ``sensors``: every active sensor's raw
@@ -80,8 +103,9 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from soft_gym._validation import require_integer, require_non_negative
-from soft_gym.envs.rendering import SceneRenderer
+from soft_gym._validation import (as_finite_array, require_bool, require_choice,
+                                  require_integer, require_names, require_non_negative)
+from soft_gym.envs.rendering import SceneRenderer, check_render_size
 from soft_gym.robots.actuation import Actuation
 from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import ArmSpec
@@ -101,6 +125,17 @@ from soft_gym.tasks.workspace import reachable_tips
 
 START_TOLERANCE_MM = 2.0
 """How close ``reset`` must bring the tip to ``start_m`` (mm)."""
+
+MAX_SETTLE_S = 60.0
+"""Longest rest before an episode (s): every preset settles within a few seconds, and each reset
+simulates ``settle_s`` (an hour of rest would take minutes per reset)."""
+
+MAX_ACTION_RATE_WEIGHT = 1000.0
+"""Largest ``action_rate_weight``: its penalty for a full swing of every chamber (4 per chamber)
+is then 10^4-10^5 times a 10 mm tracking error; larger weights only swamp the reward."""
+
+RESET_OPTIONS = ("recalibrate",)
+"""The keys ``reset(options=...)`` understands."""
 
 STATE_PARTS = ("pose", "target", "pressure")
 """The default observation."""
@@ -136,9 +171,9 @@ class SoftArmEnv(gym.Env):
             ``strain_sr``'s (:class:`~soft_gym.sensing.feedback.StrainShapeFeedback`).
         action_mode: ``"absolute"`` or ``"delta"``.
         delta_fraction: pressure change per unit action in delta mode, as a fraction of p_max.
-        action_rate_weight: weight of the action-rate penalty.
-        episode_steps: reach episode length in control steps.
-        settle_s: simulated time the arm rests before each episode (s).
+        action_rate_weight: weight of the action-rate penalty, in [0, ``MAX_ACTION_RATE_WEIGHT``].
+        episode_steps: reach episode length in control steps (an integer >= 1).
+        settle_s: simulated time the arm rests before each episode (s, in [0, ``MAX_SETTLE_S``]).
         target_m: reach only: a fixed goal (m, base frame) instead of a random reachable one.
         start_m: reach only: the tip is driven there during ``reset`` (the episode's loads in
             place, steps not counted; :func:`soft_gym.tasks.positioning.drive_tip_to`), and the
@@ -148,12 +183,16 @@ class SoftArmEnv(gym.Env):
             target (mm); ``info["step"]`` then gives the steps taken.
         render_mode: ``None`` or ``"rgb_array"``.
         render_size: (width, height) of rendered frames in pixels.
+
+    Raises:
+        ValueError: for any argument of a wrong type or value (see "Bad input" above), naming it.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, preset: str | ArmSpec = "wang2023", task: str = "reach",
-                 path: str = "circle", cycles: int = 1, speed_m_s: float | None = None,
+                 path: str | list[str] = "circle", cycles: int = 1,
+                 speed_m_s: float | None = None,
                  waypoints_m: Any = None, scenario: Any = None,
                  obs: tuple[str, ...] = STATE_PARTS, obs_format: str = "flat",
                  sensors: tuple[str, ...] = (), sensor_config: dict | None = None,
@@ -164,11 +203,20 @@ class SoftArmEnv(gym.Env):
                  episode_steps: int = 100, settle_s: float = 0.5, target_m: Any = None,
                  start_m: Any = None, tolerance_mm: float | None = None,
                  render_mode: str | None = None, render_size: tuple[int, int] = (320, 240)) -> None:
+        self._init_kwargs = _snapshot(locals())
         if not isinstance(preset, (str, ArmSpec)):
-            raise ValueError(f"preset must be a preset name or an ArmSpec, got {preset!r}")
+            raise ValueError(f"preset must be a preset name or an ArmSpec, got {preset!r} "
+                             f"({type(preset).__name__})")
         self.spec_arm = preset if isinstance(preset, ArmSpec) else get_preset(preset)
-        if task not in TASKS:
-            raise ValueError(f"task must be one of {list(TASKS)}, got {task!r}")
+        require_choice("task", task, TASKS)
+        if task == "reach":
+            track_only = [f"{name}={value!r}" for name, value, default in (
+                ("path", path, "circle"), ("cycles", cycles, 1), ("speed_m_s", speed_m_s, None),
+                ("waypoints_m", waypoints_m, None)) if not _is_default(value, default)]
+            if track_only:
+                raise ValueError(f"path, cycles, speed_m_s and waypoints_m belong to the track "
+                                 f"task (a reach env has no path), got {', '.join(track_only)} "
+                                 f"with task='reach'")
         if not isinstance(obs, (str, list, tuple)) or not all(isinstance(p, str) for p in obs):
             raise ValueError(f"obs must be a part name or a sequence of them from "
                              f"{list(OBSERVATION_PARTS)}, got {obs!r}")
@@ -178,32 +226,22 @@ class SoftArmEnv(gym.Env):
             raise ValueError(
                 f"obs must be a non-empty tuple of distinct parts from {list(OBSERVATION_PARTS)}, "
                 f"got {obs!r}")
-        if obs_format not in OBS_FORMATS:
-            raise ValueError(f"obs_format must be one of {list(OBS_FORMATS)}, got {obs_format!r}")
-        sensors = (sensors,) if isinstance(sensors, str) else tuple(sensors)
-        unknown = [name for name in sensors if name not in SENSORS]
-        if unknown:
-            raise ValueError(f"sensors must be names from {sorted(SENSORS)}, got {sensors!r}")
-        sensor_config = dict(sensor_config or {})
-        unknown = [name for name in sensor_config if name not in SENSORS]
-        if unknown:
-            raise ValueError(f"sensor_config keys must be sensor names from {sorted(SENSORS)}, "
-                             f"got {sorted(sensor_config)!r}")
-        self.feedback_source = make_feedback_source(feedback, sensing)
+        require_choice("obs_format", obs_format, OBS_FORMATS)
+        sensors = require_names("sensors", sensors, SENSORS)
+        sensor_config = _check_sensor_config(sensor_config)
+        self.feedback_source = _make_feedback_source(feedback, sensing)
         if "shape" in obs and not self.feedback_source.estimates_shape:
             raise ValueError(f"obs part 'shape' needs a feedback source that estimates the "
                              f"backbone ('ground_truth' or 'strain_sr'), got feedback "
                              f"{feedback!r}")
-        if render_mode not in (None, "rgb_array"):
+        if not (render_mode is None or isinstance(render_mode, str) and render_mode == "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        action_rate_weight = require_non_negative("action_rate_weight", action_rate_weight)
+        action_rate_weight = require_non_negative("action_rate_weight", action_rate_weight,
+                                                  maximum=MAX_ACTION_RATE_WEIGHT)
         episode_steps = require_integer("episode_steps", episode_steps, 1)
-        settle_s = require_non_negative("settle_s", settle_s)
-        if (not isinstance(render_size, (tuple, list)) or len(render_size) != 2
-                or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
-                           and 1 <= v <= 4096 for v in render_size)):
-            raise ValueError("render_size must be (width, height) in pixels, each an integer in "
-                             f"[1, 4096], got {render_size!r}")
+        settle_s = require_non_negative("settle_s", settle_s, maximum=MAX_SETTLE_S,
+                                        unit="seconds")
+        render_size = check_render_size(render_size)
         self.loads = make_scenario(scenario)
         paths = [path] if isinstance(path, str) or task == "reach" else path
         if (not isinstance(paths, (list, tuple)) or not paths
@@ -229,6 +267,12 @@ class SoftArmEnv(gym.Env):
         wanted = ([part for part in obs if part in SENSORS] + list(sensors)
                   + list(self.feedback_source.sensors))
         self._faults = self._route_faults(faults, wanted, feedback, obs, sensors)
+        absent = [name for name in sensor_config if name not in wanted]
+        if absent:
+            raise ValueError(
+                f"sensor_config[{absent[0]!r}] configures a sensor this env does not simulate "
+                f"(it simulates {list(dict.fromkeys(wanted)) or 'none'}; feedback {feedback!r}, "
+                f"obs {obs!r}, sensors {sensors!r}): add it to sensors= or obs=")
         defaults = self.feedback_source.sensor_options()
         self.sensors = {}
         for name in dict.fromkeys(wanted):
@@ -358,6 +402,30 @@ class SoftArmEnv(gym.Env):
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode (see the module docstring).
+
+        Args:
+            seed: ``None`` or an integer >= 0: seeds the env's random draws (targets, noise,
+                randomisation) and returns the feedback source to its calibrated state.
+            options: ``None`` or a dict; ``{"recalibrate": True}`` recalibrates the feedback
+                source (``fused``, ``camera`` or ``fbg``).
+
+        Raises:
+            ValueError: a ``seed`` or ``options`` of a wrong type or value, naming it.
+        """
+        if seed is not None:
+            seed = require_integer("seed", seed, 0)  # a Python int, as gymnasium wants
+        if options is not None:
+            if not isinstance(options, dict):
+                raise ValueError(f"options must be None or a dict with keys from "
+                                 f"{list(RESET_OPTIONS)}, got {options!r} "
+                                 f"({type(options).__name__})")
+            unknown = [key for key in options if key not in RESET_OPTIONS]
+            if unknown:
+                raise ValueError(f"options keys must be among {list(RESET_OPTIONS)}, got "
+                                 f"{unknown!r}")
+            if "recalibrate" in options:
+                require_bool("options['recalibrate']", options["recalibrate"])
         super().reset(seed=seed)
         if options and options.get("recalibrate"):
             if not self.feedback_source.calibrates:
@@ -465,18 +533,22 @@ class SoftArmEnv(gym.Env):
     def close(self):
         self.sim.close()
 
+    def __reduce__(self):
+        """Pickle and deep-copy as a new env of the same configuration (see "Copies")."""
+        if self._init_kwargs is None:
+            raise ValueError(
+                f"this {type(self).__name__} cannot be copied or pickled: one of its constructor "
+                "arguments cannot be copied; make a new env with gymnasium.make(...) instead")
+        state = {"spec": self.spec} if getattr(self, "spec", None) is not None else None
+        return _rebuild_env, (type(self), self._init_kwargs), state
+
     # ------------------------------------------------------------------ helpers
     def _check_action(self, action) -> np.ndarray:
-        if np.iscomplexobj(action):
-            raise ValueError(f"action must be real, got complex values {action!r}")
-        try:
-            array = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"action must be numeric, got {action!r}") from error
+        if _is_boolean(action):
+            raise ValueError(f"action must be real numbers (float), got booleans {action!r}")
+        array = as_finite_array("action", action)
         if array.shape != self.action_space.shape:
             raise ValueError(f"action must have shape {self.action_space.shape}, got {array.shape}")
-        if not np.all(np.isfinite(array)):
-            raise ValueError(f"action must be finite, got {array.tolist()}")
         if np.any(np.abs(array) > 1.0 + 1e-6):
             raise ValueError(f"action must lie in [-1, 1], got {array.tolist()}")
         return np.clip(array, -1.0, 1.0)  # only float32 rounding beyond +-1 reaches here
@@ -530,3 +602,70 @@ class SoftArmEnv(gym.Env):
         if isinstance(reading, dict):
             return {key: np.array(value) for key, value in reading.items()}
         return np.array(reading)
+
+
+def _snapshot(arguments: dict[str, Any]) -> dict[str, Any] | None:
+    """The constructor's arguments (``locals()`` on entry) deep-copied as given, to rebuild the env
+    from when it is pickled or copied; ``None`` if one cannot be copied (pickling then raises)."""
+    import copy
+
+    kwargs = {name: value for name, value in arguments.items()
+              if name not in ("self", "__class__")}
+    try:
+        return copy.deepcopy(kwargs)
+    except Exception:  # noqa: BLE001 - any object without copy support
+        return None
+
+
+def _is_default(value: Any, default: Any) -> bool:
+    """Whether ``value`` is ``default`` itself (same type and value; ``True`` is not ``1``)."""
+    return value is default or (type(value) is type(default) and value == default)
+
+
+def _is_boolean(value: Any) -> bool:
+    """Whether ``value`` is a bool or an array of bools (which NumPy would take as 0 and 1)."""
+    try:
+        return np.asarray(value).dtype == np.bool_
+    except (TypeError, ValueError):  # ragged: as_finite_array says what is wrong
+        return False
+
+
+def _rebuild_env(cls: type, kwargs: dict[str, Any]) -> "SoftArmEnv":
+    """A new ``cls(**kwargs)`` (the target of :meth:`SoftArmEnv.__reduce__`)."""
+    return cls(**kwargs)
+
+
+def _check_sensor_config(sensor_config: Any) -> dict[str, dict]:
+    """``sensor_config`` as a dict from sensor names to dicts of keyword arguments."""
+    if sensor_config is None:
+        return {}
+    if not isinstance(sensor_config, dict):
+        raise ValueError(f"sensor_config must be None or a dict from sensor names to dicts of "
+                         f"keyword arguments, got {sensor_config!r} "
+                         f"({type(sensor_config).__name__})")
+    unknown = [name for name in sensor_config if not isinstance(name, str) or name not in SENSORS]
+    if unknown:
+        raise ValueError(f"sensor_config keys must be sensor names from {sorted(SENSORS)}, "
+                         f"got {sorted(map(str, sensor_config))!r}")
+    for name, options in sensor_config.items():
+        if not isinstance(options, dict) or not all(isinstance(key, str) for key in options):
+            raise ValueError(f"sensor_config[{name!r}] must be a dict of keyword arguments of the "
+                             f"{name} sensor, got {options!r}")
+    return {name: dict(options) for name, options in sensor_config.items()}
+
+
+def _make_feedback_source(feedback: Any, sensing: Any):
+    """:func:`~soft_gym.sensing.feedback.make_feedback_source`, with a bad ``sensing`` option
+    refused by name (the source's own message says which option and what is allowed)."""
+    from soft_gym.sensing.feedback_base import FEEDBACK_SOURCES
+
+    if not isinstance(feedback, str) or feedback not in FEEDBACK_SOURCES:
+        raise ValueError(f"feedback must be one of {sorted(FEEDBACK_SOURCES)}, got {feedback!r}")
+    if sensing is None:
+        return make_feedback_source(feedback, None)
+    try:
+        return make_feedback_source(feedback, sensing)
+    except ValueError as error:
+        if str(error).startswith("sensing"):
+            raise
+        raise ValueError(f"sensing (options of feedback {feedback!r}): {error}") from error

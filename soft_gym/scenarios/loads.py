@@ -5,6 +5,24 @@ ends) and is refreshed by the simulator at its actuation rate (``ArmSpec.actuati
 Masses change the tip link's mass in PyBullet; forces are external forces applied every physics
 substep; the swaying mass is a separate rigid body hung from the tip by a point-to-point
 constraint; the obstacle is a fixed collision body.
+
+Every parameter is checked on construction (a ``ValueError`` naming it, its value and what is
+allowed): its type, finiteness and sign, and physical bounds. The loads of the papers are a few
+grams to 263 g (zhao2021) and pushes of 0.2-1 N, and the arms bear at most a few newtons. How much
+a load weighs or pushes is checked when it is attached to an arm (the simulator's ``add_load``):
+first against what that arm bears (:attr:`soft_gym.robots.spec.ArmSpec.max_load_n`, 0.8-7.2 N for
+the presets), then against absolute bounds that hold whatever the arm:
+
+* a mass (a tip mass, a filled container, a swaying ball) is at most :data:`MAX_MASS_KG`;
+* a force (a push, a flick's force ``impulse / duration``) is at most :data:`MAX_FORCE_N`.
+
+On construction:
+
+* a container fills at most at :data:`MAX_FILL_RATE_KG_S`;
+* a swaying ball hangs at most :data:`MAX_SWAY_LENGTH_M` under the tip and is at most
+  :data:`MAX_SWAY_RADIUS_M` in radius;
+* an obstacle rod is at most :data:`MAX_ROD_RADIUS_M` thick and :data:`MAX_ROD_LENGTH_M` long, and
+  must not cut through the arm where it is attached (the arm would be thrown out of it).
 """
 
 from __future__ import annotations
@@ -16,7 +34,51 @@ import numpy as np
 import pybullet
 
 from soft_gym._timing import TimeWindow
-from soft_gym._validation import as_finite_array, require_non_negative, require_positive
+from soft_gym._validation import (as_finite_array, require_bool, require_non_negative,
+                                  require_positive)
+
+MAX_MASS_KG = 1.0
+"""Heaviest mass a load element may have (kg): about four times zhao2021's heaviest tip load
+(263 g), and above what any preset arm bears (zhao2021's ``max_load_n`` of 7.2 N is 734 g), which
+the simulator checks when the load is attached."""
+
+MAX_FORCE_N = 10.0
+"""Strongest force a push or flick may exert (N): ten times zhao2021's 1 N pull, fifty times
+wang2023's 0.2 N push, and above what any preset arm bears (at most 7.2 N, zhao2021)."""
+
+MAX_FILL_RATE_KG_S = 1.0
+"""Fastest a filling container may fill (kg/s, a litre of water a second; ho2018 pours 0.6 g/s)."""
+
+MAX_SWAY_LENGTH_M = 0.5
+"""Longest string a swaying mass may hang on (m): over twice the longest preset arm (214 mm);
+zhao2021 hangs its ball 50 mm under the tip."""
+
+MAX_SWAY_RADIUS_M = 0.05
+"""Largest swaying ball (m radius; zhao2021's 119 g ball: 15 mm)."""
+
+MIN_SWAY_RADIUS_M = 1e-3
+"""Smallest swaying ball (m radius): a smaller one's inertia is too small for a stable step."""
+
+MAX_ROD_RADIUS_M = 0.1
+"""Thickest obstacle rod (m radius; wang2023's aluminium rod: 4 mm)."""
+
+MAX_ROD_LENGTH_M = 2.0
+"""Longest obstacle rod (m; the default: 0.2 m)."""
+
+
+def _check_peak_mass(load: "_Timed", name: str, mass_kg: float) -> None:
+    """Refuse (when attaching ``load``) a mass above ``MAX_MASS_KG``, naming ``name``."""
+    if mass_kg > MAX_MASS_KG:
+        raise ValueError(f"{name} must be at most {MAX_MASS_KG:g} kg (MAX_MASS_KG), got "
+                         f"{mass_kg!r} kg in {load!r}")
+
+
+def _check_peak_force(load: "Push", name: str) -> None:
+    """Refuse (when attaching ``load``) a force above ``MAX_FORCE_N``, naming ``name``."""
+    magnitude = float(np.linalg.norm(load.force_n))
+    if magnitude > MAX_FORCE_N:
+        raise ValueError(f"{name} must be a force of at most {MAX_FORCE_N:g} N in magnitude "
+                         f"(MAX_FORCE_N), got {magnitude:.3g} N in {load!r}")
 
 
 @dataclass
@@ -59,6 +121,10 @@ class _TipMassBase(_Timed):
     def _key(self) -> str:
         return f"tipmass{id(self)}"
 
+    def attach(self, sim) -> None:
+        _check_peak_mass(self, "mass_kg" if isinstance(self, TipMass)
+                         else "initial_mass_kg + added_mass_kg", self.peak_mass_kg())
+
     def update(self, sim, time_s: float) -> None:
         sim.set_tip_payload(self._key(), self.extra_mass_kg(time_s) if self.active(time_s) else 0.0)
 
@@ -73,7 +139,7 @@ class TipMass(_TipMassBase):
     mass_kg: float = 0.02
 
     def __post_init__(self) -> None:
-        require_non_negative("mass_kg", self.mass_kg)
+        require_non_negative("mass_kg", self.mass_kg, unit="kg")
         self.check_window()
 
     def extra_mass_kg(self, time_s: float) -> float:
@@ -97,9 +163,9 @@ class FillingLoad(_TipMassBase):
     start_s: float = 5.0
 
     def __post_init__(self) -> None:
-        require_non_negative("initial_mass_kg", self.initial_mass_kg)
-        require_non_negative("added_mass_kg", self.added_mass_kg)
-        require_positive("rate_kg_s", self.rate_kg_s)
+        require_non_negative("initial_mass_kg", self.initial_mass_kg, unit="kg")
+        require_non_negative("added_mass_kg", self.added_mass_kg, unit="kg")
+        require_positive("rate_kg_s", self.rate_kg_s, maximum=MAX_FILL_RATE_KG_S, unit="kg/s")
         self.check_window()
 
     def active(self, time_s: float) -> bool:
@@ -124,15 +190,19 @@ class SwayingMass(_Timed):
     _constraint: int = field(default=-1, init=False, repr=False)
 
     def __post_init__(self) -> None:
-        require_positive("mass_kg", self.mass_kg)
-        require_positive("length_m", self.length_m)
-        require_positive("radius_m", self.radius_m)
+        require_positive("mass_kg", self.mass_kg, unit="kg")
+        require_positive("length_m", self.length_m, maximum=MAX_SWAY_LENGTH_M, unit="m")
+        radius = require_positive("radius_m", self.radius_m, maximum=MAX_SWAY_RADIUS_M, unit="m")
+        if radius < MIN_SWAY_RADIUS_M:
+            raise ValueError(f"radius_m must be at least {MIN_SWAY_RADIUS_M:g} m "
+                             f"(MIN_SWAY_RADIUS_M), got {self.radius_m!r}")
         self.check_window()
 
     def peak_load_n(self, gravity_m_s2: float) -> float:
         return self.mass_kg * gravity_m_s2
 
     def attach(self, sim) -> None:
+        _check_peak_mass(self, "mass_kg", self.mass_kg)
         client = sim.client
         shape = client.createCollisionShape(pybullet.GEOM_SPHERE, radius=self.radius_m)
         visual = client.createVisualShape(pybullet.GEOM_SPHERE, radius=self.radius_m,
@@ -195,17 +265,27 @@ class Push(_Timed):
 
     def __post_init__(self) -> None:
         self.force_n = tuple(as_finite_array("force_n", self.force_n, shape=(3,)).tolist())
-        require_non_negative("ramp_s", self.ramp_s)
+        self._check_link_and_cap()
+        require_non_negative("ramp_s", self.ramp_s, unit="s")
         self.check_window()
+
+    def _check_link_and_cap(self) -> None:
+        if isinstance(self.link, (bool, np.bool_)) or not isinstance(self.link, (int, np.integer)):
+            raise ValueError(f"link must be an integer link index (0 at the base, -1 the tip), "
+                             f"got {self.link!r} ({type(self.link).__name__})")
+        self.on_tip_cap = require_bool("on_tip_cap", self.on_tip_cap)
 
     def _link_index(self, sim) -> int:
         n = len(sim.arm.station_link)
         if isinstance(self.link, (bool, np.bool_)) or not isinstance(self.link, (int, np.integer)) \
                 or not -n <= self.link < n:
-            raise ValueError(f"link must be in [{-n}, {n - 1}] for this arm, got {self.link!r}")
+            raise ValueError(f"link must be an integer in [{-n}, {n - 1}] for this arm "
+                             f"({n} links), got {self.link!r}")
         return int(sim.arm.station_link[self.link])
 
     def attach(self, sim) -> None:
+        _check_peak_force(self, "impulse_ns / duration_s" if isinstance(self, Flick)
+                          else "force_n")
         self._link_index(sim)
 
     def peak_load_n(self, gravity_m_s2: float) -> float:
@@ -244,10 +324,11 @@ class Flick(Push):
 
     def __post_init__(self) -> None:
         impulse = as_finite_array("impulse_ns", self.impulse_ns, shape=(3,))
-        require_positive("duration_s", self.duration_s)
-        self.force_n = tuple((impulse / self.duration_s).tolist())
-        self.end_s = self.start_s + self.duration_s
+        duration = require_positive("duration_s", self.duration_s, unit="s")
+        self.force_n = tuple((impulse / duration).tolist())
+        self._check_link_and_cap()
         self.check_window()
+        self.end_s = self.start_s + duration
 
 
 @dataclass
@@ -264,15 +345,40 @@ class ObstacleRod(_Timed):
     _body: int = field(default=-1, init=False, repr=False)
 
     def __post_init__(self) -> None:
-        as_finite_array("point_m", self.point_m, shape=(3,))
+        self.point_m = tuple(as_finite_array("point_m", self.point_m, shape=(3,)).tolist())
         axis = as_finite_array("axis", self.axis, shape=(3,))
         if np.linalg.norm(axis) == 0:
             raise ValueError("axis must be a non-zero vector, got (0, 0, 0)")
-        require_positive("radius_m", self.radius_m)
-        require_positive("length_m", self.length_m)
+        self.axis = tuple(axis.tolist())
+        require_positive("radius_m", self.radius_m, maximum=MAX_ROD_RADIUS_M, unit="m")
+        require_positive("length_m", self.length_m, maximum=MAX_ROD_LENGTH_M, unit="m")
         self.check_window()
 
+    def clearance_m(self, backbone_m: np.ndarray, arm_radius_m: float) -> float:
+        """Gap (m) between the rod's surface and an arm of radius ``arm_radius_m`` (m) along the
+        polyline ``backbone_m`` (m, base frame); negative where they overlap."""
+        axis = np.asarray(self.axis, dtype=float) / np.linalg.norm(self.axis)
+        centre = np.asarray(self.point_m, dtype=float)
+        rod = (centre - axis * self.length_m / 2, centre + axis * self.length_m / 2)
+        points = np.asarray(backbone_m, dtype=float)
+        distance = min(_segment_distance(rod[0], rod[1], a, b)
+                       for a, b in zip(points[:-1], points[1:]))
+        return distance - self.radius_m - arm_radius_m
+
     def attach(self, sim) -> None:
+        """Build the rod; refuse one that cuts through the arm as every reset puts it: straight
+        along the base's z axis, rest length (s) long."""
+        spec = sim.spec
+        arm_radius = max(segment.outer_radius_m for segment in spec.segments)
+        gap = self.clearance_m(np.array([[0.0, 0.0, 0.0], [0.0, 0.0, spec.length_m]]),
+                               arm_radius)
+        if gap < 0:
+            raise ValueError(
+                f"point_m, axis and radius_m put the obstacle rod through the {spec.name} arm "
+                f"at rest ({-gap * 1e3:.1f} mm deep; the straight arm runs from the base along z "
+                f"for {spec.length_m * 1e3:.0f} mm and is {arm_radius * 1e3:.1f} mm in radius): "
+                f"place it beside the arm, got point_m={self.point_m}, axis={self.axis}, "
+                f"radius_m={self.radius_m!r}")
         axis = np.asarray(self.axis, dtype=float)
         axis /= np.linalg.norm(axis)
         z = np.array([0.0, 0.0, 1.0])
@@ -295,6 +401,31 @@ class ObstacleRod(_Timed):
         if self._body >= 0:
             sim.client.removeBody(self._body)
             self._body = -1
+
+
+def _segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> float:
+    """Shortest distance (m) between the segments ``p0``-``p1`` and ``q0``-``q1`` (m)."""
+    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+    a, e, f = float(d1 @ d1), float(d2 @ d2), float(d2 @ r)
+    if a <= 1e-18 and e <= 1e-18:
+        return float(np.linalg.norm(r))
+    if a <= 1e-18:
+        s, t = 0.0, float(np.clip(f / e, 0.0, 1.0))
+    else:
+        c = float(d1 @ r)
+        if e <= 1e-18:
+            s, t = float(np.clip(-c / a, 0.0, 1.0)), 0.0
+        else:
+            b = float(d1 @ d2)
+            denominator = a * e - b * b
+            s = float(np.clip((b * f - c * e) / denominator, 0.0, 1.0)) if denominator > 1e-18 \
+                else 0.0
+            t = (b * s + f) / e
+            if t < 0.0:
+                s, t = float(np.clip(-c / a, 0.0, 1.0)), 0.0
+            elif t > 1.0:
+                s, t = float(np.clip((b - c) / a, 0.0, 1.0)), 1.0
+    return float(np.linalg.norm(p0 + d1 * s - (q0 + d2 * t)))
 
 
 def heaviest_total_load_n(loads: list, gravity_m_s2: float) -> float:

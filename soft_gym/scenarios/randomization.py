@@ -22,6 +22,15 @@ Load kinds: ``none`` 0.3, ``tip_mass`` 0.35, ``filling_load`` 0.1, ``swaying_mas
 ``push`` 0.15. Faults: ``none`` 0.5, ``moving_occluder`` (partial) 0.15, ``low_light`` 0.15,
 ``led_glare`` 0.1, ``motion_blur`` 0.1. The defaults keep the tip load at or below 10 g, so a
 heavier load (e.g. 20 g) stays out of the training distribution for generalisation tests.
+
+Every range is a finite ``(low, high)`` pair of real numbers with ``low <= high`` inside its
+allowed interval (:data:`RANGE_LIMITS`): masses up to :data:`~soft_gym.scenarios.loads.MAX_MASS_KG`,
+pushes up to :data:`~soft_gym.scenarios.loads.MAX_FORCE_N`, fill rates up to
+:data:`~soft_gym.scenarios.loads.MAX_FILL_RATE_KG_S`, fault strengths within [0, 1], a noise
+factor up to 10, a stiffness factor within [0.6, 5] (zou2022's arm under 95 % of its
+``max_load_n`` and bang-bang pressures leaves its end stops at 0.5 and stays on them at 0.6; every
+arm does from 0.6 to 10) and a time-constant factor within [0.1, 10]. The env further checks that
+no draw loads the arm beyond :attr:`~soft_gym.robots.spec.ArmSpec.max_load_n`.
 """
 
 from __future__ import annotations
@@ -35,9 +44,24 @@ from typing import Any
 import numpy as np
 
 from soft_gym.robots.spec import GRAVITY_M_S2
+from soft_gym.scenarios.loads import (MAX_FILL_RATE_KG_S, MAX_FORCE_N, MAX_MASS_KG,
+                                      FillingLoad)
 
 LOAD_KINDS = ("none", "tip_mass", "filling_load", "swaying_mass", "push")
 FAULT_KINDS = ("none", "moving_occluder", "low_light", "led_glare", "motion_blur")
+
+RANGE_LIMITS: dict[str, tuple[float, float, str]] = {
+    "tip_mass_kg": (0.0, MAX_MASS_KG, "kg"),
+    "filling_added_kg": (0.0, MAX_MASS_KG - FillingLoad.initial_mass_kg, "kg"),
+    "filling_rate_kg_s": (1e-12, MAX_FILL_RATE_KG_S, "kg/s"),
+    "swaying_mass_kg": (1e-12, MAX_MASS_KG, "kg"),
+    "push_force_n": (0.0, MAX_FORCE_N, "N"),
+    "fault_strength": (0.0, 1.0, "-"),
+    "sensor_noise_scale": (1e-12, 10.0, "-"),
+    "stiffness_scale": (0.6, 5.0, "-"),
+    "time_constant_scale": (0.1, 10.0, "-"),
+}
+"""The interval each ``(low, high)`` range must lie in, and its unit (see the module docstring)."""
 
 
 @dataclass(frozen=True)
@@ -62,22 +86,22 @@ class RandomizationConfig:
     def __post_init__(self) -> None:
         _check_weights("load_weights", self.load_weights, LOAD_KINDS)
         _check_weights("fault_weights", self.fault_weights, FAULT_KINDS)
-        for name, low_bound in (("tip_mass_kg", 0.0), ("filling_added_kg", 0.0),
-                                ("filling_rate_kg_s", 1e-12), ("swaying_mass_kg", 1e-12),
-                                ("push_force_n", 0.0), ("fault_strength", 0.0),
-                                ("sensor_noise_scale", 1e-12), ("stiffness_scale", 1e-12),
-                                ("time_constant_scale", 1e-12)):
+        for name, (lowest, highest, unit) in RANGE_LIMITS.items():
             value = getattr(self, name)
-            try:
-                low, high = (float(v) for v in value)
-            except (TypeError, ValueError) as error:
-                raise ValueError(f"{name} must be a (low, high) pair, got {value!r}") from error
-            if not (math.isfinite(low) and math.isfinite(high)) or low < low_bound or high < low:
-                raise ValueError(f"{name} must be a finite range with {low_bound} <= low <= high, "
+            if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 2 or not all(
+                    isinstance(v, (int, float, np.integer, np.floating))
+                    and not isinstance(v, (bool, np.bool_)) for v in value):
+                raise ValueError(f"{name} must be a (low, high) pair of real numbers ({unit}), "
                                  f"got {value!r}")
+            low, high = (float(v) for v in value)
+            if name == "fault_strength" and not 0.0 <= low <= high <= 1.0:
+                raise ValueError(f"fault_strength must lie within [0, 1] with low <= high, "
+                                 f"got {value!r}")
+            if not (math.isfinite(low) and math.isfinite(high)) or low < lowest \
+                    or high > highest or high < low:
+                raise ValueError(f"{name} must be a finite range with {lowest:g} <= low <= high "
+                                 f"<= {highest:g} ({unit}), got {value!r}")
             object.__setattr__(self, name, (low, high))
-        if self.fault_strength[1] > 1.0:
-            raise ValueError(f"fault_strength must lie within [0, 1], got {self.fault_strength!r}")
 
     @classmethod
     def from_any(cls, config: Any) -> "RandomizationConfig | None":
@@ -94,7 +118,11 @@ class RandomizationConfig:
             path = Path(config)
             if not path.is_file():
                 raise ValueError(f"randomization file {str(path)!r} does not exist")
-            config = yaml.safe_load(path.read_text()) or {}
+            try:
+                config = yaml.safe_load(path.read_text()) or {}
+            except (yaml.YAMLError, UnicodeDecodeError) as error:
+                raise ValueError(f"randomization file {str(path)!r} is not valid YAML: "
+                                 f"{error}") from error
         if not isinstance(config, dict):
             raise ValueError("randomization must be None, a bool, a dict of ranges, a YAML path "
                              f"or a RandomizationConfig, got {config!r}")
@@ -112,6 +140,10 @@ def _check_weights(name: str, weights: Any, kinds: tuple[str, ...]) -> None:
     unknown = sorted(set(weights) - set(kinds))
     if unknown:
         raise ValueError(f"{name} keys must be among {list(kinds)}, got {unknown}")
+    bad = [v for v in weights.values() if isinstance(v, (bool, np.bool_))
+           or not isinstance(v, (int, float, np.integer, np.floating))]
+    if bad:
+        raise ValueError(f"{name} must map kinds to real numbers (odds), got {weights!r}")
     values = np.array([float(v) for v in weights.values()])
     if not np.all(np.isfinite(values)) or np.any(values < 0) or values.sum() <= 0:
         raise ValueError(f"{name} must be finite odds >= 0 with a positive sum, got {weights!r}")

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from soft_gym._validation import as_finite_array, require_positive
+from soft_gym._validation import as_finite_array, require_integer, require_positive
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.tasks.paths import PATH_SHAPES, PathSpec, make_reference_trajectory, path_polyline
 from soft_gym.tasks.workspace import reachable_tips
@@ -40,10 +40,8 @@ class ReachTask:
 
     def __init__(self, spec: ArmSpec, episode_steps: int = 100, target_m: Any = None,
                  tolerance_mm: float | None = None) -> None:
-        if episode_steps < 1:
-            raise ValueError(f"episode_steps must be >= 1, got {episode_steps!r}")
         self.spec = spec
-        self.episode_steps = int(episode_steps)
+        self.episode_steps = require_integer("episode_steps", episode_steps, 1)
         self.fixed_target = None if target_m is None else within_reach(spec, "target_m", target_m)
         self.tolerance_mm = None if tolerance_mm is None else require_positive("tolerance_mm",
                                                                                  tolerance_mm)
@@ -126,10 +124,15 @@ class TrackTask:
                                                     * spec.control_period_s)
         if steps > MAX_TRACK_STEPS:
             slowest = self.path_spec.cycles * length_m / (MAX_TRACK_STEPS * spec.control_period_s)
+            most_cycles = int(MAX_TRACK_STEPS * self.path_spec.speed_m_s * spec.control_period_s
+                              // length_m)
             raise ValueError(
-                f"speed_m_s={speed_m_s!r} makes a {steps:.3g}-step episode; at most "
-                f"{MAX_TRACK_STEPS} steps are allowed, so speed_m_s must be >= {slowest:.3g} "
-                f"for this path ({length_m * 1e3:.0f} mm x {self.path_spec.cycles} cycles)")
+                f"cycles={self.path_spec.cycles} at speed_m_s={self.path_spec.speed_m_s:.3g} "
+                f"make a {steps:.3g}-step episode; at most {MAX_TRACK_STEPS} steps are allowed "
+                f"(MAX_TRACK_STEPS: an hour at {1 / spec.control_period_s:g} Hz), so speed_m_s "
+                f"must be >= {slowest:.3g} for this path ({length_m * 1e3:.0f} mm x "
+                f"{self.path_spec.cycles} cycles)"
+                + (f", or cycles <= {most_cycles} at this speed" if most_cycles >= 1 else ""))
         self.trajectory_m = make_reference_trajectory(self.path_spec, spec.control_period_s)
         self.episode_steps = len(self.trajectory_m)
 
