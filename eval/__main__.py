@@ -21,35 +21,82 @@ records the soft-arm-gym version that made it (``soft_arm_gym_version``). ``--vi
 ``benchmark``, ``compare``, ``estimation``) also writes an MP4 of each run next to its CSV (a GIF
 where ffmpeg is absent): the scene with the target, path, loads, true tip and estimate, and the
 camera sensors' frames beside it, one frame per control step (see ``eval/video.py``).
+
+Every option is checked before any work starts: a bad value (a count below 1, a negative seed, a
+gain that is not a finite positive number, JSON that does not parse, an output directory that
+cannot be written, an unknown preset, path, feedback source or policy, an ``sb3:PATH`` that holds
+no model or one whose observation or action space differs from its env's) exits with status 2
+and one line naming the option, the value and what is allowed. ``track``, ``benchmark`` and
+``compare`` check every run's configuration (each env built once without calibration, every
+baseline made, every agent loaded) before the first run, and write each run's CSV as it
+finishes, so a run failing later keeps the finished ones.
 """
 
 from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import os
 from pathlib import Path
 
 from eval import compare as compare_module
 from eval import estimation as estimation_module
 from eval.estimation import EXPERIMENTS, run_experiments
-from soft_gym._cli import HelpFormatter
+from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
+                           json_value, non_negative_int, positive_float, positive_int)
 
 
 DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
 
 
-def _track(args: argparse.Namespace) -> None:
+TRACK_OPTIONS = {"env_kwargs.preset": "--preset", "env_kwargs.path": "--path",
+                 "env_kwargs.cycles": "--cycles", "env_kwargs.feedback": "--feedback",
+                 "env_kwargs.scenario": "--scenario", "env_kwargs.faults": "--faults",
+                 "policy": "--policies", "policy_params": "--kp", "seed": "--seeds"}
+"""The part of a run configuration (:class:`eval.runner.ConfigError`) -> the ``track`` option
+that sets it."""
+
+
+def _check_configs(parser: argparse.ArgumentParser, configs: list,
+                   options: dict[str, str]) -> None:
+    """Check every run's configuration before the first run (:func:`eval.runner.check_configs`);
+    a refusal is one ``parser.error`` line naming the option of the refused part (``options``:
+    part -> option) and its value in the refused configuration."""
+    from eval.runner import ConfigError, check_configs
+
+    try:
+        check_configs(configs)
+    except ConfigError as error:
+        option = options.get(error.part) or options.get(error.part.split(".")[0])
+        if option is None and error.config.policy.startswith("sb3:") and options:
+            option = options.get("policy")  # the agent's own interface refused
+        if option is None:
+            parser.error(f"{error.part} of run {error.config.identity()}: {error.message}")
+        if error.part == "policy":
+            shown = error.config.policy
+        elif error.part.startswith("env_kwargs."):
+            shown = error.config.env_kwargs.get(error.part.split(".", 1)[1])
+        else:
+            shown = getattr(error.config, error.part, None)
+        fail(parser, option, f"{shown!r} refused: {error.message}" if shown is not None
+             else error.message)
+
+
+def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
+           options: dict[str, str] | None = None) -> None:
+    """Check every run, then run them, writing each run's CSV and trajectory plot as it
+    finishes; then the table, ``track.json``/``track.md`` and the error plot.
+
+    ``options``: the option naming each part of a configuration in errors (default
+    :data:`TRACK_OPTIONS`; ``benchmark`` has its own).
+    """
     from eval.metrics import add_improvement, summarize, summary_table
     from eval.report import markdown_table, plot_error_time, plot_trajectory, \
         write_records_csv, write_results_json
     from eval.runner import RunConfig, run_many
 
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    scenario = json.loads(args.scenario) if args.scenario else None
-    faults = json.loads(args.faults) if args.faults else None
+    scenario, faults = args.scenario, args.faults  # parsed JSON (``json_value``)
     rows, records = [], {}
     # an SB3 agent has no K_p: it runs once per seed
     runs = [(kp, seed, policy) for kp, seed, policy in itertools.product(args.kp, args.seeds,
@@ -62,13 +109,19 @@ def _track(args: argparse.Namespace) -> None:
                     "scenario": scenario, "faults": faults, "feedback": args.feedback},
         video_path=str(out / f"{_track_label(policy, kp, seed)}.mp4") if video else None)
         for kp, seed, policy in runs]
-    print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
-    records_in_order = run_many(configs, workers=args.workers, progress=True)
-    for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
+    _check_configs(parser, configs, TRACK_OPTIONS if options is None else options)
+    out.mkdir(parents=True, exist_ok=True)
+
+    def keep(index: int, record: dict) -> None:  # on disk as soon as the run finishes
+        kp, seed, policy = runs[index]
         label = _track_label(policy, kp, seed)
-        records[label] = record
         write_records_csv(out / f"{label}.csv", record)
         plot_trajectory(out / f"{label}_trajectory.png", record, label)
+
+    print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
+    records_in_order = run_many(configs, workers=args.workers, progress=True, on_result=keep)
+    for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
+        records[_track_label(policy, kp, seed)] = record
         rows.append((config.identity(), summarize(record)))
     table = summary_table(rows)
     for row in table:  # the paper compares settled tracking: the last cycle, after learning
@@ -118,17 +171,22 @@ def _agents_against_first_gain(table: list[dict], kp: float) -> None:
                 row[column] = 100.0 * improvement(baseline[0][metric], row[metric])
 
 
-def _check_seeds_and_baselines(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    """``--seeds`` >= 0 and ``--baselines`` known names or ``sb3:PATH``, before any work."""
-    if any(seed < 0 for seed in args.seeds):
-        parser.error(f"--seeds must be >= 0, got {args.seeds}")
+def _check_baselines(parser: argparse.ArgumentParser, baselines: list[str],
+                     check_agent=None) -> None:
+    """``--baselines``: known baseline names or ``sb3:PATH``, before any work; ``check_agent``
+    (the experiment module's ``check_baselines``) then tries each on the experiment's env."""
     from agents.policies import BASELINES
 
-    unknown = [name for name in args.baselines
-               if name not in BASELINES and not name.startswith("sb3:")]
+    unknown = [name for name in baselines
+               if name not in BASELINES and not (name.startswith("sb3:") and len(name) > 4)]
     if unknown:
         parser.error(f"--baselines must be names from {sorted(BASELINES)} or sb3:PATH, "
                      f"got {unknown}")
+    if check_agent is not None:
+        try:
+            check_agent(tuple(baselines))
+        except ValueError as error:
+            fail(parser, "--baselines", error)
 
 
 def _paper_parser(sub, name: str, module, help_text: str,
@@ -139,8 +197,14 @@ def _paper_parser(sub, name: str, module, help_text: str,
                            formatter_class=HelpFormatter)
     paper.add_argument("--experiments", nargs="+", default=list(module.EXPERIMENTS),
                        choices=list(module.EXPERIMENTS), help="which experiments")
-    paper.add_argument("--seeds", type=int, nargs="+", default=[0], help=seeds_help)
+    paper.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
+                       help=f"{seeds_help}; integers >= 0")
     return paper
+
+
+def _add_workers(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--workers", type=positive_int, default=DEFAULT_WORKERS,
+                        help="runs in parallel processes, >= 1 (up to 2 helps, one per core)")
 
 
 def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
@@ -150,8 +214,8 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     from eval import suite as suite_module
     from eval import suite_report
 
-    if args.workers < 1:
-        parser.error(f"--workers must be >= 1, got {args.workers}")
+    if args.out is not None:
+        check_output_dir(parser, "--out", args.out)
     backend = args.backend
     if args.address is not None and args.backend != "ray":
         parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
@@ -185,6 +249,8 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     except ValueError as error:
         parser.error(f"spec: {error}")
     out = Path(args.out or f"results/suite_{spec.name}")
+    if args.out is None:
+        check_output_dir(parser, "--out", out)
     if args.report_only and not suite_module.records_dir(out).is_dir():
         parser.error(f"--report-only: no records under {out} (give the --out of a suite run)")
     failure = None
@@ -207,14 +273,15 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
+    """``python -m eval``: parse and check every option (one-line errors, exit 2), then run."""
     parser = argparse.ArgumentParser(prog="python -m eval", description=__doc__,
                                      formatter_class=HelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     benchmark = sub.add_parser("benchmark", help="the small embedded default comparison",
                                formatter_class=HelpFormatter)
-    benchmark.add_argument("--out", default="results/benchmark", help="output directory")
-    benchmark.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
-                           help="runs in parallel processes (up to 2, one per core)")
+    benchmark.add_argument("--out", default="results/benchmark",
+                           help="output directory (made; must be writable)")
+    _add_workers(benchmark)
     _add_video_flag(benchmark)
     estimation = sub.add_parser("estimation", help="wang2023 estimation experiments",
                                 description=estimation_module.__doc__,
@@ -223,71 +290,86 @@ def main(argv: list[str] | None = None) -> None:
                             choices=list(EXPERIMENTS) + ["all"],
                             help="which runs ('all' for every one)")
     estimation.add_argument("--steps", type=int, default=4000,
-                            help="control steps of 0.05 s per run (paper: ~4000)")
-    estimation.add_argument("--seed", type=int, default=0, help="episode seed")
-    estimation.add_argument("--out", default="results/estimation", help="output directory")
+                            help="control steps of 0.05 s per run, >= 600 (paper: ~4000)")
+    estimation.add_argument("--seed", type=non_negative_int, default=0,
+                            help="episode seed (integer >= 0)")
+    estimation.add_argument("--out", default="results/estimation",
+                            help="output directory (made; must be writable)")
     _add_video_flag(estimation)
     track = sub.add_parser("track", help="baselines tracking a path",
                            formatter_class=HelpFormatter)
     track.add_argument("--policies", nargs="+", default=["cc_model", "hybrid_gpr"],
-                       help="baseline names or sb3:PATH")
-    track.add_argument("--kp", type=float, nargs="+", default=[0.06],
-                       help="K_p gains of eq. (26) (paper: 0.04 0.06 0.08 0.10)")
-    track.add_argument("--preset", default="wang2023", help="arm preset")
-    track.add_argument("--path", default="circle", help="circle, pentagram, rectangle, spiral, star")
-    track.add_argument("--cycles", type=int, default=3, help="path cycles per run")
+                       help="baseline names (cc_model, hybrid_gpr, lwpr_rwr, local_ik_asdm) or "
+                            "sb3:PATH (a model .zip, a run directory or a shipped agent's name; "
+                            "its observation and action spaces must match the env's)")
+    track.add_argument("--kp", type=positive_float, nargs="+", default=[0.06],
+                       help="K_p gains of eq. (26), finite numbers > 0 (paper: 0.04 0.06 0.08 "
+                            "0.10)")
+    track.add_argument("--preset", default="wang2023",
+                       help="arm preset: wang2023, ho2018, zhao2021 or zou2022")
+    track.add_argument("--path", default="circle",
+                       help="circle, pentagram, rectangle, spiral, star")
+    track.add_argument("--cycles", type=positive_int, default=3,
+                       help="path cycles per run (>= 1)")
     track.add_argument("--feedback", default="ground_truth",
-                       help="pose feedback: fused, camera, fbg, em or ground_truth")
-    track.add_argument("--scenario", default=None,
+                       help="pose feedback: fused, camera, fbg, em, ground_truth (or another "
+                            "source the preset supports)")
+    track.add_argument("--scenario", type=json_value, default=None,
                        help='loads as JSON, e.g. \'{"name": "tip_mass", "mass_kg": 0.01}\'')
-    track.add_argument("--faults", default=None,
+    track.add_argument("--faults", type=json_value, default=None,
                        help='visual faults as JSON, e.g. \'"wang2023_occlusion"\'')
-    track.add_argument("--seeds", type=int, nargs="+", default=[0], help="episode seeds")
-    track.add_argument("--out", default="results/track", help="output directory")
-    track.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
-                       help="runs in parallel processes (up to 2, one per core)")
+    track.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
+                       help="episode seeds (integers >= 0)")
+    track.add_argument("--out", default="results/track",
+                       help="output directory (made; must be writable)")
+    _add_workers(track)
     _add_video_flag(track)
     from eval import ho2018 as ho2018_module
 
     ho2018 = _paper_parser(sub, "ho2018", ho2018_module,
                            "ho2018 static and varying tip-load experiments",
                            "seeds (pre-training waypoints and episode)")
-    ho2018.add_argument("--cycle-s", type=float, default=None,
-                        help="seconds per rectangle cycle (s); default: the experiment's own "
-                             "(40 s static, 30 s varying)")
+    ho2018.add_argument("--cycle-s", type=finite_float(5.0, 3600.0), default=None,
+                        help="seconds per rectangle cycle (s), in [5, 3600]; default: the "
+                             "experiment's own (40 s static, 30 s varying)")
     ho2018.add_argument("--baselines", nargs="*", default=[],
                         help="further policies on the online run's load, e.g. cc_model "
-                             "hybrid_gpr")
-    ho2018.add_argument("--lead-in-s", type=float, default=15.0,
-                        help="seconds tracking the first corner before recording (s)")
-    ho2018.add_argument("--out", default="results/ho2018", help="output directory")
+                             "hybrid_gpr sb3:PATH")
+    ho2018.add_argument("--lead-in-s", type=finite_float(0.0, 3600.0), default=15.0,
+                        help="seconds tracking the first corner before recording (s), in "
+                             "[0, 3600]")
+    ho2018.add_argument("--out", default="results/ho2018",
+                        help="output directory (made; must be writable)")
     from eval import zhao2021 as zhao2021_module
 
     zhao2021 = _paper_parser(sub, "zhao2021", zhao2021_module,
                              "zhao2021 shape reconstruction and local-IK control experiments",
                              "seeds (exploration, training and episodes)")
-    zhao2021.add_argument("--samples", type=int, nargs=2, default=[4000, 2000],
+    zhao2021.add_argument("--samples", type=non_negative_int, nargs=2, default=[4000, 2000],
                           metavar=("FREE", "LOADED"),
-                          help="exploration samples free and with the 75 g tip (paper: 4000 "
-                               "2000)")
-    zhao2021.add_argument("--iterations", type=int, default=1000,
-                          help="most training iterations of the networks (paper: 1000)")
+                          help="exploration samples free and with the 75 g tip, >= 0 each and "
+                               ">= 24 together (paper: 4000 2000)")
+    zhao2021.add_argument("--iterations", type=positive_int, default=1000,
+                          help="most training iterations of the networks, >= 1 (paper: 1000)")
     zhao2021.add_argument("--baselines", nargs="*", default=[],
                           help="further policies on the free point-to-point run and circle, "
                                "e.g. lwpr_rwr cc_model sb3:PATH")
-    zhao2021.add_argument("--out", default="results/zhao2021", help="output directory")
+    zhao2021.add_argument("--out", default="results/zhao2021",
+                          help="output directory (made; must be writable)")
     from eval import zou2022 as zou2022_module
 
     zou2022 = _paper_parser(sub, "zou2022", zou2022_module,
                             "zou2022 shape estimation (RSES, ASES, DNN) and control with each "
                             "shape source", "seeds (exploration, training, sensor noise, poses)")
-    zou2022.add_argument("--samples", type=int, default=29791,
-                         help="exploration samples of the DNN's data set (paper: 31^3 = 29791, "
-                              "~25 min on one core, cached)")
-    zou2022.add_argument("--epochs", type=int, default=500, help="DNN training epochs (paper: 500)")
-    zou2022.add_argument("--poses", type=int, default=20,
-                         help="random poses of the ASES fault experiment")
-    zou2022.add_argument("--out", default="results/zou2022", help="output directory")
+    zou2022.add_argument("--samples", type=int_at_least(20), default=29791,
+                         help="exploration samples of the DNN's data set, >= 20 (paper: 31^3 = "
+                              "29791, ~25 min on one core, cached)")
+    zou2022.add_argument("--epochs", type=positive_int, default=500,
+                         help="DNN training epochs, >= 1 (paper: 500)")
+    zou2022.add_argument("--poses", type=positive_int, default=20,
+                         help="random poses of the ASES fault experiment (>= 1)")
+    zou2022.add_argument("--out", default="results/zou2022",
+                         help="output directory (made; must be writable)")
     compare = sub.add_parser(
         "compare", help="SB3 agents against the baselines, nominal and out of distribution",
         description=compare_module.__doc__, formatter_class=HelpFormatter)
@@ -295,17 +377,20 @@ def main(argv: list[str] | None = None) -> None:
                          help="baselines, sb3:PATH or shipped agent names as sb3:<name> "
                               "(default: cc_model, hybrid_gpr and every shipped agent)")
     compare.add_argument("--paths", nargs="+", default=["circle", "pentagram"],
-                         help="paths to track")
+                         help="paths to track (circle, pentagram, rectangle, spiral, star)")
     compare.add_argument("--conditions", nargs="+", default=list(compare_module.CONDITIONS),
                          choices=list(compare_module.CONDITIONS), help="test conditions")
-    compare.add_argument("--seeds", type=int, nargs="+", default=[0, 1], help="episode seeds")
-    compare.add_argument("--cycles", type=int, default=2, help="path cycles per run")
+    compare.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0, 1],
+                         help="episode seeds (integers >= 0)")
+    compare.add_argument("--cycles", type=positive_int, default=2,
+                         help="path cycles per run (>= 1)")
     compare.add_argument("--feedback", default="fused",
                          help="pose feedback of every policy: fused, camera, fbg, em, ground_truth")
-    compare.add_argument("--kp", type=float, default=0.06, help="K_p of the CC baselines")
-    compare.add_argument("--out", default="results/compare", help="output directory")
-    compare.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
-                         help="runs in parallel processes (up to 2, one per core)")
+    compare.add_argument("--kp", type=positive_float, default=0.06,
+                         help="K_p of the CC baselines, a finite number > 0")
+    compare.add_argument("--out", default="results/compare",
+                         help="output directory (made; must be writable)")
+    _add_workers(compare)
     _add_video_flag(compare)
     from eval import suite as suite_module
 
@@ -316,13 +401,13 @@ def main(argv: list[str] | None = None) -> None:
     suite.add_argument("spec", help="suite YAML file, or a bundled suite: "
                        f"{', '.join(suite_module.bundled_suites())}")
     suite.add_argument("--out", default=None,
-                       help="output directory; default: results/suite_<suite name>")
-    suite.add_argument("--workers", type=int, default=DEFAULT_WORKERS,
-                       help="runs in parallel processes (up to 2, one per core)")
+                       help="output directory (made; must be writable); default: "
+                            "results/suite_<suite name>")
+    _add_workers(suite)
     suite.add_argument("--resume", action="store_true",
                        help="skip the runs whose record is already in the output directory")
-    suite.add_argument("--seeds", type=int, nargs="+", default=None,
-                       help="episode seeds replacing the suite's own")
+    suite.add_argument("--seeds", type=non_negative_int, nargs="+", default=None,
+                       help="episode seeds replacing the suite's own (distinct integers >= 0)")
     suite.add_argument("--report-only", action="store_true",
                        help="run nothing: write the report from the records there")
     suite.add_argument("--backend", default="process", choices=["process", "serial", "ray"],
@@ -334,19 +419,20 @@ def main(argv: list[str] | None = None) -> None:
                             "ray://host:10001, host:6379); the package must be importable on "
                             "every node. Default: a local Ray")
     args = parser.parse_args(argv)
+    subparsers = {"benchmark": benchmark, "estimation": estimation, "track": track,
+                  "ho2018": ho2018, "zhao2021": zhao2021, "zou2022": zou2022,
+                  "compare": compare, "suite": suite}
+    command = subparsers[args.command]
+    for option in ("policies", "kp", "seeds", "paths", "conditions", "experiments", "baselines"):
+        values = getattr(args, option, None)
+        if isinstance(values, list) and len(set(values)) != len(values):
+            command.error(f"--{option} must be distinct (each run once), got {values}")
     if args.command == "suite":
         _suite(suite, args)
         return
+    check_output_dir(command, "--out", args.out)
     if args.command == "ho2018":
-        for option, value, low in (("--cycle-s", args.cycle_s, 5.0),
-                                   ("--lead-in-s", args.lead_in_s, 0.0)):
-            if value is not None and (not value >= low or value > 3600):
-                parser.error(f"{option} must be within [{low:g}, 3600] s, got {value!r}")
-        _check_seeds_and_baselines(parser, args)
-        try:
-            ho2018_module.check_baselines(tuple(args.baselines))
-        except ValueError as error:
-            parser.error(f"--baselines: {error}")
+        _check_baselines(ho2018, args.baselines, ho2018_module.check_baselines)
         ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
                                      cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
                                      baselines=tuple(args.baselines))
@@ -354,12 +440,10 @@ def main(argv: list[str] | None = None) -> None:
         return
     if args.command == "zhao2021":
         free, loaded = args.samples
-        if free < 0 or loaded < 0 or free + loaded < 24:
-            parser.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
-                         f"{args.samples}")
-        if args.iterations < 1:
-            parser.error(f"--iterations must be >= 1, got {args.iterations}")
-        _check_seeds_and_baselines(parser, args)
+        if free + loaded < 24:
+            zhao2021.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
+                           f"{args.samples}")
+        _check_baselines(zhao2021, args.baselines, zhao2021_module.check_baselines)
         from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
 
         config = ReconstructionConfig(n_free=free, n_loaded=loaded,
@@ -369,12 +453,6 @@ def main(argv: list[str] | None = None) -> None:
         print(f"output directory: {args.out}")
         return
     if args.command == "zou2022":
-        for option, value, low in (("--samples", args.samples, 20), ("--epochs", args.epochs, 1),
-                                   ("--poses", args.poses, 1)):
-            if value < low:
-                parser.error(f"{option} must be >= {low}, got {value}")
-        if any(seed < 0 for seed in args.seeds):
-            parser.error(f"--seeds must be >= 0, got {args.seeds}")
         from soft_gym.sensing.shape_dnn import ShapeDNNConfig
 
         config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
@@ -383,21 +461,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"output directory: {args.out}")
         return
     if args.command == "compare":
-        from agents.policies import shipped_agents
-
-        policies = args.policies or (["cc_model", "hybrid_gpr"]
-                                     + [f"sb3:{name}" for name in shipped_agents()])
-        if args.feedback not in ("fused", "camera") and "occlusion" in args.conditions:
-            parser.error("the occlusion condition needs camera feedback: --feedback fused or "
-                         f"camera, got {args.feedback!r}")
-        rows = compare_module.run_comparison(
-            policies, args.paths, args.conditions, args.seeds, args.out, cycles=args.cycles,
-            feedback=args.feedback, kp=args.kp, workers=args.workers,
-            **({"video": True} if args.video else {}))
-        from eval.report import markdown_table
-
-        print(markdown_table(rows, float_format="{:.2f}"))
-        print(f"output directory: {args.out}")
+        _compare(compare, args)
         return
     if args.command == "benchmark":
         from agents.policies import shipped_agents
@@ -407,14 +471,15 @@ def main(argv: list[str] | None = None) -> None:
         args = argparse.Namespace(
             policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in shipped_agents()],
             kp=[0.06], preset="wang2023", path="circle",
-            cycles=3, feedback="fused", scenario=json.dumps({"name": "tip_mass", "mass_kg": 0.01}),
-            faults=json.dumps(occluder), seeds=[0], out=args.out, workers=args.workers,
+            cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": 0.01},
+            faults=occluder, seeds=[0], out=args.out, workers=args.workers,
             video=args.video)
-        _track(args)
+        # benchmark's settings are fixed: a refusal names the part (a shipped agent, ...)
+        _track(args, benchmark, options={})
     elif args.command == "estimation":
         if args.steps < 600:
-            parser.error(f"--steps must be >= 600 (the F-emp calibration alone takes 450), "
-                         f"got {args.steps}")
+            estimation.error(f"--steps must be >= 600 (the F-emp calibration alone takes 450), "
+                             f"got {args.steps}")
         experiments = list(EXPERIMENTS) if "all" in args.experiments else args.experiments
         rows = run_experiments(experiments, args.out, steps=args.steps, seed=args.seed,
                                **({"video": True} if args.video else {}))
@@ -422,7 +487,43 @@ def main(argv: list[str] | None = None) -> None:
 
         print(markdown_table(rows, float_format="{:.2f}"))
     else:
-        _track(args)
+        _track(args, track)
+    print(f"output directory: {args.out}")
+
+
+COMPARE_OPTIONS = {"env_kwargs.path": "--paths", "env_kwargs.cycles": "--cycles",
+                   "env_kwargs.feedback": "--feedback", "env_kwargs.scenario": "--conditions",
+                   "env_kwargs.faults": "--conditions", "policy": "--policies",
+                   "policy_params": "--kp", "seed": "--seeds"}
+"""The part of a run configuration -> the ``compare`` option that sets it."""
+
+
+def _compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``compare``: check the options and every run, run (each run's CSV written as it
+    finishes), print the table."""
+    from agents.policies import shipped_agents
+    from eval.runner import ConfigError
+
+    policies = args.policies or (["cc_model", "hybrid_gpr"]
+                                 + [f"sb3:{name}" for name in shipped_agents()])
+    if args.feedback not in ("fused", "camera") and "occlusion" in args.conditions:
+        parser.error("the occlusion condition needs camera feedback: --feedback fused or "
+                     f"camera, got {args.feedback!r}")
+    try:
+        rows = compare_module.run_comparison(
+            policies, args.paths, args.conditions, args.seeds, args.out, cycles=args.cycles,
+            feedback=args.feedback, kp=args.kp, workers=args.workers,
+            **({"video": True} if args.video else {}), check=True)
+    except ConfigError as error:
+        option = COMPARE_OPTIONS.get(error.part, "--policies")
+        shown = {"--paths": error.config.env_kwargs.get("path"), "--kp": args.kp,
+                 "--feedback": args.feedback, "--cycles": args.cycles,
+                 "--conditions": error.config.labels.get("condition"),
+                 "--policies": error.config.policy, "--seeds": error.config.seed}[option]
+        fail(parser, option, f"{shown!r} refused: {error.message}")
+    from eval.report import markdown_table
+
+    print(markdown_table(rows, float_format="{:.2f}"))
     print(f"output directory: {args.out}")
 
 

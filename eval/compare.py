@@ -43,13 +43,23 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
                    seeds: Sequence[int], out: str | Path, cycles: int = 2,
                    feedback: str = "fused", kp: float = 0.06, preset: str = "wang2023",
                    progress: bool = True, workers: int = 1,
-                   video: bool = False) -> list[dict[str, Any]]:
+                   video: bool = False, check: bool = True) -> list[dict[str, Any]]:
     """Run the comparison grid and write its outputs; returns the seed-aggregated rows
-    (``video``: a video of every run beside its CSV)."""
+    (``video``: a video of every run beside its CSV).
+
+    With ``check`` every run's configuration is checked before the first run starts
+    (:func:`eval.runner.check_configs`: an unknown path or feedback source, a policy that
+    cannot drive the arm, an agent of another observation or action space); each run's CSV is
+    written as soon as it finishes, so a run failing later keeps the finished ones.
+
+    Raises:
+        eval.runner.ConfigError: (with ``check``) a configuration refused, before any run.
+        ValueError: unknown conditions, ``cycles`` < 1.
+    """
     from eval.metrics import add_improvement, aggregate_seeds, summarize, summary_table
     from eval.report import (markdown_table, plot_error_time, with_mean_std, write_records_csv,
                              write_results_json)
-    from eval.runner import RunConfig, run_many
+    from eval.runner import RunConfig, check_configs, run_many
 
     unknown = [c for c in conditions if c not in CONDITIONS]
     if unknown:
@@ -57,21 +67,27 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
     if cycles < 1:
         raise ValueError(f"cycles must be >= 1, got {cycles!r}")
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     rows, first_seed_records = [], {}
     grid = list(itertools.product(paths, conditions, seeds, policies))
     configs = [RunConfig(
         policy=policy, policy_params={} if policy.startswith("sb3:") else {"kp": kp}, seed=seed,
         env_kwargs={"preset": preset, "path": path, "cycles": cycles, "feedback": feedback,
-                    **CONDITIONS[condition]},
+                    **CONDITIONS[condition]}, labels={"condition": condition},
         video_path=str(out / "runs" / f"{_run_name(policy, path, condition, seed)}.mp4")
         if video else None) for path, condition, seed, policy in grid]
-    print(f"{len(configs)} runs on {workers} worker(s)", flush=True)
-    records = run_many(configs, workers=workers, progress=progress)
-    for (path, condition, seed, policy), record in zip(grid, records):
-        label = policy_label(policy)
+    if check:
+        check_configs(configs)
+    out.mkdir(parents=True, exist_ok=True)
+
+    def keep(index: int, record: dict) -> None:  # on disk as soon as the run finishes
+        path, condition, seed, policy = grid[index]
         write_records_csv(out / "runs" / f"{_run_name(policy, path, condition, seed)}.csv",
                           record)
+
+    print(f"{len(configs)} runs on {workers} worker(s)", flush=True)
+    records = run_many(configs, workers=workers, progress=progress, on_result=keep)
+    for (path, condition, seed, policy), record in zip(grid, records):
+        label = policy_label(policy)
         summary = summarize(record)
         identity = {"policy": label, "path": path, "condition": condition, "seed": seed}
         rows.append((identity, summary))

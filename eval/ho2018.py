@@ -129,9 +129,19 @@ def _scenario(load: str, lead_in_s: float, cycle_s: float) -> list:
 
 def check_baselines(baselines: tuple[str, ...], preset: str = "ho2018") -> None:
     """Refuse (``ValueError``) a baseline that cannot drive ``preset`` with this experiment's
-    observation (pose and target, EM feedback), before any work."""
+    observation (pose and target, EM feedback), or an ``sb3:PATH`` agent that holds no model or
+    reads or writes other spaces than its env's (pose, target and pressure, with the agent's own
+    interface), before any work."""
+    from eval.runner import agent_error
+
     for policy in baselines:
-        if not policy.startswith("sb3:"):
+        if policy.startswith("sb3:"):
+            message = agent_error(policy, "SoftArmReach-v0",
+                                  {"preset": preset, "feedback": "em",
+                                   "obs": ("pose", "target", "pressure")})
+            if message is not None:
+                raise ValueError(f"{policy}: {message}")
+        else:
             probe = gym.make("SoftArmReach-v0", preset=preset, feedback="em",
                              obs=("pose", "target"))
             try:

@@ -10,13 +10,20 @@ With a video path (``RunConfig.video_path``, ``run_episode(video_path=...)``) th
 a video (:mod:`eval.video`) of :func:`soft_gym.envs.rendering.render_frame` frames: one after
 ``reset`` and one after every step, at the env's ``render_fps``. Rendering only reads the
 simulation, so the record is the same with and without a video.
+
+Before a batch of runs starts, :func:`check_configs` checks every configuration the cheap way
+(each distinct env built once without calibrating its feedback, every baseline made on it, every
+SB3 agent loaded once and its observation and action spaces compared with its env's), so that a
+bad run late in a batch fails before the first one starts; :func:`run_many` hands each record to
+``on_result`` as it finishes, so that a batch failing later keeps the finished runs.
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import gymnasium as gym
 import numpy as np
@@ -183,21 +190,246 @@ def run(config: RunConfig, progress: bool = False) -> dict[str, np.ndarray]:
         env.close()
 
 
-def run_many(configs: list[RunConfig], workers: int = 1,
-             progress: bool = False) -> list[dict[str, np.ndarray]]:
+def run_many(configs: list[RunConfig], workers: int = 1, progress: bool = False,
+             on_result: Callable[[int, dict[str, np.ndarray]], None] | None = None,
+             ) -> list[dict[str, np.ndarray]]:
     """Run several configurations, in ``workers`` processes when > 1; records in input order.
 
     Each worker process calibrates its own sensing pipeline (the calibration is cached per
     process), and seeded runs give the same records whichever process runs them.
+
+    ``on_result(index, record)`` is called in this process as each run finishes (in the order
+    they finish), e.g. to write its record to disk at once. When a run fails, no further run is
+    started, the runs already under way finish (and are handed to ``on_result``), and the first
+    error is raised.
     """
-    if not isinstance(workers, int) or workers < 1:
+    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    records: list[dict[str, np.ndarray] | None] = [None] * len(configs)
     if workers == 1 or len(configs) <= 1:
-        return [run(config, progress=progress) for config in configs]
+        for index, config in enumerate(configs):
+            records[index] = run(config, progress=progress)
+            if on_result is not None:
+                on_result(index, records[index])
+        return records
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     context = multiprocessing.get_context("spawn")
+    bar = tqdm(total=len(configs), desc="runs", disable=not progress)
+    first_error: BaseException | None = None
     with ProcessPoolExecutor(max_workers=min(workers, len(configs)), mp_context=context) as pool:
-        return list(tqdm(pool.map(run, configs), total=len(configs), desc="runs",
-                         disable=not progress))
+        futures = {pool.submit(run, config): index for index, config in enumerate(configs)}
+        pending = set(futures)
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in sorted(done, key=futures.get):
+                if future.cancelled():
+                    continue
+                error = future.exception()
+                if error is not None:
+                    first_error = first_error or error
+                    continue
+                index = futures[future]
+                records[index] = future.result()
+                bar.update(1)
+                if on_result is not None:
+                    try:
+                        on_result(index, records[index])
+                    except Exception as error:  # noqa: BLE001  (stop, as for a failed run)
+                        first_error = first_error or error
+            if first_error is not None:
+                for future in pending:
+                    future.cancel()  # the ones not started; those under way finish
+    bar.close()
+    if first_error is not None:
+        raise first_error
+    return records
+
+
+# ------------------------------------------------------------------------------ checking
+class ConfigError(ValueError):
+    """A run configuration that cannot run: ``index`` of the config in the checked list,
+    ``part`` that is refused (``"policy"``, ``"policy_params"``, ``"env_id"`` or
+    ``"env_kwargs.<key>"``) and the env's or policy's own message."""
+
+    def __init__(self, index: int, config: RunConfig, part: str, message: str) -> None:
+        self.index, self.config, self.part = index, config, part
+        self.message = " ".join(str(message).split())
+        super().__init__(f"run {index} ({config.policy}, seed {config.seed}): {part}: "
+                         f"{self.message}")
+
+
+def make_uncalibrated_env(env_id: str, kwargs: dict[str, Any]) -> gym.Env:
+    """The env of ``env_id`` with ``kwargs``, with every argument check and its simulator but no
+    feedback calibration (the runs calibrate, cached on disk)."""
+    import copy
+
+    try:
+        spec = gym.spec(env_id)
+    except gym.error.Error as error:
+        raise ValueError(f"env id must be a registered id, got {env_id!r} ({error})") from None
+    entry = dict(spec.kwargs or {})
+    alias = entry.pop("alias_preset", None)
+    kwargs = copy.deepcopy(dict(kwargs))
+    if alias is not None:
+        if kwargs.get("preset", alias) != alias:
+            raise ValueError(f"preset must be {alias!r} on {env_id}, got {kwargs['preset']!r}")
+        kwargs["preset"] = alias
+    return _uncalibrated_env_class()(**{**entry, **kwargs})
+
+
+@functools.lru_cache(maxsize=None)
+def _uncalibrated_env_class():
+    """:class:`SoftArmEnv` with every argument check and its simulator but no feedback
+    calibration (as :mod:`eval.suite` checks a suite's envs; defined here too, since the suite
+    imports :mod:`eval.compare`, which imports this module)."""
+    from soft_gym.envs.soft_arm_env import SoftArmEnv
+
+    class UncalibratedEnv(SoftArmEnv):
+        def _calibrate(self, use_cache: bool) -> None:  # the runs calibrate (cached on disk)
+            pass
+
+    return UncalibratedEnv
+
+
+class _Checker:
+    """Builds each distinct env configuration once and remembers the outcome."""
+
+    def __init__(self) -> None:
+        self.errors: dict[str, str | None] = {}
+
+    @staticmethod
+    def _key(env_id: str, kwargs: dict[str, Any]) -> str:
+        import json
+
+        return json.dumps([env_id, kwargs], sort_keys=True, default=repr)
+
+    def env_error(self, env_id: str, kwargs: dict[str, Any]) -> str | None:
+        key = self._key(env_id, kwargs)
+        if key not in self.errors:
+            try:
+                env = make_uncalibrated_env(env_id, kwargs)
+            except Exception as error:  # noqa: BLE001  (any refusal is the user's input)
+                self.errors[key] = f"{error}"
+            else:
+                env.close()
+                self.errors[key] = None
+        return self.errors[key]
+
+    def blame(self, env_id: str, kwargs: dict[str, Any]) -> tuple[str, str] | None:
+        """``None`` when the env accepts ``kwargs``; else the first keyword argument (in their
+        order) whose addition makes it refuse, and the refusal."""
+        message = self.env_error(env_id, kwargs)
+        if message is None:
+            return None
+        partial: dict[str, Any] = {}
+        for key, value in kwargs.items():
+            partial[key] = value
+            found = self.env_error(env_id, partial)
+            if found is not None:
+                return f"env_kwargs.{key}", found
+        return "env_id", message
+
+
+def _space_error(policy, env) -> str | None:
+    """Why an SB3 agent cannot act on ``env``: another observation or action space."""
+    try:
+        policy.check_env(env)
+    except ValueError as error:
+        return str(error)
+    expected = getattr(policy.model, "action_space", None)
+    if expected is not None and expected.shape != env.action_space.shape:
+        return (f"the agent writes actions of shape {expected.shape}, the env takes "
+                f"{env.action_space.shape}: make the env with the agent's interface "
+                f"{policy.env_interface}")
+    return None
+
+
+def check_configs(configs: Sequence[RunConfig], progress: bool = False) -> None:
+    """Check every configuration as far as it can be without running it.
+
+    Each distinct env (id and keyword arguments) is built once without calibrating its feedback
+    source and closed; every baseline is made on its env with its parameters (not calibrated);
+    every SB3 agent is loaded once and its observation and action spaces are compared with those
+    of its env (made with the agent's interface, as :func:`build` does).
+
+    Raises:
+        ConfigError: the first configuration refused, with the part refused and the message.
+    """
+    from agents.policies import SB3Policy
+
+    checker = _Checker()
+    agents: dict[str, Any] = {}
+    made: set[str] = set()
+    for index, config in enumerate(tqdm(configs, desc="checking the runs", leave=False,
+                                        disable=not progress)):
+        if not isinstance(config.seed, int) or isinstance(config.seed, bool) or config.seed < 0:
+            raise ConfigError(index, config, "seed",
+                              f"seed must be an integer >= 0, got {config.seed!r}")
+        kwargs = dict(config.env_kwargs)
+        if config.policy.startswith("sb3:"):
+            if config.policy not in agents:
+                try:
+                    agents[config.policy] = SB3Policy.load(config.policy[4:])
+                except Exception as error:  # noqa: BLE001  (a bad path or file)
+                    agents[config.policy] = error
+            policy = agents[config.policy]
+            if isinstance(policy, Exception):
+                raise ConfigError(index, config, "policy", str(policy))
+            kwargs.update(policy.env_interface)
+        blamed = checker.blame(config.env_id, kwargs)
+        if blamed is not None:
+            raise ConfigError(index, config, *blamed)
+        key = checker._key(config.env_id, [config.policy, config.policy_params, kwargs])
+        if key in made:
+            continue
+        made.add(key)
+        env = make_uncalibrated_env(config.env_id, kwargs)
+        try:
+            if config.policy.startswith("sb3:"):
+                message = _space_error(agents[config.policy], env)
+                if message is not None:
+                    raise ConfigError(index, config, "policy", message)
+                continue
+            _check_baseline(index, config, env)
+        finally:
+            env.close()
+
+
+def _check_baseline(index: int, config: RunConfig, env: gym.Env) -> None:
+    """Make the baseline of ``config`` on ``env``; a refusal of its name or parameters raises
+    :class:`ConfigError`."""
+    from agents.policies import BASELINES
+
+    if config.policy not in BASELINES:
+        raise ConfigError(index, config, "policy",
+                          f"policy must be one of {sorted(BASELINES)} or sb3:PATH, got "
+                          f"{config.policy!r}")
+    try:
+        make_policy(config.policy, env=env)
+    except Exception as error:  # noqa: BLE001  (the baseline refuses this env: its message)
+        raise ConfigError(index, config, "policy", str(error)) from None
+    if config.policy_params:
+        try:
+            make_policy(config.policy, env=env, **config.policy_params)
+        except Exception as error:  # noqa: BLE001
+            raise ConfigError(index, config, "policy_params", str(error)) from None
+
+
+def agent_error(name: str, env_id: str, env_kwargs: dict[str, Any]) -> str | None:
+    """Why the SB3 agent ``name`` (``"sb3:PATH"``) cannot run on ``env_id`` made with
+    ``env_kwargs`` plus the agent's own interface (a path that holds no model, another
+    observation or action space), or ``None`` when it can. The env is built without calibrating
+    its feedback, and closed."""
+    from agents.policies import SB3Policy
+
+    try:
+        policy = SB3Policy.load(name[4:])
+        env = make_uncalibrated_env(env_id, {**env_kwargs, **policy.env_interface})
+    except Exception as error:  # noqa: BLE001  (a bad path, file or interface)
+        return " ".join(str(error).split())
+    try:
+        return _space_error(policy, env)
+    finally:
+        env.close()

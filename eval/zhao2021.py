@@ -416,6 +416,21 @@ def run_circle(sensing: dict, seed: int = 0, progress: bool = True,
     return results
 
 
+def check_baselines(baselines: tuple[str, ...]) -> None:
+    """Refuse (``ValueError``) an ``sb3:PATH`` baseline that holds no model or reads or writes
+    other spaces than the env it would drive (pose, target and pressure, with the agent's own
+    interface), before any work; a baseline that refuses the arm is recorded as refused when it
+    runs, not here."""
+    from eval.runner import agent_error
+
+    for name in baselines:
+        if name.startswith("sb3:"):
+            message = agent_error(name, "SoftArmReach-v0",
+                                  {"preset": PRESET, "obs": ("pose", "target", "pressure")})
+            if message is not None:
+                raise ValueError(f"{name}: {message}")
+
+
 def _baseline_run(name: str, sensing: dict, start_m, targets_m, max_steps: int, seed: int,
                   progress: bool) -> dict:
     """Another policy on the same start, targets and ``strain_sr`` feedback; a policy that

@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from soft_gym._cli import HelpFormatter
+from soft_gym._cli import HelpFormatter, finite_float
 from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.robots.presets import PRESETS
 from soft_gym.sim import ArmSimulator
@@ -61,11 +61,9 @@ def main(argv: list[str] | None = None) -> None:
                                      formatter_class=HelpFormatter)
     parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS),
                         help="arm presets to roll out")
-    parser.add_argument("--hold-s", type=float, default=2.0,
-                        help="simulated seconds each pattern is held before reading")
+    parser.add_argument("--hold-s", type=finite_float(0.0, 600.0, low_open=True), default=2.0,
+                        help="simulated seconds each pattern is held before reading, in (0, 600]")
     args = parser.parse_args(argv)
-    if not args.hold_s > 0:
-        parser.error(f"--hold-s must be > 0, got {args.hold_s}")
     rows = run(args.presets, args.hold_s)
     header = (f"{'preset':<10} {'pattern':<22} {'tip x':>8} {'tip y':>8} {'tip z':>8} "
               f"{'moved':>8} {'bend':>6} {'chamber':>8} {'x real':>7}")

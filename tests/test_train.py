@@ -16,8 +16,8 @@ import yaml
 import soft_gym  # noqa: F401
 from agents.policies import make_policy
 from train.__main__ import main as train_main
-from train.config import (ALGORITHMS, parse_key_values, parse_python_value, read_hyperparameters,
-                          split_hyperparameters)
+from train.config import (ALGORITHMS, check_hyperparameters, parse_key_values,
+                          parse_python_value, read_hyperparameters, split_hyperparameters)
 from train.trainer import TrainRequest, train
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -60,6 +60,43 @@ def test_key_values_are_yaml():
         "a": 1, "b": ["circle", "pentagram"], "c": "em", "d": True}
     with pytest.raises(ValueError, match="KEY=VALUE"):
         parse_key_values(["novalue"], "--env-kwargs")
+
+
+def test_hyperparameters_are_checked_by_key_and_value():
+    """A key the algorithm does not take is refused naming those it does; values out of range
+    are refused naming what is allowed; every shipped config passes."""
+    with pytest.raises(ValueError, match=r"unknown hyperparameter 'nonsense' for sac; allowed: "
+                                         r"\[.*'learning_rate'"):
+        check_hyperparameters("sac", {"nonsense": 1})
+    with pytest.raises(ValueError, match="n_epochs"):  # PPO's keys, not SAC's
+        check_hyperparameters("ppo", {"buffer_size": 10})
+    for key, value, allowed in (("gamma", 2.0, r"\(0, 1\]"), ("gamma", 0, r"\(0, 1\]"),
+                                ("learning_rate", -1.0, "> 0"), ("learning_rate", "lin_x", "lin_"),
+                                ("batch_size", 0, ">= 1"), ("batch_size", 1.5, "integer"),
+                                ("buffer_size", True, "integer"), ("tau", 1.5, r"\(0, 1\]"),
+                                ("learning_starts", -1, ">= 0"), ("train_freq", [1, "x"], "step"),
+                                ("ent_coef", "autox", "auto"), ("n_timesteps", 0, ">= 1"),
+                                ("normalize", 3, "dict")):
+        with pytest.raises(ValueError, match=f"{key} must be .*{allowed}"):
+            check_hyperparameters("sac", {key: value})
+    check_hyperparameters("sac", {"learning_rate": "lin_3e-4", "ent_coef": "auto_0.1",
+                                  "train_freq": [1, "episode"], "gradient_steps": -1,
+                                  "normalize": "dict(norm_obs=True)", "n_timesteps": 2e5})
+    for algo in ALGORITHMS:
+        for entry in yaml.safe_load((ROOT / "train" / "configs" / f"{algo}.yml").read_text()
+                                    ).values():
+            split_hyperparameters(algo, entry)
+
+
+def test_numbers_in_e_notation_are_numbers():
+    """YAML 1.1 reads ``1e-3`` as text; ``-hp learning_rate=1e-3`` means the number."""
+    assert parse_key_values(["learning_rate=1e-3", "x=2E5", "name=e5"], "-hp") == {
+        "learning_rate": 1e-3, "x": 2e5, "name": "e5"}
+
+
+def test_resume_without_a_model_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="model.zip"):
+        train(TrainRequest(resume=str(tmp_path), timesteps=10, progress=False))
 
 
 @pytest.mark.parametrize("algo", ALGORITHMS)

@@ -74,16 +74,18 @@ def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, lo
 
 
 def test_a_sweep_whose_trials_all_fail_exits_1_naming_the_error(tmp_path, local_ray, capsys):
+    """A failure only training meets (the replay buffer refuses a keyword argument; bad options
+    and env keyword arguments are refused before any trial)."""
     out = tmp_path / "failed"
     with pytest.raises(SystemExit) as exit_info:
-        train_main(["sweep", "--env", ENV_ID, "--env-kwargs", "feedback=gps", "-hp",
-                    "learning_starts=10", "--trials", "1", "--steps", "20", "--out", str(out),
-                    "--no-progress"])
+        train_main(["sweep", "--env", ENV_ID, "--env-kwargs", *FAST_ENV, "-hp",
+                    "learning_starts=10", "replay_buffer_kwargs=dict(bogus=1)", "--trials", "1",
+                    "--steps", "20", "--out", str(out), "--no-progress"])
     assert exit_info.value.code == 1
     error = capsys.readouterr().err.strip().splitlines()[-1]
-    assert error.startswith("error: all 1 trials failed") and "got 'gps'" in error
+    assert error.startswith("error: all 1 trials failed") and "bogus" in error
     trial, = json.loads((out / "trials.json").read_text())["trials"]
-    assert trial["status"] == "error" and trial["error"].startswith("ValueError: feedback")
+    assert trial["status"] == "error" and trial["error"].startswith("TypeError:")
     assert not (out / "sac.yml").exists()
 
 
@@ -117,6 +119,11 @@ def test_an_optuna_search_runs_and_keeps_the_baseline_trial(tmp_path, local_ray)
     (["--metric", "accuracy"], "--metric"),
     (["--search", "grid"], "--search"),
     (["--trials", "two"], "--trials"),
+    (["-hp", "nonsense=1"], "--hyperparams"),
+    (["-hp", "tau=2"], "--hyperparams"),
+    (["--env-kwargs", "feedback=gps"], "--env-kwargs"),
+    (["--preset", "nope"], "--preset"),
+    (["--conf-file", "/nonexistent/sac.yml"], "--conf-file"),
 ])
 def test_cli_bad_options_exit_2_with_one_line(argv, option, tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:

@@ -13,6 +13,13 @@ true/false, [lists], {dicts}; quote those from the shell, where brackets are fil
 run directory (``--out``/``--name``) gets the model, its VecNormalize statistics, checkpoints,
 the best evaluated model, TensorBoard and CSV logs, the resolved config, versions and git
 revision, and learning_curve.png; its path is printed at the end.
+
+Every option is checked before training starts (one line naming the option, the value and what
+is allowed, exit status 2): counts and frequencies, the env id or preset, the config file, each
+``-hp`` key (refused unless the algorithm takes it, naming those it does) and value (``gamma`` in
+(0, 1], ``learning_rate`` > 0, ``batch_size`` an integer >= 1, ...), the env keyword arguments
+(the env is built once, without calibration), the output directory, and a ``--resume`` run
+directory (it must hold config.yaml and model.zip).
 """
 
 from __future__ import annotations
@@ -20,8 +27,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from soft_gym._cli import HelpFormatter
-from train.cli_options import add_env_options, parse_env_and_hyperparameters
+from soft_gym._cli import (HelpFormatter, check_file, check_output_dir, fail, non_negative_int,
+                           positive_int)
+from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
+                               check_hyperparameter_overrides, parse_env_and_hyperparameters,
+                               resolve_env_id)
 from train.config import ALGORITHMS
 
 
@@ -38,28 +48,98 @@ def build_parser() -> argparse.ArgumentParser:
                         help="hyperparameters over the config's (e.g. learning_rate=3e-4)")
     parser.add_argument("--conf-file", default=None,
                         help="hyperparameter YAML (default train/configs/<algo>.yml)")
-    parser.add_argument("--timesteps", type=int, default=None,
-                        help="env steps to train (default: the config's n_timesteps)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of envs, networks, evaluation")
-    parser.add_argument("--n-envs", type=int, default=None,
-                        help="parallel envs in subprocesses (default: the config's n_envs)")
-    parser.add_argument("--eval-freq", type=int, default=10_000,
+    parser.add_argument("--timesteps", type=positive_int, default=None,
+                        help="env steps to train, >= 1 (default: the config's n_timesteps)")
+    parser.add_argument("--seed", type=non_negative_int, default=0,
+                        help="seed of envs, networks, evaluation (integer >= 0)")
+    parser.add_argument("--n-envs", type=positive_int, default=None,
+                        help="parallel envs in subprocesses, >= 1 (default: the config's n_envs)")
+    parser.add_argument("--eval-freq", type=non_negative_int, default=10_000,
                         help="env steps between evaluations (0: none)")
-    parser.add_argument("--eval-episodes", type=int, default=2, help="episodes per evaluation")
-    parser.add_argument("--checkpoint-freq", type=int, default=50_000,
+    parser.add_argument("--eval-episodes", type=positive_int, default=2,
+                        help="episodes per evaluation (>= 1)")
+    parser.add_argument("--checkpoint-freq", type=non_negative_int, default=50_000,
                         help="env steps between checkpoints (0: none)")
-    parser.add_argument("--threads", type=int, default=1, help="torch threads")
-    parser.add_argument("--out", default="results/train", help="directory of run directories")
+    parser.add_argument("--threads", type=positive_int, default=1, help="torch threads (>= 1)")
+    parser.add_argument("--out", default="results/train",
+                        help="directory of run directories (made; must be writable)")
     parser.add_argument("--name", default=None,
-                        help="run directory name (default <algo>_<env>_seed<seed>)")
+                        help="run directory name (default <algo>_<env>_seed<seed>); a directory "
+                             "already holding a run is refused")
     parser.add_argument("--resume", default=None, metavar="RUN_DIR",
-                        help="continue a run for --timesteps more steps (model, replay buffer "
-                             "and normalisation restored)")
+                        help="continue a run (a directory holding config.yaml and model.zip) "
+                             "for --timesteps more steps (model, replay buffer and "
+                             "normalisation restored)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     return parser
 
 
+def check_resume(parser: argparse.ArgumentParser, run_dir: str) -> None:
+    """``--resume``: a run directory of ``python -m train`` (config.yaml with its request, and
+    model.zip)."""
+    from pathlib import Path
+
+    import yaml
+
+    from train.trainer import MODEL_FILE
+
+    path = Path(run_dir)
+    if not path.is_dir():
+        parser.error(f"--resume {run_dir!r} is not a directory: give the run directory of an "
+                     f"earlier python -m train")
+    missing = [name for name in ("config.yaml", MODEL_FILE) if not (path / name).is_file()]
+    if missing:
+        parser.error(f"--resume {run_dir!r} holds no {' or '.join(missing)}: give the run "
+                     f"directory of an earlier python -m train")
+    try:
+        saved = yaml.safe_load((path / "config.yaml").read_text())
+    except yaml.YAMLError as error:
+        fail(parser, "--resume", f"{run_dir!r}: config.yaml is not YAML: {error}")
+    if not isinstance(saved, dict) or not isinstance(saved.get("request"), dict):
+        parser.error(f"--resume {run_dir!r}: config.yaml has no 'request' (not written by "
+                     f"python -m train)")
+    check_output_dir(parser, "--resume", path)
+
+
+def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                   env_kwargs: dict, hyperparameters: dict):
+    """Every check of a new training run before it starts; returns its :class:`TrainRequest`."""
+    from pathlib import Path
+
+    from train.trainer import TrainRequest, resolve
+
+    env_id = resolve_env_id(parser, args)
+    check_conf_file(parser, args.conf_file)
+    if args.randomization_config is not None:
+        check_file(parser, "--randomization-config", args.randomization_config,
+                   "a randomisation YAML file (e.g. train/configs/randomization.yaml)")
+    check_hyperparameter_overrides(parser, args.algo, hyperparameters)
+    check_output_dir(parser, "--out", args.out)
+    request = TrainRequest(
+        algo=args.algo, env_id=env_id, env_kwargs=env_kwargs, hyperparameters=hyperparameters,
+        timesteps=args.timesteps, seed=args.seed, n_envs=args.n_envs, config_file=args.conf_file,
+        out_dir=args.out, run_name=args.name, resume=None, eval_freq=args.eval_freq,
+        eval_episodes=args.eval_episodes, checkpoint_freq=args.checkpoint_freq,
+        threads=args.threads, progress=not args.no_progress)
+    try:
+        settings, _ = resolve(request)
+    except ValueError as error:  # the config file's entry (the overrides passed above)
+        fail(parser, "--conf-file" if args.conf_file else "--algo", error)
+    overrides = {key: ("--randomization-config" if key == "randomization"
+                       and args.randomization_config is not None else "--env-kwargs")
+                 for key in env_kwargs}
+    check_env_kwargs(parser, env_id, settings.env_kwargs, overrides)
+    name = args.name or f"{args.algo}_{env_id}_seed{args.seed}"
+    if name.strip() in ("", ".", ".."):
+        parser.error(f"--name must name a run directory, got {name!r}")
+    if (Path(args.out) / name / "config.yaml").exists():
+        parser.error(f"--name: run directory {str(Path(args.out) / name)!r} already holds a "
+                     f"run: give another --name or --out, or continue it with --resume")
+    return request
+
+
 def main(argv: list[str] | None = None) -> None:
+    """``python -m train`` (and ``python -m train sweep ...``): check every option, then train."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["sweep"]:  # the one subcommand; every other form trains as before
         from train.sweep import main as sweep_main
@@ -75,18 +155,14 @@ def main(argv: list[str] | None = None) -> None:
         env_kwargs["randomization"] = args.randomization_config
     elif args.randomize:
         env_kwargs["randomization"] = True
-    if args.resume is not None and args.timesteps is None:
-        parser.error("--resume needs --timesteps (how many more steps to train)")
-    if args.env is None:
-        from soft_gym.envs.registration import preset_env_id
-
-        args.env = preset_env_id("track", args.preset)
-    request = TrainRequest(
-        algo=args.algo, env_id=args.env, env_kwargs=env_kwargs, hyperparameters=hyperparameters,
-        timesteps=args.timesteps, seed=args.seed, n_envs=args.n_envs, config_file=args.conf_file,
-        out_dir=args.out, run_name=args.name, resume=args.resume, eval_freq=args.eval_freq,
-        eval_episodes=args.eval_episodes, checkpoint_freq=args.checkpoint_freq,
-        threads=args.threads, progress=not args.no_progress)
+    if args.resume is not None:
+        if args.timesteps is None:
+            parser.error("--resume needs --timesteps (how many more steps to train)")
+        check_resume(parser, args.resume)
+        request = TrainRequest(resume=args.resume, timesteps=args.timesteps,
+                               progress=not args.no_progress)
+    else:
+        request = check_training(parser, args, env_kwargs, hyperparameters)
     try:
         run_dir = train(request)
     except ValueError as error:

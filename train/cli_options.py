@@ -1,8 +1,15 @@
-"""Command-line options that ``python -m train`` and ``python -m train sweep`` share."""
+"""Command-line options and checks that ``python -m train`` and ``python -m train sweep`` share.
+
+Every check here runs before any work starts and reports a refusal the argparse way: one line
+``<prog>: error: <option> ...`` naming the option, the value and what is allowed, exit status 2.
+"""
 
 from __future__ import annotations
 
 import argparse
+from typing import Any
+
+from soft_gym._cli import check_file, fail
 
 
 def add_env_options(parser: argparse.ArgumentParser) -> None:
@@ -14,7 +21,8 @@ def add_env_options(parser: argparse.ArgumentParser) -> None:
                         help="arm preset when --env is not given (wang2023, zhao2021, zou2022, "
                              "ho2018)")
     parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
-                        help="env keyword arguments over the config's (e.g. feedback=em)")
+                        help="env keyword arguments over the config's (e.g. feedback=em); "
+                             "checked by building the env before training")
 
 
 def parse_env_and_hyperparameters(parser: argparse.ArgumentParser,
@@ -23,8 +31,85 @@ def parse_env_and_hyperparameters(parser: argparse.ArgumentParser,
     from train.config import parse_key_values
 
     try:
-        return (parse_key_values(args.env_kwargs, "--env-kwargs"),
-                parse_key_values(args.hyperparams, "--hyperparams"))
+        env_kwargs = parse_key_values(args.env_kwargs, "--env-kwargs")
     except ValueError as error:
         parser.error(str(error))
-        raise  # parser.error exits; this keeps the return type honest
+    try:
+        hyperparameters = parse_key_values(args.hyperparams, "--hyperparams")
+    except ValueError as error:
+        parser.error(str(error))
+    return env_kwargs, hyperparameters
+
+
+def resolve_env_id(parser: argparse.ArgumentParser, args: argparse.Namespace) -> str:
+    """``--env`` when given (a registered id), else the track id of ``--preset`` (a known
+    preset); a refusal names the option, the value and the ids or presets allowed."""
+    import gymnasium
+
+    import soft_gym  # noqa: F401  (registers the env ids)
+    from soft_gym.envs.registration import preset_env_id
+    from soft_gym.robots.presets import PRESETS
+
+    if args.env is None:
+        if args.preset not in PRESETS:
+            parser.error(f"--preset must be one of {sorted(PRESETS)}, got {args.preset!r}")
+        return preset_env_id("track", args.preset)
+    if args.env not in gymnasium.registry:
+        ids = sorted(name for name in gymnasium.registry if name.startswith("SoftArm"))
+        parser.error(f"--env must be a registered id ({', '.join(ids)}), got {args.env!r}")
+    return args.env
+
+
+def check_hyperparameter_overrides(parser: argparse.ArgumentParser, algo: str,
+                                   hyperparameters: dict[str, Any]) -> None:
+    """``-hp``: keys ``algo`` takes (the refusal lists them) and values in range."""
+    from train.config import check_hyperparameters
+
+    try:
+        check_hyperparameters(algo, hyperparameters)
+    except ValueError as error:
+        fail(parser, "--hyperparams", error)
+
+
+def check_conf_file(parser: argparse.ArgumentParser, path: str | None) -> None:
+    """``--conf-file``: an existing YAML file whose top level maps env ids to entries."""
+    if path is None:
+        return
+    import yaml
+
+    check_file(parser, "--conf-file", path, "a hyperparameter YAML file (train/configs/*.yml)")
+    try:
+        with open(path) as handle:
+            table = yaml.safe_load(handle)
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        fail(parser, "--conf-file", f"{path!r} is not YAML: {error}")
+    if not isinstance(table, dict) or not all(isinstance(v, dict) for v in table.values()):
+        parser.error(f"--conf-file {path!r} must map env ids (or 'default') to hyperparameter "
+                     f"mappings, as train/configs/*.yml do")
+
+
+def check_env_kwargs(parser: argparse.ArgumentParser, env_id: str, env_kwargs: dict[str, Any],
+                     overrides: dict[str, str]) -> None:
+    """Build the env ``env_id`` with ``env_kwargs`` (without calibrating its feedback) and close
+    it; a refusal names the option that gave the refused keyword argument (``overrides``: key
+    -> option, e.g. ``{"feedback": "--env-kwargs"}``; other keys came from ``--conf-file``)."""
+    from eval.runner import make_uncalibrated_env
+
+    try:
+        make_uncalibrated_env(env_id, env_kwargs).close()
+        return
+    except Exception as error:  # noqa: BLE001  (any refusal is the user's input)
+        message = " ".join(str(error).split())
+    # which option: the first keyword argument (config entry's first) whose addition fails
+    ordered = [k for k in env_kwargs if k not in overrides] + [k for k in env_kwargs
+                                                               if k in overrides]
+    partial: dict[str, Any] = {}
+    for key in ordered:
+        partial[key] = env_kwargs[key]
+        try:
+            make_uncalibrated_env(env_id, partial).close()
+        except Exception as error:  # noqa: BLE001
+            option = overrides.get(key, "--conf-file")
+            fail(parser, option, f"env keyword {key}={env_kwargs[key]!r} refused by {env_id}: "
+                                 f"{' '.join(str(error).split())}")
+    fail(parser, "--env", f"{env_id} refused {env_kwargs}: {message}")

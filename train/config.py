@@ -18,11 +18,17 @@
 (off-policy action noise) are the zoo's special keys; everything else goes to the algorithm's
 constructor. Strings such as ``"dict(net_arch=[64, 64], activation_fn=nn.ReLU)"`` are parsed
 without ``eval``: only literals and ``nn.<Activation>`` names are allowed.
+
+:func:`check_hyperparameters` refuses, before anything is built, a key the algorithm does not
+take (naming the keys it does) and a value out of range (``gamma`` in (0, 1], ``learning_rate``
+> 0 or ``lin_<initial>``, ``batch_size`` an integer >= 1, ``tau`` in (0, 1], ... see
+:data:`VALUE_RULES`).
 """
 
 from __future__ import annotations
 
 import ast
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,6 +41,156 @@ ALGORITHMS = ("sac", "td3", "ppo", "a2c", "ddpg")
 OFF_POLICY = ("sac", "td3", "ddpg")
 _SPECIAL = ("n_timesteps", "n_envs", "normalize", "env_kwargs", "noise_type", "noise_std",
             "policy")
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
+def _is_number(value: Any) -> bool:
+    return (isinstance(value, (int, float, np.integer, np.floating))
+            and not isinstance(value, bool) and bool(np.isfinite(value)))
+
+
+def _int_at_least(low: int):
+    return (lambda v: _is_int(v) and v >= low), f"an integer >= {low}"
+
+
+def _number_in(low: float, high: float | None, low_open: bool, text: str):
+    def rule(value: Any) -> bool:
+        if not _is_number(value):
+            return False
+        above = value > low if low_open else value >= low
+        return above and (high is None or value <= high)
+
+    return rule, text
+
+
+def _schedule_or(rule_text: tuple) -> tuple:
+    rule, text = rule_text
+
+    def either(value: Any) -> bool:
+        if isinstance(value, str):
+            kind, _, initial = value.partition("_")
+            try:
+                return kind == "lin" and rule(float(initial))
+            except ValueError:
+                return False
+        return rule(value)
+
+    return either, f"{text}, or 'lin_<initial>' with such an initial value (a linear decay)"
+
+
+def _train_freq(value: Any) -> bool:
+    if isinstance(value, (list, tuple)):
+        return (len(value) == 2 and _is_int(value[0]) and value[0] >= 1
+                and value[1] in ("step", "episode"))
+    return _is_int(value) and value >= 1
+
+
+def _ent_coef(value: Any) -> bool:
+    if isinstance(value, str):
+        if value == "auto":
+            return True
+        kind, _, initial = value.partition("_")
+        try:
+            return kind == "auto" and float(initial) > 0
+        except ValueError:
+            return False
+    return _is_number(value) and value >= 0
+
+
+def _literal_or_text(kind: type):
+    def rule(value: Any) -> bool:
+        if isinstance(value, str):
+            try:
+                value = parse_python_value(value)
+            except ValueError:
+                return False
+        return isinstance(value, kind)
+
+    return rule
+
+
+_POSITIVE = _number_in(0.0, None, True, "a finite number > 0")
+_NON_NEGATIVE = _number_in(0.0, None, False, "a finite number >= 0")
+_BOOL = ((lambda v: isinstance(v, bool)), "true or false")
+
+VALUE_RULES: dict[str, tuple] = {
+    "n_timesteps": ((lambda v: _is_number(v) and float(v).is_integer() and v >= 1),
+                    "a whole number >= 1"),
+    "n_envs": _int_at_least(1),
+    "policy": ((lambda v: isinstance(v, str) and v in ("MlpPolicy", "MultiInputPolicy")),
+               "'MlpPolicy' (flat observations) or 'MultiInputPolicy' (obs_format=dict)"),
+    "normalize": ((lambda v: isinstance(v, (bool, dict)) or _literal_or_text(dict)(v)),
+                  "true, false, a mapping or a 'dict(...)' string of VecNormalize arguments"),
+    "env_kwargs": (_literal_or_text(dict), "a mapping or a 'dict(...)' string"),
+    "policy_kwargs": (_literal_or_text(dict), "a mapping or a 'dict(...)' string"),
+    "replay_buffer_kwargs": (_literal_or_text(dict), "a mapping or a 'dict(...)' string"),
+    "noise_type": ((lambda v: v in ("normal", "ornstein-uhlenbeck")),
+                   "'normal' or 'ornstein-uhlenbeck'"),
+    "noise_std": _NON_NEGATIVE,
+    "learning_rate": _schedule_or(_POSITIVE),
+    "clip_range": _schedule_or(_POSITIVE),
+    "clip_range_vf": ((lambda v: v is None or _POSITIVE[0](v)), "null or a finite number > 0"),
+    "gamma": _number_in(0.0, 1.0, True, "a number in (0, 1]"),
+    "tau": _number_in(0.0, 1.0, True, "a number in (0, 1]"),
+    "gae_lambda": _number_in(0.0, 1.0, False, "a number in [0, 1]"),
+    "batch_size": _int_at_least(1),
+    "buffer_size": _int_at_least(1),
+    "n_steps": _int_at_least(1),
+    "n_epochs": _int_at_least(1),
+    "learning_starts": _int_at_least(0),
+    "policy_delay": _int_at_least(1),
+    "target_update_interval": _int_at_least(1),
+    "train_freq": (_train_freq, "an integer >= 1 or [N, 'step' | 'episode']"),
+    "gradient_steps": ((lambda v: _is_int(v) and (v >= 1 or v == -1)),
+                       "an integer >= 1, or -1 (as many as env steps)"),
+    "ent_coef": (_ent_coef, "a finite number >= 0, 'auto' or 'auto_<initial>'"),
+    "vf_coef": _NON_NEGATIVE,
+    "max_grad_norm": _POSITIVE,
+    "target_policy_noise": _NON_NEGATIVE,
+    "target_noise_clip": _NON_NEGATIVE,
+    "rms_prop_eps": _POSITIVE,
+    "sde_sample_freq": ((lambda v: _is_int(v) and v >= -1), "an integer >= -1"),
+    "use_sde": _BOOL, "use_sde_at_warmup": _BOOL, "normalize_advantage": _BOOL,
+    "use_rms_prop": _BOOL, "optimize_memory_usage": _BOOL,
+}
+"""Hyperparameter -> (its check, what is allowed); keys without a rule are checked by the
+algorithm itself."""
+
+
+def allowed_hyperparameters(algo: str) -> list[str]:
+    """The keys a config entry or ``-hp`` may set for ``algo``: the zoo's special keys and the
+    keyword arguments of the algorithm's constructor (but ``policy``'s ``env``)."""
+    import inspect
+
+    names = inspect.signature(algorithm_class(algo).__init__).parameters
+    own = [name for name in names if name not in ("self", "env", "policy", "seed", "verbose",
+                                                  "device", "tensorboard_log", "_init_setup_model",
+                                                  "action_noise")]
+    return sorted(set(own) | set(_SPECIAL))
+
+
+def check_hyperparameters(algo: str, hyperparameters: dict) -> None:
+    """Refuse a key ``algo`` does not take or a value out of range, before anything is built.
+
+    Raises:
+        ValueError: one line naming the key, the value and what is allowed.
+    """
+    allowed = allowed_hyperparameters(algo)
+    for key, value in hyperparameters.items():
+        if key not in allowed:
+            raise ValueError(f"unknown hyperparameter {key!r} for {algo}; allowed: {allowed}")
+        if key in VALUE_RULES:
+            rule, text = VALUE_RULES[key]
+            if not rule(value):
+                raise ValueError(f"{key} must be {text}, got {value!r}")
+    if isinstance(hyperparameters.get("ent_coef"), str) and algo != "sac":
+        raise ValueError(f"ent_coef must be a finite number >= 0 for {algo} ('auto' is SAC's "
+                         f"only), got {hyperparameters['ent_coef']!r}")
+    if "noise_type" in hyperparameters and algo not in OFF_POLICY:
+        raise ValueError(f"noise_type applies to {list(OFF_POLICY)} only, not {algo!r}")
 
 
 def algorithm_class(algo: str):
@@ -108,6 +264,7 @@ class TrainSettings:
 def split_hyperparameters(algo: str, hyperparameters: dict) -> TrainSettings:
     """Turn a zoo-format entry into :class:`TrainSettings` (schedules and noise built)."""
     hp = dict(hyperparameters)
+    check_hyperparameters(algo, hp)
     if "n_timesteps" not in hp:
         raise ValueError(f"hyperparameters must give n_timesteps, got keys {sorted(hp)}")
     n_timesteps = int(float(hp["n_timesteps"]))
@@ -177,5 +334,16 @@ def parse_key_values(items: list[str] | None, name: str) -> dict:
         key, sep, value = item.partition("=")
         if not sep or not key:
             raise ValueError(f"{name} entries must be KEY=VALUE, got {item!r}")
-        result[key] = yaml.safe_load(value)
+        try:
+            parsed = yaml.safe_load(value)
+        except yaml.YAMLError as error:
+            problem = getattr(error, "problem", None) or str(error).splitlines()[0]
+            raise ValueError(f"{name} {item!r}: the value is not YAML ({problem}); quote "
+                             f"strings with brackets or colons") from None
+        if isinstance(parsed, str) and _SCIENTIFIC.match(parsed):
+            parsed = float(parsed)  # YAML 1.1 reads 1e-3 as text; it is meant as a number
+        result[key] = parsed
     return result
+
+
+_SCIENTIFIC = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)[eE][+-]?\d+$")

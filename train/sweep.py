@@ -536,16 +536,22 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m train sweep``: one-line errors exit 2 before any trial."""
-    from train.cli_options import parse_env_and_hyperparameters
+    """``python -m train sweep``: one-line errors exit 2 before any trial (every option, each
+    ``-hp`` key and value, the env built once with the env keyword arguments, the output and
+    storage directories)."""
+    from soft_gym._cli import check_output_dir
+    from train.cli_options import (check_conf_file, check_env_kwargs,
+                                   check_hyperparameter_overrides,
+                                   parse_env_and_hyperparameters, resolve_env_id)
 
     parser = build_parser()
     args = parser.parse_args(argv)
     env_kwargs, hyperparameters = parse_env_and_hyperparameters(parser, args)
-    if args.env is None:
-        from soft_gym.envs.registration import preset_env_id
-
-        args.env = preset_env_id("track", args.preset)
+    args.env = resolve_env_id(parser, args)
+    check_conf_file(parser, args.conf_file)
+    check_output_dir(parser, "--out", args.out)
+    if args.storage is not None and "://" not in args.storage:
+        check_output_dir(parser, "--storage", args.storage)
     request = SweepRequest(
         env_id=args.env, env_kwargs=env_kwargs, hyperparameters=hyperparameters,
         trials=args.trials, steps=args.steps, eval_episodes=args.eval_episodes, seed=args.seed,
@@ -555,16 +561,24 @@ def main(argv: list[str] | None = None) -> None:
     options = {"trials": "--trials", "steps": "--steps", "eval_episodes": "--eval-episodes",
                "workers": "--workers", "seed": "--seed", "address": "--address",
                "hyperparameters": "--hyperparams", "env_id": "--env",
-               "learning_starts": "--steps"}
+               "learning_starts": "--steps", "config": "--conf-file"}
     try:
-        base_entry(request)
-        require_tune()
-        if request.search == "optuna":
-            import optuna  # noqa: F401
+        base_entry(request)  # the request's own fields first: they name their option
     except ValueError as error:
         text = " ".join(str(error).split())
         name = text.split(" ", 1)[0]
-        parser.error(f"{options.get(name, '')}: {text}" if name in options else text)
+        if name not in options:  # the entry's values: the file's or -hp's
+            check_hyperparameter_overrides(parser, ALGO, hyperparameters)
+            parser.error(f"--conf-file: {text}" if args.conf_file else text)
+        parser.error(f"{options[name]}: {text}")
+    check_hyperparameter_overrides(parser, ALGO, hyperparameters)
+    entry = base_entry(request)
+    check_env_kwargs(parser, args.env, entry["env_kwargs"],
+                     {key: "--env-kwargs" for key in env_kwargs})
+    try:
+        require_tune()
+        if request.search == "optuna":
+            import optuna  # noqa: F401
     except ImportError as error:
         parser.error(" ".join(str(error).split()))
     try:

@@ -155,6 +155,10 @@ def train(request: TrainRequest) -> Path:
     torch.set_num_threads(max(1, int(request.threads)))
     if request.resume is not None:
         run_dir = Path(request.resume)
+        missing = [name for name in ("config.yaml", MODEL_FILE) if not (run_dir / name).is_file()]
+        if missing:
+            raise ValueError(f"resume {str(run_dir)!r} holds no {' or '.join(missing)}: give "
+                             f"the run directory of an earlier training")
         saved = yaml.safe_load((run_dir / "config.yaml").read_text())
         request = TrainRequest(**{**saved["request"], "resume": str(run_dir),
                                   "timesteps": request.timesteps, "progress": request.progress})
