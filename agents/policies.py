@@ -234,6 +234,17 @@ def _space_shapes(space: Any) -> Any:
     return type(space).__name__, tuple(getattr(space, "shape", None) or ())
 
 
+def _describe_space(space: Any) -> str:
+    """A space in a few words on one line: its kind and shape (``Box (16,)``), or for a
+    ``Dict`` those of each part."""
+    shapes = _space_shapes(space)
+    if isinstance(shapes, dict):
+        return "Dict(" + ", ".join(f"{key}: {_describe_space(part)}"
+                                   for key, part in space.spaces.items()) + ")"
+    kind, shape = shapes
+    return f"{kind} {shape}"
+
+
 def _read_run_config(config_path: Path | None) -> dict:
     """The run's ``config.yaml`` as a dict (``{}`` without one); ``ValueError`` naming the file
     where it is not YAML or not a mapping."""
@@ -454,9 +465,13 @@ class SB3Policy(BaselinePolicy):
             source = "" if self.model_path is None else f" {str(self.model_path)!r}"
             raise ValueError(
                 f"the sb3 model{source} does not fit the env's {' and '.join(wrong)}: the agent "
-                f"reads observations {model_spaces[0]} and writes actions {model_spaces[1]}, the "
-                f"env gives observations {env_spaces[0]} and takes actions {env_spaces[1]}: make "
-                f"the env with the agent's interface {self.env_interface}")
+                f"reads observations {_describe_space(model_spaces[0])} and writes actions "
+                f"{_describe_space(model_spaces[1])}, the env gives observations "
+                f"{_describe_space(env_spaces[0])} and takes actions "
+                f"{_describe_space(env_spaces[1])}" + (
+                    f": make the env with the agent's interface {self.env_interface}"
+                    if self.env_interface else
+                    " (an agent drives only the arm and observation layout it was trained on)"))
 
 
 def _guess_algorithm(model_path: Path, data: dict | None = None) -> str:

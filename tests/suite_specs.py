@@ -1,6 +1,6 @@
 """A tiny benchmark suite spec shared by the suite tests: two quick wang2023 runs per seed (a
-26-step circle, one cycle, nominal and with a 10 g tip) and one n/a per seed (cc_model refuses
-ho2018's two segments)."""
+26-step circle, one cycle, nominal and with a 10 g tip) and one n/a per seed (the shipped
+wang2023 agent refuses ho2018's six chambers)."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ arms:
     env: {speed_m_s: 0.05}
     conditions:
       nominal: {}
-    policies: [cc_model]
+    policies: ["sb3:sac_wang2023_track"]
 """
 
 

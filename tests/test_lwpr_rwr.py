@@ -233,9 +233,3 @@ def test_pretraining_is_cached_on_disk_and_a_corrupt_file_is_rebuilt(tmp_path, m
     env.close()
 
 
-@pytest.mark.parametrize("name", ["cc_model", "hybrid_gpr"])
-def test_cc_controllers_refuse_two_segment_arms_by_name(name):
-    env = _env()
-    with pytest.raises(ValueError, match=rf"{name} drives one-segment arms only.*ho2018.*2 segments"):
-        make_policy(name, env)
-    env.close()

@@ -23,7 +23,7 @@ from suite_specs import assert_suite_cli_error, tiny_suite
 pytest.importorskip("rliable")
 
 TINY = tiny_suite()
-"""Two quick wang2023 runs (a 26-step circle) and one n/a (cc_model refuses two segments)."""
+"""Two quick wang2023 runs (a 26-step circle) and one n/a (the wang2023 agent on ho2018)."""
 
 
 def _write(tmp_path: Path, text: str, name: str = "suite.yaml") -> Path:
@@ -96,7 +96,7 @@ def test_env_and_policy_values_are_checked_before_any_run(case, tmp_path):
 
 
 def test_a_baseline_refusing_the_arm_is_not_a_suite_error(tmp_path):
-    """cc_model refuses ho2018 with its defaults too: an n/a run, not a validation error."""
+    """The wang2023 agent refuses ho2018 (its six chambers): an n/a run, not a validation error."""
     spec = suite.load_suite(_write(tmp_path, TINY))
     assert len(suite.check_suite(spec)) == 3
 
@@ -178,7 +178,7 @@ def test_run_records_na_and_resume_redoes_no_finished_run(tmp_path):
     assert steps["tip_m"].shape == (metrics["n_steps"], 3)
     refused = records["ho2018/nominal"]
     assert refused["status"] == "n/a" and refused["metrics"] is None
-    assert "one-segment" in refused["reason"]
+    assert "does not fit the env's observations and actions" in refused["reason"]
     assert suite.read_steps(out, cells[2].key) is None
     assert not list(out.rglob("*.tmp"))
 
@@ -195,7 +195,7 @@ def test_run_records_na_and_resume_redoes_no_finished_run(tmp_path):
 
     # the report of these records
     text = suite_report.write_report(spec, out, reps=200, profile_reps=100)
-    assert "| 1 | cc_model |" in text and "one-segment" in text
+    assert "| 1 | cc_model |" in text and "does not fit the env" in text
     for name in ("leaderboard.md", "runs.csv", "suite.json", "aggregate_iqm.png",
                  "performance_profiles.png", "plots/error_wang2023_circle_load_10g.png",
                  "plots/trajectory_wang2023_circle_nominal.png"):

@@ -70,7 +70,7 @@ def test_ray_records_equal_the_process_pool_records(tmp_path, local_ray, capsys)
             for name, array in steps_process.items():
                 np.testing.assert_array_equal(steps_ray[name], array, err_msg=name)
         else:
-            assert by_ray["status"] == "n/a" and "one-segment" in by_ray["reason"]
+            assert by_ray["status"] == "n/a" and "does not fit the env" in by_ray["reason"]
     assert (ray_out / "leaderboard.md").is_file()
 
 

@@ -21,9 +21,21 @@ the controlled env, its episode and its random state are left as they were, and 
 ``obs -> predict -> step`` loop works as with an SB3 model. :meth:`~CCModelController.calibrate`
 called directly probes the controlled env itself and leaves it reset.
 
-One-segment arms only (wang2023, zou2022): on a redundant arm the probes' tip displacements do
-not identify the individual chambers' gains, so an arm with several segments is refused with a
-``ValueError``.
+Several segments (ho2018, zhao2021): the Jacobian of eqs. (19)-(24) chains the segments'
+frames (:func:`soft_gym.kinematics.cc_jacobian`, ``3 x 3 n_segments``), eq. (25)'s
+pseudo-inverse then spreads the tip displacement over all chambers and its null-space term
+resolves the redundancy towards the rest lengths, and eq. (27) keeps one gain per chamber. Only
+the probes need more than the paper says. The pseudo-inverse of the whole ``3 x 6`` Jacobian
+gives the least-norm length change, which spreads a probe of one chamber over both segments;
+and a soft two-segment arm swings far out of the Jacobian's linear range under a probe
+(ho2018's proximal probe lengthens its chamber 8 mm and moves the tip 96 mm sideways and 36 mm
+down, where the rest-pose Jacobian reads a 30 mm *shortening*). A probe changes only its own
+segment's lengths, so those three lengths are fitted to the measured tip displacement through
+the CC forward map itself (:func:`soft_gym.kinematics.cc_tip_pose`, nonlinear least squares
+from the rest lengths), the other segments held at rest. One-segment arms keep the paper's
+mapping through the rest-pose Jacobian's inverse (on wang2023 the two differ: 14.8 vs 10.8 MPa/m,
+the probe reaching beyond the linear range there too, and the paper's gains are what its
+controller was tuned with).
 
 Pressures cannot go below the pre-pressure or above ``p_max``: the model lengths are kept
 consistent with the saturated pressures (anti-windup), so the integrator of eq. (26) does not
@@ -42,11 +54,12 @@ from pathlib import Path
 from typing import Any, Callable, TypeVar
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from agents.policies import BaselinePolicy, require_soft_arm_env
 from soft_gym._validation import (require_integer, require_non_negative, require_number,
                                   require_positive)
-from soft_gym.kinematics import cc_jacobian
+from soft_gym.kinematics import cc_jacobian, cc_tip_pose
 from soft_gym.robots.actuation import Actuation
 
 T = TypeVar("T")
@@ -84,13 +97,6 @@ class CCModelController(BaselinePolicy):
         self.controlled_axes = _axes(controlled_axes)
         self.env = unwrapped
         spec = self.env.spec_arm
-        if spec.n_segments != 1:
-            raise ValueError(
-                f"{self.name} drives one-segment arms only, got the {spec.name} arm with "
-                f"{spec.n_segments} segments: its start-up probes read each chamber's gain from "
-                "the tip displacement mapped through the CC Jacobian's pseudo-inverse (eq. (27)), "
-                "which cannot tell the chambers of several segments apart; use lwpr_rwr, which "
-                "learns a redundant arm's inverse")
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:
                 raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
@@ -119,8 +125,9 @@ class CCModelController(BaselinePolicy):
             ``alpha`` (Pa/m), one gain per chamber; the controller's episode state is reset.
         """
         env = self.env if env is None else env
-        # the probes map the full tip displacement to chamber lengths
-        jacobian_inverse = self._pseudo_inverse(cc_jacobian(self.rest_lengths, self.d))
+        jacobian = cc_jacobian(self.rest_lengths, self.d)
+        block_inverses = [self._pseudo_inverse(jacobian[:, 3 * k:3 * k + 3])
+                          for k in range(len(self.rest_lengths) // 3)]
         alpha = np.empty(len(self.rest_lengths))
         for chamber in range(len(alpha)):
             env.reset(seed=seed if chamber == 0 else None)
@@ -133,16 +140,43 @@ class CCModelController(BaselinePolicy):
             pressures[chamber] += self.probe_fraction * (self.p_high[chamber] - self.p_low[chamber])
             for _ in range(self.probe_steps):
                 observation, *_ = env.step(self._action_for(pressures))
-            length_change = jacobian_inverse @ (self._pose(observation) - start)
-            if length_change[chamber] <= 1e-7:
+            segment, own = divmod(chamber, 3)
+            displacement = self._pose(observation) - start
+            if len(block_inverses) == 1:  # the paper's eq. (27) probes
+                length_change = (block_inverses[0] @ displacement)[own]
+            else:
+                length_change = self.segment_length_change(segment, displacement)[own]
+            if length_change <= 1e-7:
                 raise ValueError(
-                    f"probe of chamber {chamber} gave no lengthening ({length_change[chamber]:.2e} m):"
+                    f"probe of chamber {chamber} gave no lengthening ({length_change:.2e} m):"
                     " the feedback pose does not respond to actuation")
-            alpha[chamber] = (pressures[chamber] - self.p_low[chamber]) / length_change[chamber]
+            alpha[chamber] = (pressures[chamber] - self.p_low[chamber]) / length_change
         env.reset()
         self.reset()
         self.alpha = alpha
         return alpha
+
+    def segment_length_change(self, segment: int, displacement_m: np.ndarray) -> np.ndarray:
+        """The length changes (m) of ``segment``'s three chambers that move the CC model's tip by
+        ``displacement_m`` (m) from the rest pose, the other segments at rest: nonlinear least
+        squares on :func:`~soft_gym.kinematics.cc_tip_pose` (see the module docstring)."""
+        rest_tip = cc_tip_pose(self.rest_lengths, self.d)[0]
+        chambers = slice(3 * segment, 3 * segment + 3)
+
+        def residual(change: np.ndarray) -> np.ndarray:
+            lengths = self.rest_lengths.copy()
+            lengths[chambers] += change
+            return cc_tip_pose(lengths, self.d)[0] - rest_tip - displacement_m
+
+        def jacobian(change: np.ndarray) -> np.ndarray:
+            lengths = self.rest_lengths.copy()
+            lengths[chambers] += change
+            return cc_jacobian(lengths, self.d)[:, chambers]
+
+        shortest = 0.5 * self.rest_lengths[chambers]  # keeps every trial length positive
+        fit = least_squares(residual, np.zeros(3), jac=jacobian, bounds=(-shortest, np.inf),
+                            xtol=1e-12, ftol=1e-12)
+        return fit.x
 
     def calibrate_on_copy(self, seed: int = 0) -> np.ndarray:
         """:meth:`calibrate` on a private copy of the controlled env, made with
