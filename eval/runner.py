@@ -276,14 +276,13 @@ def make_uncalibrated_env(env_id: str, kwargs: dict[str, Any]) -> gym.Env:
         if kwargs.get("preset", alias) != alias:
             raise ValueError(f"preset must be {alias!r} on {env_id}, got {kwargs['preset']!r}")
         kwargs["preset"] = alias
-    return _uncalibrated_env_class()(**{**entry, **kwargs})
+    return uncalibrated_env_class()(**{**entry, **kwargs})
 
 
 @functools.lru_cache(maxsize=None)
-def _uncalibrated_env_class():
+def uncalibrated_env_class():
     """:class:`SoftArmEnv` with every argument check and its simulator but no feedback
-    calibration (as :mod:`eval.suite` checks a suite's envs; defined here too, since the suite
-    imports :mod:`eval.compare`, which imports this module)."""
+    calibration: what the runners and :mod:`eval.suite` build to check configurations."""
     from soft_gym.envs.soft_arm_env import SoftArmEnv
 
     class UncalibratedEnv(SoftArmEnv):

@@ -561,23 +561,13 @@ def _label_text(labels: Mapping[str, Any]) -> str:
 
 
 # ---------------------------------------------------------------------------- validation
-def _uncalibrated_env_class():
-    from soft_gym.envs.soft_arm_env import SoftArmEnv
-
-    class UncalibratedEnv(SoftArmEnv):
-        """The env with every argument check and its simulator, but no feedback calibration."""
-
-        def _calibrate(self, use_cache: bool) -> None:  # the runs calibrate (cached on disk)
-            pass
-
-    return UncalibratedEnv
-
-
 class _EnvChecker:
     """Builds each distinct env configuration once (uncalibrated) and remembers the outcome."""
 
     def __init__(self) -> None:
-        self.env_class = _uncalibrated_env_class()
+        from eval.runner import uncalibrated_env_class
+
+        self.env_class = uncalibrated_env_class()
         self.errors: dict[str, str | None] = {}
         self.builds = 0
 
