@@ -15,7 +15,8 @@ import numpy as np
 
 from soft_gym._validation import as_finite_array, require_integer, require_positive
 from soft_gym.robots.spec import ArmSpec
-from soft_gym.tasks.paths import PATH_SHAPES, PathSpec, make_reference_trajectory, path_polyline
+from soft_gym.tasks.paths import (PATH_SHAPES, PathSpec, make_reference_trajectory, path_length,
+                                  path_polyline)
 from soft_gym.tasks.workspace import reachable_tips
 
 MAX_TRACK_STEPS = 72_000
@@ -119,9 +120,13 @@ class TrackTask:
             shape=path, center_m=center, radius_m=radius, speed_m_s=speed_m_s, cycles=cycles,
             waypoints_m=None if waypoints_m is None else tuple(map(tuple, waypoints_m)))
         self.polyline_m = path_polyline(self.path_spec)
-        length_m = float(np.linalg.norm(np.diff(self.polyline_m, axis=0), axis=1).sum())
+        length_m = path_length(self.path_spec)  # closed: the last point back to the first
         steps = self.path_spec.cycles * length_m / (self.path_spec.speed_m_s
                                                     * spec.control_period_s)
+        trajectory = None
+        if steps <= MAX_TRACK_STEPS * 1.01:  # cheap to build: count its steps exactly
+            trajectory = make_reference_trajectory(self.path_spec, spec.control_period_s)
+            steps = len(trajectory)
         if steps > MAX_TRACK_STEPS:
             slowest = self.path_spec.cycles * length_m / (MAX_TRACK_STEPS * spec.control_period_s)
             most_cycles = int(MAX_TRACK_STEPS * self.path_spec.speed_m_s * spec.control_period_s
@@ -133,7 +138,7 @@ class TrackTask:
                 f"must be >= {slowest:.3g} for this path ({length_m * 1e3:.0f} mm x "
                 f"{self.path_spec.cycles} cycles)"
                 + (f", or cycles <= {most_cycles} at this speed" if most_cycles >= 1 else ""))
-        self.trajectory_m = make_reference_trajectory(self.path_spec, spec.control_period_s)
+        self.trajectory_m = trajectory
         self.episode_steps = len(self.trajectory_m)
 
     def reset(self, rng: np.random.Generator) -> None:
