@@ -30,12 +30,20 @@ For every arm preset (or the ``--presets`` subset) this script measures:
    the maximum and final deviations are reported in mm, next to the tip's largest excursion from
    its settled position for scale.
 
+6. **SoMo-style reference** -- in the same process, in ``REFERENCE_BLOCKS`` blocks taking turns
+   with the env's timed steps (A B A B ..., so both see the same machine load): 10 rigid links,
+   one revolute joint each with alternating axes, explicit spring torques set every 1 ms physics
+   step, 20 Hz control (:class:`SoMoReference`). Reported as its control steps per second and
+   ``env / reference`` (the env's steps/s over the reference's; the goal is 5 or more).
+   ``--reference-steps 0`` skips it.
+
 Also reported: ``physics_dt_s``, physics substeps per control step, and the number of joints of
 the PyBullet body.
 
 Table columns: ``joints`` (PyBullet joints), ``dt ms`` (physics step), ``sub/step`` (physics
 substeps per control step), ``env st/s`` (1), ``phys st/s`` and ``env/phys`` (2), ``phys share``
-(2, in-loop), ``reset ms`` (3, mean), ``sim s/wall s`` (4, resets excluded), ``dev max mm``,
+(2, in-loop), ``ref st/s`` and ``env/ref`` (6), ``reset ms`` (3, mean), ``sim s/wall s`` (4,
+resets excluded), ``dev max mm``,
 ``dev final mm`` and ``excursion mm`` (5). The JSON holds these and more (make time, in-loop
 reset count and time, reset max, real-time factor with resets, mean deviation, settings and
 versions).
@@ -75,6 +83,8 @@ from soft_gym.robots import PRESETS, get_preset
 from soft_gym.sim import ArmSimulator
 
 REFERENCE_REFINEMENT = 4
+REFERENCE_BLOCKS = 10
+"""The env's timed steps and the SoMo-style reference's run in this many alternating blocks."""
 
 
 @contextlib.contextmanager
@@ -98,9 +108,73 @@ def quiet_stdout() -> Iterator[None]:
         os.close(saved)
 
 
+class SoMoReference:
+    """The yardstick of measurement 6: a SoMo-style rigid-link model of a soft arm.
+
+    10 rigid links (10 mm capsules, 10 g), each on one revolute joint, the axes alternating
+    between x and y; every 1 ms physics step the joint states are read, explicit spring-damper
+    torques ``-k q - c v`` plus the held actuation torque are computed with numpy and set, and
+    PyBullet steps; one control step (20 Hz) sets a new random actuation torque and runs 50
+    physics steps. This is how SoMo (Graule et al. 2021) and similar PyBullet soft-arm models
+    simulate, so ``env / reference`` says how the environment compares with that approach on
+    the same machine at the same moment.
+    """
+
+    N_LINKS = 10
+    PHYSICS_DT_S = 0.001
+    CONTROL_PERIOD_S = 0.05
+
+    def __init__(self, seed: int = 0) -> None:
+        from pybullet_utils import bullet_client
+
+        with quiet_stdout():
+            self.client = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
+        c, n = self.client, self.N_LINKS
+        c.setPhysicsEngineParameter(fixedTimeStep=self.PHYSICS_DT_S, numSubSteps=1)
+        c.setGravity(0.0, 0.0, -9.81)
+        length, radius, mass = 0.01, 0.004, 0.01
+        shape = c.createCollisionShape(pybullet.GEOM_CAPSULE, radius=radius, height=length,
+                                       collisionFramePosition=[0, 0, length / 2])
+        self.body = c.createMultiBody(
+            baseMass=0.0, basePosition=[0, 0, 0.2], baseOrientation=[1, 0, 0, 0],
+            linkMasses=[mass] * n, linkCollisionShapeIndices=[shape] * n,
+            linkVisualShapeIndices=[-1] * n,
+            linkPositions=[[0, 0, 0]] + [[0, 0, length]] * (n - 1),
+            linkOrientations=[[0, 0, 0, 1]] * n,
+            linkInertialFramePositions=[[0, 0, length / 2]] * n,
+            linkInertialFrameOrientations=[[0, 0, 0, 1]] * n,
+            linkParentIndices=list(range(n)), linkJointTypes=[pybullet.JOINT_REVOLUTE] * n,
+            linkJointAxis=[[1, 0, 0] if i % 2 == 0 else [0, 1, 0] for i in range(n)])
+        self.joints = list(range(n))
+        c.setJointMotorControlArray(self.body, self.joints, pybullet.VELOCITY_CONTROL,
+                                    forces=[0.0] * n)
+        # a 10 mm silicone-like beam segment: omega = sqrt(k / I) well below 1 / dt
+        self.stiffness = np.full(n, 0.05)      # N m / rad
+        self.damping = np.full(n, 2e-4)        # N m s / rad
+        self.actuation = np.zeros(n)
+        self.rng = np.random.default_rng(seed)
+        self.substeps = int(round(self.CONTROL_PERIOD_S / self.PHYSICS_DT_S))
+
+    def step(self) -> None:
+        """One control step: a new actuation torque, then 50 physics steps with spring torques."""
+        c, body, joints = self.client, self.body, self.joints
+        self.actuation = self.rng.uniform(-0.02, 0.02, size=self.N_LINKS)
+        for _ in range(self.substeps):
+            states = c.getJointStates(body, joints)
+            q = np.array([s[0] for s in states])
+            v = np.array([s[1] for s in states])
+            torque = self.actuation - self.stiffness * q - self.damping * v
+            c.setJointMotorControlArray(body, joints, pybullet.TORQUE_CONTROL,
+                                        forces=torque.tolist())
+            c.stepSimulation()
+
+    def close(self) -> None:
+        self.client.disconnect()
+
+
 def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
-             feedback: str = "ground_truth") -> dict:
-    """Measurements 1-4 for one preset (one env, one PyBullet client)."""
+             feedback: str = "ground_truth", reference_steps: int = 0) -> dict:
+    """Measurements 1-4 and 6 for one preset (one env, one PyBullet client)."""
     start = time.perf_counter()
     with quiet_stdout():
         env = gym.make(TASK_IDS[task], preset=preset, feedback=feedback)
@@ -129,21 +203,43 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
         step_s = 0.0
         loop_reset_s = 0.0
         loop_resets = 0
+        # 6. the SoMo-style reference runs in the same process, block by block in turn with the
+        # env's steps (A B A B ...), so that both see the same machine load
+        reference = SoMoReference(seed) if reference_steps > 0 else None
+        blocks = max(1, min(REFERENCE_BLOCKS, steps))
+        reference_s, reference_done, block_ratios = 0.0, 0, []
         client.stepSimulation = timed_step_simulation  # shadows BulletClient.__getattr__
         try:
-            for action in actions:
-                t0 = clock()
-                _, _, terminated, truncated, _ = env.step(action)
-                t1 = clock()
-                step_s += t1 - t0
-                if terminated or truncated:
-                    in_reset = in_step[0]
-                    env.reset()
-                    loop_reset_s += clock() - t1
-                    loop_resets += 1
-                    in_step[0] = in_reset  # count only the physics of env.step calls
+            for block in range(blocks):
+                block_actions = actions[block * steps // blocks:(block + 1) * steps // blocks]
+                block_s = 0.0
+                for action in block_actions:
+                    t0 = clock()
+                    _, _, terminated, truncated, _ = env.step(action)
+                    t1 = clock()
+                    block_s += t1 - t0
+                    if terminated or truncated:
+                        in_reset = in_step[0]
+                        env.reset()
+                        loop_reset_s += clock() - t1
+                        loop_resets += 1
+                        in_step[0] = in_reset  # count only the physics of env.step calls
+                step_s += block_s
+                if reference is not None:
+                    count = ((block + 1) * reference_steps // blocks
+                             - block * reference_steps // blocks)
+                    t0 = clock()
+                    for _ in range(count):
+                        reference.step()
+                    elapsed = clock() - t0
+                    reference_s += elapsed
+                    reference_done += count
+                    if count and block_actions:
+                        block_ratios.append((len(block_actions) / block_s) / (count / elapsed))
         finally:
             del client.stepSimulation
+            if reference is not None:
+                reference.close()
         in_loop_physics_s = in_step[0]
 
         # 2. physics-only bound: the same client and body, bare stepSimulation calls, from the
@@ -193,6 +289,12 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
             "reset_ms_max": 1000.0 * float(np.max(reset_times)) if reset_times else None,
             "sim_s_per_wall_s": steps * control_period_s / step_s,
             "sim_s_per_wall_s_with_resets": steps * control_period_s / (step_s + loop_reset_s),
+            "reference_steps": reference_done,
+            "reference_steps_per_s": reference_done / reference_s if reference_done else None,
+            "env_over_reference": (env_sps / (reference_done / reference_s)
+                                   if reference_done else None),
+            "env_over_reference_block_median": (float(np.median(block_ratios))
+                                                if block_ratios else None),
         }
     finally:
         env.close()
@@ -253,6 +355,8 @@ COLUMNS = (
     ("phys st/s", "physics_equiv_env_steps_per_s", "{:.0f}"),
     ("env/phys", "env_over_physics", "{:.2f}"),
     ("phys share", "in_loop_physics_fraction", "{:.2f}"),
+    ("ref st/s", "reference_steps_per_s", "{:.0f}"),
+    ("env/ref", "env_over_reference", "{:.2f}"),
     ("reset ms", "reset_ms_mean", "{:.1f}"),
     ("sim s/wall s", "sim_s_per_wall_s", "{:.1f}"),
     ("dev max mm", "tip_dev_max_mm", "{:.3f}"),
@@ -300,6 +404,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--steps", type=int, default=1000,
                         help="timed env steps per preset (also sets the physics-only substeps)")
     parser.add_argument("--resets", type=int, default=5, help="timed resets per preset")
+    parser.add_argument("--reference-steps", type=int, default=None,
+                        help="control steps of the SoMo-style reference run beside each preset's "
+                             "env steps (default: a quarter of --steps; 0 skips it)")
     parser.add_argument("--hold-steps", type=int, default=10,
                         help="control periods each random command is held in the accuracy test "
                              "(10 = 0.5 s)")
@@ -316,6 +423,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error(f"--steps must be >= 1, got {args.steps}")
     if args.resets < 0:
         parser.error(f"--resets must be >= 0, got {args.resets}")
+    if args.reference_steps is None:
+        args.reference_steps = max(1, args.steps // 4)
+    if args.reference_steps < 0:
+        parser.error(f"--reference-steps must be >= 0, got {args.reference_steps}")
     if args.hold_steps < 1:
         parser.error(f"--hold-steps must be >= 1, got {args.hold_steps}")
     if args.accuracy_steps < 0:
@@ -329,7 +440,8 @@ def main(argv: list[str] | None = None) -> int:
     total = time.perf_counter()
     for preset in args.presets:
         print(f"measuring {preset} ...", file=sys.stderr, flush=True)
-        row = time_env(preset, args.task, args.steps, args.resets, args.seed, args.feedback)
+        row = time_env(preset, args.task, args.steps, args.resets, args.seed, args.feedback,
+                       args.reference_steps)
         if args.accuracy_steps:
             row.update(accuracy(preset, args.accuracy_steps, row["settle_s"], args.seed,
                                 args.hold_steps))
@@ -341,6 +453,7 @@ def main(argv: list[str] | None = None) -> int:
         "created_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "settings": {"presets": args.presets, "task": args.task, "steps": args.steps,
                      "resets": args.resets, "accuracy_steps": args.accuracy_steps,
+                     "reference_steps": args.reference_steps,
                      "seed": args.seed, "reference_refinement": REFERENCE_REFINEMENT},
         "machine": {"python": platform.python_version(), "platform": platform.platform(),
                     "processor": platform.processor() or platform.machine(),
@@ -355,6 +468,10 @@ def main(argv: list[str] | None = None) -> int:
                      if args.accuracy_steps else "skipped")
     print(f"({args.steps} env steps per preset, task {args.task}, seed {args.seed}; "
           f"accuracy: {accuracy_note}; total {total_s:.1f} s)")
+    if args.reference_steps:
+        print(f"env/ref: env steps/s over the SoMo-style reference's control steps/s (10 rigid "
+              f"links, spring torques set every 1 ms step, 20 Hz control), "
+              f"{REFERENCE_BLOCKS} alternating blocks; the goal is 5 or more")
     text = json.dumps(results, indent=2)
     if args.json in (None, "-"):
         print(text)

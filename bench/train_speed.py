@@ -9,9 +9,11 @@ training env, wang2023 tracking with EM feedback and domain randomisation):
    i.e. per two env steps (SB3's ``train_freq`` counts vector steps).
 
 Each learning run first fills ``learning_starts`` steps (not timed), then times ``--steps`` env
-steps. Example::
+steps. ``--env-kwargs KEY=VALUE`` overrides the env's keyword arguments, as ``python -m train``
+does (e.g. ``feedback=fused`` for the camera + FBG pipeline). Example::
 
     python bench/train_speed.py --steps 3000
+    python bench/train_speed.py --steps 1000 --env-kwargs feedback=fused
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 import torch
 
 from soft_gym._cli import HelpFormatter
-from train.config import read_hyperparameters, split_hyperparameters
+from train.config import parse_key_values, read_hyperparameters, split_hyperparameters
 from train.trainer import make_vec_env, new_model
 
 
@@ -40,10 +42,12 @@ def env_only(env_id: str, env_kwargs: dict, steps: int) -> float:
     return steps / elapsed
 
 
-def learning(algo: str, env_id: str, n_envs: int, steps: int) -> float:
+def learning(algo: str, env_id: str, n_envs: int, steps: int,
+             env_kwargs: dict | None = None) -> float:
     from stable_baselines3.common.vec_env import VecNormalize
 
     settings = split_hyperparameters(algo, read_hyperparameters(algo, env_id))
+    settings.env_kwargs.update(env_kwargs or {})
     with tempfile.TemporaryDirectory() as monitor_dir:
         env = make_vec_env(env_id, settings.env_kwargs, n_envs, seed=0, monitor_dir=monitor_dir)
         if settings.normalize is not None:
@@ -63,12 +67,19 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--algo", default="sac", help="algorithm (its train/configs entry)")
     parser.add_argument("--env", default="SoftArmTrackWang2023-v0", help="Gymnasium id")
     parser.add_argument("--steps", type=int, default=3000, help="timed env steps per run")
+    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="env keyword arguments over the configuration's (YAML values)")
     args = parser.parse_args(argv)
+    try:
+        overrides = parse_key_values(args.env_kwargs, "--env-kwargs")
+    except ValueError as error:
+        parser.error(str(error))
     torch.set_num_threads(1)
     settings = split_hyperparameters(args.algo, read_hyperparameters(args.algo, args.env))
+    settings.env_kwargs.update(overrides)
     base = env_only(args.env, settings.env_kwargs, args.steps)
-    one = learning(args.algo, args.env, 1, args.steps)
-    two = learning(args.algo, args.env, 2, args.steps)
+    one = learning(args.algo, args.env, 1, args.steps, overrides)
+    two = learning(args.algo, args.env, 2, args.steps, overrides)
     print(f"{args.env} {settings.env_kwargs}")
     print(f"{'run':<22}{'env steps/s':>12}{'vs env only':>13}")
     for name, value in (("env only", base), (f"{args.algo} n_envs=1", one),

@@ -13,12 +13,14 @@ import numpy as np
 import pybullet
 from pybullet_utils import bullet_client
 
+from soft_gym._pybullet import c_stdout_silenced
 from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
 from soft_gym.robots.pneumatics import (
     PneumaticSupply,
+    chamber_area_growth,
     effective_pressure_pa,
     loads_of_effective_pressure,
     twist_of_effective_pressure,
@@ -76,7 +78,8 @@ class ArmSimulator:
         self.physics_dt_s = spec.physics_dt_s if physics_dt_s is None else require_positive(
             "physics_dt_s", physics_dt_s)
         self._substeps_per_actuation = max(1, int(round(spec.actuation_update_s / self.physics_dt_s)))
-        self.client = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
+        with c_stdout_silenced():  # PyBullet prints "argv[0]=" on connect
+            self.client = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
         self.client.setPhysicsEngineParameter(fixedTimeStep=self.physics_dt_s, numSubSteps=1,
                                               deterministicOverlappingPairs=1)
         self.client.setTimeStep(self.physics_dt_s)
@@ -94,6 +97,8 @@ class ArmSimulator:
             for link in range(self.arm.n_joints)}
         self._tip_payloads: dict[str, float] = {}
         self.supply = PneumaticSupply(spec)
+        self._area_growth = chamber_area_growth(spec)
+        self._area_grows = bool(np.any(self._area_growth))
         self._joints = list(range(self.arm.n_joints))
         self._kind = self.arm.joint_kind
         self._stiffening = bool(np.any(self.arm.stiffening > 0))
@@ -112,8 +117,10 @@ class ArmSimulator:
             stiffness=np.where(threaded, THREAD_STIFFNESS_FACTOR, STOP_STIFFNESS_FACTOR)
             / self.arm.compliance, thread_band=self.arm.thread_band)
         self._station_links = self.arm.station_link.tolist()
-        self._frames_substep = self._positions_substep = -1  # read-out caches, per substep
+        # read-out caches, per substep
+        self._frames_substep = self._positions_substep = self._tip_substep = -1
         self._state = np.zeros(4 * self.arm.n_joints)
+        self._torque = np.zeros(self.arm.n_joints)  # the substep's joint torques (buffer)
         self._previous_velocity_valid = False
         self._torque_gain = np.zeros((self.arm.n_joints, 4 * self.arm.n_joints))
         self._torque_offset = np.zeros(self.arm.n_joints)
@@ -148,39 +155,58 @@ class ArmSimulator:
         if not np.isfinite(seconds) or seconds < 0:
             raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
         n = int(round(seconds / self.physics_dt_s))
+        if not n:
+            self.time_s = self._substep * self.physics_dt_s
+            return
+        # the substep loop is the simulator's hot path: every name it uses is bound locally, the
+        # joint states are read with one call, the arrays it writes are preallocated, and the
+        # end stops are skipped with one test while every joint is in its free range
         body, joints = self.arm.body_id, self._joints
         get_states, set_motors = self.client.getJointStates, self.client.setJointMotorControlArray
         simulate = self.client.stepSimulation
         torque_mode = pybullet.TORQUE_CONTROL
         count = len(joints)
         state = self._state  # [spring force K(q) q, v, v_previous, torque_previous]
+        spring, velocity = state[:count], state[count:2 * count]
+        previous_velocity, previous_torque = state[2 * count:3 * count], state[3 * count:]
         k0, beta, scale = self._stiffness0, self.arm.stiffening, self.arm.strain_scale
-        stop_force = self._stops.force
+        stiffening = bool(np.any(beta != 0.0))
+        stops = self._stops
+        stop_force = stops.force
+        free_centre, free_half_width = stops.free_centre, stops.free_half_width
+        per_actuation = self._substeps_per_actuation
+        torque = self._torque
+        dot, absolute, add, multiply = np.dot, np.abs, np.add, np.multiply
         for _ in range(n):
             states = get_states(body, joints)
-            q = np.fromiter((s[0] for s in states), dtype=float, count=count)
-            state[count:2 * count] = [s[1] for s in states]
-            if self._substep % self._substeps_per_actuation == 0:
+            q = np.array([s[0] for s in states])
+            velocity[:] = [s[1] for s in states]
+            if self._substep % per_actuation == 0:
                 self._update_actuation(q)
             # secant spring force with strain stiffening, k0 (1 + beta strain^2) q, every substep,
             # plus the end stops' force as a joint nears its limits
-            strain = q * scale
-            state[:count] = k0 * q * (1.0 + beta * strain * strain) + stop_force(q)
-            torque = self._torque_offset + self._torque_gain @ state
+            if stiffening:
+                strain = q * scale
+                multiply(k0 * q, 1.0 + beta * strain * strain, out=spring)
+            else:
+                multiply(k0, q, out=spring)
+            if (absolute(q - free_centre) > free_half_width).any():
+                add(spring, stop_force(q), out=spring)
+            dot(self._torque_gain, state, out=torque)
+            add(self._torque_offset, torque, out=torque)
             if self._forces:
                 torque += self._solve @ self._external_joint_torque(q)
             set_motors(body, joints, torque_mode, forces=torque.tolist())
             simulate()
-            state[2 * count:3 * count] = state[count:2 * count]
-            state[3 * count:] = torque
+            previous_velocity[:] = velocity
+            previous_torque[:] = torque
             self._substep += 1
             if not self._previous_velocity_valid:
                 # a substep has been measured: bring in the other-forces term from now on
                 self._previous_velocity_valid = True
                 self._update_implicit_gains(q, self._implicit_stiffness)
         self.time_s = self._substep * self.physics_dt_s
-        if n:
-            self._check_within_stops()
+        self._check_within_stops()
 
     def set_gravity(self, vector_m_s2: np.ndarray) -> None:
         """Set gravity in the base frame (m/s^2)."""
@@ -211,6 +237,9 @@ class ArmSimulator:
         The orientation is the last link's, continued by half of its proximal bending joint so
         that it approximates the tangent of the arc at the tip rather than at the link's middle.
         """
+        if self._tip_substep == self._substep:
+            tip, quaternion = self._tip
+            return tip.copy(), quaternion.copy()
         positions, quaternions, rotations = self._link_frames()
         q = self.joint_positions()
         bx, by = self.arm.station_bend_joints[-1]
@@ -219,7 +248,9 @@ class ArmSimulator:
                 else quaternion_multiply(half_x, half_y))
         tip_quaternion = np.array(quaternion_multiply(tuple(quaternions[-1]), half))
         tip = positions[-1] + rotations[-1][:, 2] * self.arm.station_rest_length[-1]
-        return tip, tip_quaternion / np.linalg.norm(tip_quaternion)
+        self._tip = (tip, tip_quaternion / np.linalg.norm(tip_quaternion))
+        self._tip_substep = self._substep
+        return self._tip[0].copy(), self._tip[1].copy()
 
     def chamber_lengths(self) -> np.ndarray:
         """Chamber lengths (m), shape (n_chambers,), from each segment's arc length and bending.
@@ -339,7 +370,7 @@ class ArmSimulator:
             self.client.resetJointState(self.arm.body_id, joint, float(position), 0.0)
         self._state[:] = 0.0
         self._previous_velocity_valid = False
-        self._frames_substep = self._positions_substep = -1
+        self._frames_substep = self._positions_substep = self._tip_substep = -1
         self.time_s = 0.0
         self._substep = 0
         self.restart_loads()
@@ -358,14 +389,14 @@ class ArmSimulator:
         motion), so that timed loads and faults count from here."""
         self.time_s = 0.0
         self._substep = 0
-        self._frames_substep = self._positions_substep = -1
+        self._frames_substep = self._positions_substep = self._tip_substep = -1
 
     def set_joint_positions(self, positions: np.ndarray) -> None:
         """Set every joint's position (rad or m) at rest, e.g. to impose a shape in a test."""
         positions = as_finite_array("positions", positions, shape=(self.arm.n_joints,))
         for joint, value in zip(self._joints, positions):
             self.client.resetJointState(self.arm.body_id, joint, float(value), 0.0)
-        self._frames_substep = self._positions_substep = -1
+        self._frames_substep = self._positions_substep = self._tip_substep = -1
         self._previous_velocity_valid = False
 
     def set_stiffness_scale(self, scale: float) -> None:
@@ -534,12 +565,13 @@ class ArmSimulator:
         for load in self.loads:
             load.update(self, now_s)
         pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
-        self._load_torque = self._stiffness0 * (
-            self._pressure_to_rest @ effective_pressure_pa(self.spec, pressure))
+        if self._area_grows:  # effective_pressure_pa, with the growth looked up once
+            pressure = pressure * (1.0 + self._area_growth * pressure / self.spec.p_max_pa)
+        self._load_torque = self._stiffness0 * (self._pressure_to_rest @ pressure)
         tangent = self._tangent_stiffness(q)
         if (self._substep % self._substeps_per_gain_update == 0
-                or np.any(tangent > self._implicit_stiffness)
-                or np.any(np.abs(q - self._gain_configuration) > self._configuration_tolerance)):
+                or (tangent > self._implicit_stiffness).any()
+                or (np.abs(q - self._gain_configuration) > self._configuration_tolerance).any()):
             # stiffening outgrew the implicit gains, or the arm moved enough to change M
             self._update_implicit_gains(q, _STIFFNESS_MARGIN * tangent)
         self._torque_offset = self._solve @ self._load_torque

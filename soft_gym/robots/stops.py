@@ -77,8 +77,8 @@ class EndStops:
         self._start_high = np.where(threaded, self.upper, self.upper - self._band_high)
         self._start_low = self.lower + self._band_low
         # the free range [start_low, start_high] as centre +- half width: one test per call
-        self._free_centre = 0.5 * (self._start_high + self._start_low)
-        self._free_half_width = 0.5 * (self._start_high - self._start_low)
+        self.free_centre = 0.5 * (self._start_high + self._start_low)
+        self.free_half_width = 0.5 * (self._start_high - self._start_low)
         self._threaded = threaded
         self._taut_soon = self.upper - THREAD_ANTICIPATION_FRACTION / THREAD_BAND_FRACTION * thread
         self._zeros = np.zeros_like(self.lower)
@@ -86,7 +86,7 @@ class EndStops:
 
     def force(self, q: np.ndarray) -> np.ndarray:
         """Restoring force of the stops at ``q`` (N m or N), positive along ``q``'s sign."""
-        if not np.any(np.abs(q - self._free_centre) > self._free_half_width):
+        if not (np.abs(q - self.free_centre) > self.free_half_width).any():
             return self._zeros  # every joint in its free range: no stop acts
         high = self._locking(q - self._start_high, self._band_high)
         low = self._locking(self._start_low - q, self._band_low)
@@ -94,7 +94,7 @@ class EndStops:
 
     def stiffness_at(self, q: np.ndarray) -> np.ndarray:
         """Tangent stiffness ``d force / d q`` at ``q``."""
-        if not np.any(np.abs(q - self._free_centre) > self._free_half_width):
+        if not (np.abs(q - self.free_centre) > self.free_half_width).any():
             return self._zeros
         high = np.clip((q - self._start_high) / self._band_high, 0.0, 1.0)
         low = np.clip((self._start_low - q) / self._band_low, 0.0, 1.0)
@@ -107,7 +107,7 @@ class EndStops:
         are unchanged."""
         stiffness = self.stiffness_at(q)
         soon = self._threaded & (q > self._taut_soon)
-        if np.any(soon):
+        if soon.any():
             stiffness = np.where(soon, np.maximum(stiffness, self.stiffness), stiffness)
         return stiffness
 

@@ -29,6 +29,7 @@ import numpy as np
 import scipy.linalg
 
 from soft_gym._validation import as_finite_array, require_in_range, require_positive
+from soft_gym.sensing._blas import one_blas_thread
 
 
 class OSELM:
@@ -82,6 +83,7 @@ class OSELM:
         return self._features_standard((x - self.input_mean) / self.input_scale)
 
     # ------------------------------------------------------------------ training
+    @one_blas_thread  # 200 x 200 matrices: one thread (see soft_gym.sensing._blas)
     def fit(self, inputs: np.ndarray, targets: np.ndarray) -> "OSELM":
         """Batch initialisation on ``N0`` samples (eqs. (5)-(9), ridge-regularised)."""
         x = as_finite_array("inputs", inputs)
@@ -107,6 +109,7 @@ class OSELM:
         self.updates = 0
         return self
 
+    @one_blas_thread
     def update(self, inputs: np.ndarray, target: np.ndarray) -> None:
         """Recursive update with one sample (eqs. (10)-(17) with forgetting ``w``)."""
         self._require_fitted()

@@ -22,6 +22,7 @@ they stay beyond the tip's reach as long as the arm does not extend more than
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 
@@ -42,6 +43,35 @@ _BLOCK_COLOURS = np.array([
     [0.95, 0.95, 0.95], [0.15, 0.15, 0.15], [0.60, 0.20, 0.70], [0.95, 0.45, 0.70],
     [0.30, 0.75, 0.90], [0.55, 0.35, 0.15]])
 """LEGO-like brick colours (RGB 0..1)."""
+
+
+_MESHES_GIVEN: dict[bytes, tuple[list, list, list | None, list | None]] = {}
+"""Mesh data already given to PyBullet's ``createVisualShape``, by content.
+
+PyBullet (3.2.x) takes a reference to the ``vertices``, ``indices``, ``uvs`` and ``normals``
+sequences of a mesh, and to every vertex's, uv's and normal's own list, and never gives them
+back: each scene built anew would keep its mesh lists alive for the life of the process (about
+0.6 MB per camera env made and closed). Handing over the objects of the first mesh with the same
+content instead keeps one copy per distinct mesh (the camera's scene is the same in every env of
+a seed), and the lists built meanwhile are freed as usual."""
+
+
+def _mesh_visual(client, vertices: list, indices: list, uvs: list | None = None,
+                 normals: list | None = None, **options) -> int:
+    """``client.createVisualShape(GEOM_MESH, ...)`` of the mesh, with :data:`_MESHES_GIVEN`."""
+    digest = hashlib.blake2b(digest_size=20)
+    for part in (vertices, indices, uvs, normals):
+        data = np.asarray([] if part is None else part, dtype=float)
+        digest.update(repr(data.shape).encode())
+        digest.update(data.tobytes())
+    vertices, indices, uvs, normals = _MESHES_GIVEN.setdefault(
+        digest.digest(), (vertices, indices, uvs, normals))
+    mesh = {"vertices": vertices, "indices": indices}
+    if uvs is not None:
+        mesh["uvs"] = uvs
+    if normals is not None:
+        mesh["normals"] = normals
+    return client.createVisualShape(pybullet.GEOM_MESH, **mesh, **options)
 
 
 def _texture_path(name: str) -> str:
@@ -142,8 +172,7 @@ def build_scene(client, arm_length_m: float, *, seed: int | np.random.Generator 
         if len(mine) == 0:
             continue
         vertices, indices, uvs, normals = _tile_mesh(mine, half_tile, scale_range, rng)
-        visual = client.createVisualShape(pybullet.GEOM_MESH, vertices=vertices, indices=indices,
-                                          uvs=uvs, normals=normals)
+        visual = _mesh_visual(client, vertices, indices, uvs, normals)
         body = client.createMultiBody(0.0, -1, visual, [0.0, 0.0, ground_z])
         client.changeVisualShape(body, -1, rgbaColor=[1, 1, 1, 1],
                                  textureUniqueId=texture(texture_name))
@@ -164,9 +193,8 @@ def build_scene(client, arm_length_m: float, *, seed: int | np.random.Generator 
             vertices = [[-hx, -hy, 0.0], [hx, -hy, 0.0], [hx, hy, 0.0], [-hx, hy, 0.0]]
             # a coarse colour chart: one texture repeat per 0.2 m, features for oblique views
             uvs = [[(v[0] + centre[0]) / 0.2, (v[1] + centre[1]) / 0.2] for v in vertices]
-            visual = client.createVisualShape(pybullet.GEOM_MESH, vertices=vertices,
-                                              indices=[0, 2, 1, 0, 3, 2], uvs=uvs,
-                                              normals=[[0.0, 0.0, -1.0]] * 4)
+            visual = _mesh_visual(client, vertices, [0, 2, 1, 0, 3, 2], uvs,
+                                  [[0.0, 0.0, -1.0]] * 4)
             collision = client.createCollisionShape(
                 pybullet.GEOM_BOX, halfExtents=[hx, hy, 0.001],
                 collisionFramePosition=[0, 0, 0.001]) if collide else -1
@@ -269,6 +297,5 @@ def _stud_body(client, centres: np.ndarray, colour: np.ndarray, sides: int = 8) 
                 vertices.append([centre[0] + px, centre[1] + py, centre[2] + dz])
                 normals.append(normal)
             indices += [base, base + 1, base + 2, base, base + 2, base + 3]
-    visual = client.createVisualShape(pybullet.GEOM_MESH, vertices=vertices, indices=indices,
-                                      normals=normals, rgbaColor=[*colour, 1.0])
+    visual = _mesh_visual(client, vertices, indices, normals=normals, rgbaColor=[*colour, 1.0])
     return client.createMultiBody(0.0, -1, visual, [0.0, 0.0, 0.0])
