@@ -115,6 +115,7 @@ builds and caches its calibration or pre-training, starts before its siblings.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import hashlib
 import inspect
@@ -741,6 +742,27 @@ def cell_metrics(record: Mapping[str, np.ndarray]) -> dict[str, Any]:
     }
 
 
+@contextlib.contextmanager
+def one_compute_thread() -> Iterator[None]:
+    """Run the block with BLAS, OpenMP and torch on one thread each, restoring them after.
+
+    A cell's numbers must not depend on where it runs: a Ray task starts with
+    ``OMP_NUM_THREADS=1``, a pool worker with every core, and a sum split over threads rounds
+    differently (lwpr_rwr and hybrid_gpr records differed in the tenth digit). On one thread a
+    record is the same on every backend, worker count and machine.
+    """
+    import torch
+    from threadpoolctl import threadpool_limits
+
+    torch_threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        with threadpool_limits(limits=1):
+            yield
+    finally:
+        torch.set_num_threads(torch_threads)
+
+
 def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
     """Run one cell (a worker's job; picklable): ``task`` holds ``key``, ``suite``, ``labels``,
     ``config``, ``versions`` and ``git_revision``.
@@ -761,16 +783,17 @@ def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
                            policy_params=copy.deepcopy(config["policy_params"]),
                            env_id=config["env_id"], seed=config["seed"])
     try:
-        try:
-            env, policy = build(run_config)
-        except ValueError as error:  # the policy cannot drive this arm or env
-            result.update(status="n/a", reason=" ".join(str(error).split()))
-        else:
+        with one_compute_thread():
             try:
-                steps = run_episode(env, policy, seed=config["seed"], progress=False)
-            finally:
-                env.close()
-            result.update(metrics=cell_metrics(steps), steps=steps)
+                env, policy = build(run_config)
+            except ValueError as error:  # the policy cannot drive this arm or env
+                result.update(status="n/a", reason=" ".join(str(error).split()))
+            else:
+                try:
+                    steps = run_episode(env, policy, seed=config["seed"], progress=False)
+                finally:
+                    env.close()
+                result.update(metrics=cell_metrics(steps), steps=steps)
     except Exception as error:  # noqa: BLE001 - reported, the other runs go on
         result.update(status="error", error=f"{type(error).__name__}: {error}",
                       traceback=traceback.format_exc())
