@@ -156,12 +156,17 @@ SHIPPED_DIR = Path(__file__).resolve().parent / "trained"
 """Trained agents kept in the repository, one directory each (``sb3:<name>`` loads one)."""
 
 
-def shipped_agents() -> dict[str, Path]:
-    """Name -> directory of every shipped agent (those holding a ``model.zip``)."""
+def shipped_agents(env_id: str | None = None) -> dict[str, Path]:
+    """Name -> directory of every shipped agent (those holding a ``model.zip``); with ``env_id``
+    only those trained on that env id (their ``config.yaml``'s ``env_id``)."""
     if not SHIPPED_DIR.is_dir():
         return {}
-    return {path.name: path for path in sorted(SHIPPED_DIR.iterdir())
-            if (path / "model.zip").is_file()}
+    agents = {path.name: path for path in sorted(SHIPPED_DIR.iterdir())
+              if (path / "model.zip").is_file()}
+    if env_id is None:
+        return agents
+    return {name: path for name, path in agents.items()
+            if _read_run_config(path / "config.yaml").get("env_id") == env_id}
 
 
 def resolve_sb3_path(path: str | Path) -> Path:
@@ -471,7 +476,7 @@ class SB3Policy(BaselinePolicy):
                 f"{_describe_space(env_spaces[1])}" + (
                     f": make the env with the agent's interface {self.env_interface}"
                     if self.env_interface else
-                    " (an agent drives only the arm and observation layout it was trained on)"))
+                    " (an agent's interface is the arm and observation layout it was trained on)"))
 
 
 def _guess_algorithm(model_path: Path, data: dict | None = None) -> str:

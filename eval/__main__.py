@@ -469,7 +469,8 @@ def main(argv: list[str] | None = None) -> None:
         occluder = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
                     "start_s": 40.0}
         args = argparse.Namespace(
-            policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in shipped_agents()],
+            policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in
+                                                   shipped_agents("SoftArmTrackWang2023-v0")],
             kp=[0.06], preset="wang2023", path="circle",
             cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": 0.01},
             faults=occluder, seeds=[0], out=args.out, workers=args.workers,
@@ -505,7 +506,8 @@ def _compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     from eval.runner import ConfigError
 
     policies = args.policies or (["cc_model", "hybrid_gpr"]
-                                 + [f"sb3:{name}" for name in shipped_agents()])
+                                 + [f"sb3:{name}" for name in
+                                    shipped_agents("SoftArmTrackWang2023-v0")])
     if args.feedback not in ("fused", "camera") and "occlusion" in args.conditions:
         parser.error("the occlusion condition needs camera feedback: --feedback fused or "
                      f"camera, got {args.feedback!r}")

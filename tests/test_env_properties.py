@@ -173,7 +173,8 @@ INVALID = {
     "delta_fraction": ("SoftArmReach-v0", st.one_of(
         _bad_positive(), st.floats(min_value=1.0001, allow_nan=False)).map(
         lambda v: {"action_mode": "delta", "delta_fraction": v})),
-    "speed_m_s": ("SoftArmTrack-v0", st.one_of(_bad_positive(), st.floats(1e-300, 1e-6)).map(
+    "speed_m_s": ("SoftArmTrack-v0", st.one_of(  # None is the default speed
+        _bad_positive().filter(lambda v: v is not None), st.floats(1e-300, 1e-6)).map(
         lambda v: {"speed_m_s": v})),
     "cycles": ("SoftArmTrack-v0", _bad_integer().map(lambda v: {"cycles": v})),
     "target_m": ("SoftArmReach-v0", st.one_of(_far_points(WANG_REACH), NOT_NUMBERS).map(

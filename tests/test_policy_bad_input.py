@@ -399,7 +399,7 @@ def test_a_corrupt_sb3_directory_is_refused_naming_the_file(tmp_path, track, cas
 
 def test_sb3_paths_that_are_no_model_are_refused(tmp_path, track):
     _refused(rf"sb3 path '{_named(tmp_path / 'nowhere')}' does not exist and is no shipped agent "
-             r"\['sac_wang2023_track'", lambda: make_policy(f"sb3:{tmp_path / 'nowhere'}",
+             r"\[.*'sac_wang2023_track'", lambda: make_policy(f"sb3:{tmp_path / 'nowhere'}",
                                                             env=track))
     (tmp_path / "empty").mkdir()
     _refused(rf"{_named(tmp_path / 'empty')}' is a directory without model.zip",

@@ -116,7 +116,7 @@ def test_video_flag_puts_an_mp4_path_next_to_each_csv(command, tmp_path, monkeyp
 
     seen = []
 
-    def fake_run_many(configs, workers=1, progress=False):
+    def fake_run_many(configs, workers=1, progress=False, on_result=None):
         seen.append(configs)
         raise _Stop
 
