@@ -177,7 +177,8 @@ INVALID = {
         _bad_positive().filter(lambda v: v is not None), st.floats(1e-300, 1e-6)).map(
         lambda v: {"speed_m_s": v})),
     "cycles": ("SoftArmTrack-v0", _bad_integer().map(lambda v: {"cycles": v})),
-    "target_m": ("SoftArmReach-v0", st.one_of(_far_points(WANG_REACH), NOT_NUMBERS).map(
+    "target_m": ("SoftArmReach-v0", st.one_of(  # None: a random reachable goal
+        _far_points(WANG_REACH), NOT_NUMBERS.filter(lambda v: v is not None)).map(
         lambda v: {"target_m": v})),
     "waypoints_m": ("SoftArmTrack-v0", st.lists(_far_points(WANG_REACH), min_size=2,
                                                 max_size=5).map(
