@@ -34,7 +34,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import gymnasium as gym
 import numpy as np
@@ -93,44 +93,56 @@ class _Tally:
         return distance
 
 
-def random_action_soak(preset: str, steps: int, episode_steps: int = 200, seed: int = 0,
-                       progress: bool = True) -> dict[str, Any]:
-    """Soak 1 on ``preset``: ``steps`` random-action steps with randomisation (see module doc)."""
-    spec = get_preset(preset)
-    env = gym.make("SoftArmReach-v0", preset=preset, feedback="ground_truth",
-                   obs=("pose", "target", "pressure") + PROPRIOCEPTION[preset],
-                   randomization=True, episode_steps=episode_steps)
-    rng = np.random.default_rng(seed)
+def _stepping_soak(env: gym.Env, steps: int, act: Callable[[Any], Any], label: str,
+                   seed: int, progress: bool, on_step: Callable[[dict], None] = lambda info: None,
+                   on_reset: Callable[[], None] = lambda: None) -> dict[str, Any]:
+    """Step ``env`` ``steps`` times with ``act(observation)``, a new seeded episode after each
+    end or exception, tallying what a soak must never see (see the module doc); ``on_step``
+    reads each step's ``info``, ``on_reset`` follows every reset. Closes ``env``."""
+    reach_m = env.unwrapped.spec_arm.max_reach_m
     tally, farthest = _Tally(), 0.0
     warmup = max(1, steps // 20)
-    rss_start = rss_end = rss_mb()
+    rss_start = rss_mb()
     episode, start = 0, time.perf_counter()
     obs, _ = env.reset(seed=seed)
-    for step in tqdm(range(steps), desc=f"soak {preset}", unit="step", disable=not progress,
+    on_reset()
+    for step in tqdm(range(steps), desc=label, unit="step", disable=not progress,
                      mininterval=2.0):
-        where = f"{preset} episode {episode} step {step}"
+        where = f"{label} episode {episode} step {step}"
         try:
-            obs, reward, terminated, truncated, info = env.step(
-                rng.uniform(-1.0, 1.0, spec.n_chambers).astype(np.float32))
-            farthest = max(farthest, tally.check_step(env, obs, reward, info, spec.max_reach_m,
-                                                      where))
-            if terminated or truncated:
-                episode += 1
-                obs, _ = env.reset(seed=seed + episode)
+            obs, reward, terminated, truncated, info = env.step(act(obs))
+            farthest = max(farthest, tally.check_step(env, obs, reward, info, reach_m, where))
+            on_step(info)
+            ended = terminated or truncated
         except Exception as error:  # counted, reported and soaked on
             tally.add("exceptions", f"{where}: {type(error).__name__}: {error}")
+            ended = True
+        if ended:
             episode += 1
             obs, _ = env.reset(seed=seed + episode)
+            on_reset()
         if step + 1 == warmup:
             rss_start = rss_mb()
     wall_s = time.perf_counter() - start
     rss_end = rss_mb()
     env.close()
-    return {"preset": preset, "steps": steps, "episodes": episode + 1, **tally.counts,
-            "first": tally.first, "farthest_mm": farthest * 1e3,
-            "max_reach_mm": spec.max_reach_m * 1e3, "steps_per_s": steps / wall_s,
-            "rss_start_mb": rss_start, "rss_end_mb": rss_end,
+    return {"steps": steps, "episodes": episode + 1, **tally.counts, "first": tally.first,
+            "farthest_mm": farthest * 1e3, "max_reach_mm": reach_m * 1e3,
+            "steps_per_s": steps / wall_s, "rss_start_mb": rss_start, "rss_end_mb": rss_end,
             "rss_growth_pct": 100.0 * (rss_end - rss_start) / rss_start}
+
+
+def random_action_soak(preset: str, steps: int, episode_steps: int = 200, seed: int = 0,
+                       progress: bool = True) -> dict[str, Any]:
+    """Soak 1 on ``preset``: ``steps`` random-action steps with randomisation (see module doc)."""
+    n_chambers = get_preset(preset).n_chambers
+    env = gym.make("SoftArmReach-v0", preset=preset, feedback="ground_truth",
+                   obs=("pose", "target", "pressure") + PROPRIOCEPTION[preset],
+                   randomization=True, episode_steps=episode_steps)
+    rng = np.random.default_rng(seed)
+    row = _stepping_soak(env, steps, lambda obs: rng.uniform(-1.0, 1.0, n_chambers).astype(
+        np.float32), f"soak {preset}", seed, progress)
+    return {"preset": preset, **row}
 
 
 def create_close_cycles(cycles: int, preset: str = "wang2023",
@@ -159,44 +171,21 @@ def fused_soak(schedule: str, steps: int, seed: int = 0, progress: bool = True) 
     """Soak 3: ``steps`` steps of the fused wang2023 env under ``schedule`` (see module doc)."""
     from agents.policies import make_policy  # the controller is only needed here
 
-    spec = get_preset("wang2023")
     env = gym.make("SoftArmTrack-v0", preset="wang2023", feedback="fused", path="circle",
                    cycles=10, faults=schedule)
     policy = make_policy("cc_model", env=env)
     policy.calibrate_on_copy(seed=seed)  # the start-up probes are not part of the step rate
-    tally, lost, errors = _Tally(), 0, []
-    rss_start = rss_mb()
-    warmup = max(1, steps // 20)
-    episode, start = 0, time.perf_counter()
-    obs, _ = env.reset(seed=seed)
-    policy.reset()
-    for step in tqdm(range(steps), desc=f"fused {schedule}", unit="step", disable=not progress,
-                     mininterval=2.0):
-        where = f"{schedule} episode {episode} step {step}"
-        try:
-            action, _ = policy.predict(obs, deterministic=True)
-            obs, reward, terminated, truncated, info = env.step(action)
-            tally.check_step(env, obs, reward, info, spec.max_reach_m, where)
-            lost += bool(info.get("estimates", {}).get("lost", False))
-            errors.append(float(info["error_mm"]))
-            if terminated or truncated:
-                episode += 1
-                obs, _ = env.reset(seed=seed + episode)
-                policy.reset()
-        except Exception as error:  # counted, reported and soaked on
-            tally.add("exceptions", f"{where}: {type(error).__name__}: {error}")
-            episode += 1
-            obs, _ = env.reset(seed=seed + episode)
-            policy.reset()
-        if step + 1 == warmup:
-            rss_start = rss_mb()
-    wall_s = time.perf_counter() - start
-    rss_end = rss_mb()
-    env.close()
-    return {"schedule": schedule, "steps": steps, "episodes": episode + 1, **tally.counts,
-            "first": tally.first, "lost_frames": lost, "mean_error_mm": float(np.mean(errors)),
-            "steps_per_s": steps / wall_s, "rss_start_mb": rss_start, "rss_end_mb": rss_end,
-            "rss_growth_pct": 100.0 * (rss_end - rss_start) / rss_start}
+    lost, errors = [0], []
+
+    def record(info: dict) -> None:
+        lost[0] += bool(info.get("estimates", {}).get("lost", False))
+        errors.append(float(info["error_mm"]))
+
+    row = _stepping_soak(env, steps, lambda obs: policy.predict(obs, deterministic=True)[0],
+                         f"fused {schedule}", seed, progress, on_step=record,
+                         on_reset=policy.reset)
+    return {"schedule": schedule, **row, "lost_frames": lost[0],
+            "mean_error_mm": float(np.mean(errors))}
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,9 +1,12 @@
-"""Preset variants for the tests (per-segment changes, the linear elastic beam), and the pneumatic
-load of a segment derived independently of the library's load map."""
+"""Preset variants for the tests (per-segment changes, the linear elastic beam), the pneumatic
+load of a segment derived independently of the library's load map, and the arc positions of the
+discrete beam's joints."""
 
 from __future__ import annotations
 
 import dataclasses
+
+import numpy as np
 
 
 def variant(spec, **changes):
@@ -35,3 +38,13 @@ def pneumatic_loads_reference(spec, pressures_pa):
             axial[k] += force[2]
             moment[k] += np.cross(point, force)[:2]
     return axial, moment
+
+
+def vertex_arcs(spec) -> np.ndarray:
+    """Arc positions (m) of the discrete beam's vertices at rest: the base, then the end of every
+    link, segment after segment."""
+    arcs = [0.0]
+    for segment in spec.segments:
+        for _ in range(segment.n_links):
+            arcs.append(arcs[-1] + segment.link_length_m)
+    return np.array(arcs)

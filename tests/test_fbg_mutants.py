@@ -23,6 +23,7 @@ import pytest
 
 from soft_gym.robots import get_preset
 from soft_gym.sensors.fbg import FBGFiber, FBGLayout, fbg_strain
+from arm_variants import vertex_arcs
 
 WANG = get_preset("wang2023")    # one segment of 90 mm, four links of 22.5 mm, r = 10 mm
 ZHAO = get_preset("zhao2021")    # two segments of 107 mm, r = 17.5 mm
@@ -30,14 +31,6 @@ ZHAO = get_preset("zhao2021")    # two segments of 107 mm, r = 17.5 mm
 # the Poisson ratio differ between the segments
 THIN = dataclasses.replace(ZHAO, segments=(ZHAO.segments[0], dataclasses.replace(
     ZHAO.segments[1], outer_radius_m=0.012, poisson_ratio=0.45)))
-
-
-def _vertices(spec) -> np.ndarray:
-    arcs = [0.0]
-    for segment in spec.segments:
-        for _ in range(segment.n_links):
-            arcs.append(arcs[-1] + segment.link_length_m)
-    return np.array(arcs)
 
 
 class StandIn:
@@ -93,7 +86,7 @@ def _read(fiber: FBGFiber, sim, seed: int = 0) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------- (F1)
 def _f1_reference(spec, geometry, curvature, axial, twist) -> np.ndarray:
-    vertices = _vertices(spec)
+    vertices = vertex_arcs(spec)
     out = []
     for j in range(geometry.n_gratings):
         total = 0.0
@@ -117,9 +110,9 @@ def test_fbg_strain_is_formula_f1_with_twist(right_handed: bool) -> None:
     geometry = FBGLayout(right_handed=right_handed).resolve(WANG)
     curvature, axial, twist = rng.normal(0, 5, (5, 2)), rng.normal(0, 0.05, 4), rng.normal(0, 3, 4)
     expected = _f1_reference(WANG, geometry, curvature, axial, twist)
-    np.testing.assert_allclose(fbg_strain(_vertices(WANG), curvature, axial, twist, geometry),
+    np.testing.assert_allclose(fbg_strain(vertex_arcs(WANG), curvature, axial, twist, geometry),
                                expected, rtol=1e-12, atol=1e-15)
-    twist_only = fbg_strain(_vertices(WANG), np.zeros((5, 2)), np.zeros(4), np.ones(4), geometry)
+    twist_only = fbg_strain(vertex_arcs(WANG), np.zeros((5, 2)), np.zeros(4), np.ones(4), geometry)
     r, a, _ = _helix(WANG, FBGLayout())
     np.testing.assert_allclose(twist_only, (1.0 if right_handed else -1.0) * r * math.sin(a)
                                * math.cos(a), rtol=1e-12)
@@ -412,7 +405,7 @@ def test_contact_presses_the_gratings_facing_the_force() -> None:
         sim = StandIn(WANG, forces=forces, frames={2: turn})
         plain = FBGFiber(strain_transfer=1.0, noise_std_nm=0.0, contact_strain_per_n=0.0)
         extra = (_read(fiber, sim).astype(float) - _read(plain, sim)) / (1550.0 * 0.79)
-        vertices = _vertices(WANG)
+        vertices = vertex_arcs(WANG)
         psi = geometry.center_psi_rad
         normals = np.stack([-np.sin(psi), np.cos(psi), np.zeros_like(psi)], axis=1)  # turned
         on_link = (geometry.center_arc_m >= vertices[2]) & (geometry.center_arc_m < vertices[3])

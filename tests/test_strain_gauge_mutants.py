@@ -19,6 +19,7 @@ import pytest
 
 from soft_gym.robots import get_preset
 from soft_gym.sensors.strain_gauge import StrainGauges
+from arm_variants import vertex_arcs
 
 ZHAO = get_preset("zhao2021")    # two segments of 107 mm, four links each, r = 17.5 mm
 WANG = get_preset("wang2023")    # one segment of 90 mm
@@ -46,14 +47,6 @@ class StandIn:
         return self.axial.copy()
 
 
-def _vertices(spec) -> np.ndarray:
-    arcs = [0.0]
-    for segment in spec.segments:
-        for _ in range(segment.n_links):
-            arcs.append(arcs[-1] + segment.link_length_m)
-    return np.array(arcs)
-
-
 def _profile(spec, seed: int = 0) -> StandIn:
     rng = np.random.default_rng(seed)
     n_links = sum(s.n_links for s in spec.segments)
@@ -64,7 +57,7 @@ def _reference(sim: StandIn, fractions, offset: float, radius: float | None, len
                n_points: int) -> np.ndarray:
     """(G1) averaged over each gauge, written out gauge by gauge."""
     nodes, weights = GAUSS[n_points]
-    vertices = _vertices(sim.spec)
+    vertices = vertex_arcs(sim.spec)
     out = []
     start = 0.0
     for k, segment in enumerate(sim.spec.segments):

@@ -125,9 +125,9 @@ class CCModelController(BaselinePolicy):
             ``alpha`` (Pa/m), one gain per chamber; the controller's episode state is reset.
         """
         env = self.env if env is None else env
-        jacobian = cc_jacobian(self.rest_lengths, self.d)
-        block_inverses = [self._pseudo_inverse(jacobian[:, 3 * k:3 * k + 3])
-                          for k in range(len(self.rest_lengths) // 3)]
+        paper_probes = len(self.rest_lengths) == 3  # one segment: eq. (27)'s rest Jacobian
+        if paper_probes:
+            jacobian_inverse = self._pseudo_inverse(cc_jacobian(self.rest_lengths, self.d))
         alpha = np.empty(len(self.rest_lengths))
         for chamber in range(len(alpha)):
             env.reset(seed=seed if chamber == 0 else None)
@@ -140,11 +140,11 @@ class CCModelController(BaselinePolicy):
             pressures[chamber] += self.probe_fraction * (self.p_high[chamber] - self.p_low[chamber])
             for _ in range(self.probe_steps):
                 observation, *_ = env.step(self._action_for(pressures))
-            segment, own = divmod(chamber, 3)
             displacement = self._pose(observation) - start
-            if len(block_inverses) == 1:  # the paper's eq. (27) probes
-                length_change = (block_inverses[0] @ displacement)[own]
+            if paper_probes:
+                length_change = (jacobian_inverse @ displacement)[chamber]
             else:
+                segment, own = divmod(chamber, 3)
                 length_change = self.segment_length_change(segment, displacement)[own]
             if length_change <= 1e-7:
                 raise ValueError(
@@ -288,10 +288,9 @@ def _axes(value: Any) -> tuple[int, ...]:
     return tuple(int(a) for a in axes)
 
 
-def read_settings(path: str | Path, name: str, file_name: str | None = None) -> dict[str, Any]:
-    """The settings a controller's :meth:`~CCModelController.save` wrote to the JSON file
-    ``path``, less their ``"name"`` (which must be ``name``); ``ValueError`` naming the file
-    where it is missing, not JSON, not a mapping, or another controller's."""
+def read_json_object(path: str | Path, name: str, content: str = "JSON object") -> dict:
+    """The JSON object in ``path`` (a ``name`` controller's file); ``ValueError`` naming the
+    file where it is missing, not JSON or not an object (``content``: what it should hold)."""
     path = Path(path)
     what = f"{name} controller file {str(path)!r}"
     try:
@@ -301,8 +300,16 @@ def read_settings(path: str | Path, name: str, file_name: str | None = None) -> 
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise ValueError(f"{what} is not readable JSON ({type(error).__name__}: {error})") from None
     if not isinstance(data, dict):
-        raise ValueError(f"{what} must hold a JSON object of settings, got "
-                         f"{type(data).__name__}")
+        raise ValueError(f"{what} must hold a {content}, got {type(data).__name__}")
+    return data
+
+
+def read_settings(path: str | Path, name: str) -> dict[str, Any]:
+    """The settings a controller's :meth:`~CCModelController.save` wrote to the JSON file
+    ``path``, less their ``"name"`` (which must be ``name``); ``ValueError`` naming the file
+    where it is missing, not JSON, not a mapping, or another controller's."""
+    what = f"{name} controller file {str(path)!r}"
+    data = read_json_object(path, name, "JSON object of settings")
     saved_name = data.pop("name", None)
     if saved_name != name:
         found = "no controller name" if saved_name is None else f"a {saved_name!r} controller"

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from agents.controllers.cc_model import (CCModelController, _build_from_file, _saved_alpha,
-                                         read_settings)
+                                         read_json_object, read_settings)
 from agents.learners.sliding_gp import SlidingWindowGP
 from agents.policies import require_soft_arm_env
 from soft_gym._validation import require_integer, require_number, require_positive
@@ -182,7 +182,7 @@ class HybridGPRController(CCModelController):
                              "a directory written by save() (cc_model.json, hybrid.json, gp.npz)")
         base = read_settings(directory / "cc_model.json", cls.name)
         alpha = base.pop("alpha")
-        extra = _read_json_object(directory / "hybrid.json", cls.name)
+        extra = read_json_object(directory / "hybrid.json", cls.name)
         samples = extra.pop("samples", None)
         if isinstance(samples, bool) or not isinstance(samples, int) or samples < 0:
             raise ValueError(f"{cls.name} controller file {str(directory / 'hybrid.json')!r}: "
@@ -195,18 +195,3 @@ class HybridGPRController(CCModelController):
         controller.alpha = _saved_alpha(directory / "cc_model.json", alpha,
                                         len(controller.rest_lengths))
         return controller
-
-
-def _read_json_object(path: Path, name: str) -> dict:
-    """The JSON object in ``path``; ``ValueError`` naming the file where it is missing, not JSON
-    or not an object."""
-    what = f"{name} controller file {str(path)!r}"
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise ValueError(f"{what} does not exist") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise ValueError(f"{what} is not readable JSON ({type(error).__name__}: {error})") from None
-    if not isinstance(data, dict):
-        raise ValueError(f"{what} must hold a JSON object, got {type(data).__name__}")
-    return data
