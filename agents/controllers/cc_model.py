@@ -37,6 +37,14 @@ mapping through the rest-pose Jacobian's inverse (on wang2023 the two differ: 14
 the probe reaching beyond the linear range there too, and the paper's gains are what its
 controller was tuned with).
 
+An extensible segment (zou2022, ``length_map="modal"``, its default there): eq. (27) gives each
+chamber one gain, which ties the pressure that extends the segment to the pressure that bends
+it. zou2022's artificial muscles are far softer in extension than in bending, so gains probed at
+rest are right for the one and several times too small for the other where the arm works. The
+modal map (:mod:`agents.controllers.modal_map`) gives the mean chamber length and the
+differences from it a gain each, probed at several extensions (:meth:`CCModelController.
+calibrate_modal`); eqs. (25)-(26) are unchanged.
+
 Pressures cannot go below the pre-pressure or above ``p_max``: the model lengths are kept
 consistent with the saturated pressures (anti-windup), so the integrator of eq. (26) does not
 wind up.
@@ -56,6 +64,7 @@ from typing import Any, Callable, TypeVar
 import numpy as np
 from scipy.optimize import least_squares
 
+from agents.controllers.modal_map import ModalLengthMap
 from agents.policies import BaselinePolicy, require_soft_arm_env
 from soft_gym._validation import (require_integer, require_non_negative, require_number,
                                   require_positive)
@@ -63,6 +72,13 @@ from soft_gym.kinematics import cc_jacobian, cc_tip_pose
 from soft_gym.robots.actuation import Actuation
 
 T = TypeVar("T")
+
+LENGTH_MAPS = ("chamber", "modal")
+# arms whose default length-to-pressure map is the modal one (see agents.controllers.modal_map):
+# zou2022's muscles extend 3.3-fold and are ~17 times stiffer in bending than in extension
+MODAL_ARMS = ("zou2022",)
+# common-pressure levels of the modal probes, as fractions of p_max - p_pre
+MODAL_LEVELS = (0.0, 0.25, 0.5, 0.75)
 
 class CCModelController(BaselinePolicy):
     """CC model-based controller (wang2023 eqs. (19)-(27)).
@@ -79,13 +95,19 @@ class CCModelController(BaselinePolicy):
             barely extends, so its workspace is a thin curved surface) and leaves the chambers'
             common mode to the null-space term of eq. (25); this simulated arm extends ~20 mm, and
             the planar paths need z as well, so the default controls all three.
+        length_map: the length-to-pressure map: ``"chamber"``, eq. (27)'s one gain per chamber
+            probed at rest (the paper); ``"modal"``, separate extension and bending gains probed
+            at several extensions (:mod:`agents.controllers.modal_map`; one-segment arms only);
+            ``None``: ``"modal"`` on the arms of :data:`MODAL_ARMS` (zou2022), else
+            ``"chamber"``.
     """
 
     name = "cc_model"
 
     def __init__(self, env, kp: float = 0.06, null_space_gain: float = 0.1,
                  probe_fraction: float = 0.3, probe_steps: int = 30,
-                 damping: float = 1e-4, controlled_axes: tuple[int, ...] = (0, 1, 2)) -> None:
+                 damping: float = 1e-4, controlled_axes: tuple[int, ...] = (0, 1, 2),
+                 length_map: str | None = None) -> None:
         unwrapped = require_soft_arm_env(env, self.name)
         self.kp = require_positive("kp", kp)
         self.null_space_gain = require_non_negative("null_space_gain", null_space_gain)
@@ -106,7 +128,9 @@ class CCModelController(BaselinePolicy):
         self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa
         self._command = self.actuation.initial_command_pa.copy()
         self.rest_lengths = np.repeat([s.length_m for s in spec.segments], 3).astype(float)
+        self.length_map = _length_map(length_map, spec)
         self.alpha: np.ndarray | None = None
+        self.modal_map: ModalLengthMap | None = None
         self.lengths = self.rest_lengths.copy()
 
     # ------------------------------------------------------------------ calibration
@@ -123,8 +147,15 @@ class CCModelController(BaselinePolicy):
 
         Returns:
             ``alpha`` (Pa/m), one gain per chamber; the controller's episode state is reset.
+            With ``length_map="modal"`` the probes are :meth:`calibrate_modal`'s instead and
+            ``alpha`` holds the rest level's gains, ``common / bending`` per chamber.
         """
         env = self.env if env is None else env
+        if self.length_map == "modal":
+            self.modal_map = self.calibrate_modal(seed=seed, env=env)
+            rest_gain = self.modal_map.bending_gains_pa_m[0]
+            self.alpha = np.full(len(self.rest_lengths), rest_gain)
+            return self.alpha
         paper_probes = len(self.rest_lengths) == 3  # one segment: eq. (27)'s rest Jacobian
         if paper_probes:
             jacobian_inverse = self._pseudo_inverse(cc_jacobian(self.rest_lengths, self.d))
@@ -156,24 +187,90 @@ class CCModelController(BaselinePolicy):
         self.alpha = alpha
         return alpha
 
-    def segment_length_change(self, segment: int, displacement_m: np.ndarray) -> np.ndarray:
+    def calibrate_modal(self, seed: int = 0, env=None) -> ModalLengthMap:
+        """Probe the :class:`~agents.controllers.modal_map.ModalLengthMap` of a one-segment arm.
+
+        One probing sequence from rest, ``probe_steps`` control steps per hold, the pose read at
+        the end of each. At each level of :data:`MODAL_LEVELS` every chamber is held at the
+        common pressure ``p_pre + level (p_max - p_pre)``; the tip's displacement from rest,
+        fitted through the CC forward map to the chamber lengths, gives the level's extension
+        (their mean). Then each chamber in turn gets ``probe_fraction / 2`` of its range on top
+        of the common pressure (less where that would pass ``p_max``), the previous one back at
+        it; each hold's displacement from the previous hold is fitted to length changes from the
+        previous hold's lengths, and the bending gain is the least-squares ratio of the
+        differential pressure changes (each less their mean) to the differential length
+        changes. The env is reset first (seeded with ``seed``) and at the end.
+
+        Raises:
+            ValueError: the levels gave no increasing extension, or the probes no bending.
+        """
+        env = self.env if env is None else env
+        span = self.p_high - self.p_low
+        env.reset(seed=seed)
+        self._command = self.actuation.initial_command_pa.copy()
+        rest_pose = self._hold(env, self.p_low)
+        means, commons, gains = [], [], []
+        for level in MODAL_LEVELS:
+            base = self.p_low + level * span
+            pose = rest_pose if level == 0.0 else self._hold(env, base)
+            lengths = self.rest_lengths + self.segment_length_change(0, pose - rest_pose)
+            means.append(lengths.mean())
+            commons.append(base.mean())
+            pressures, work, squares = base, 0.0, 0.0
+            for chamber in range(len(base)):
+                probe = base.copy()
+                probe[chamber] += min(0.5 * self.probe_fraction, 1.0 - level) * span[chamber]
+                probe_pose = self._hold(env, probe)
+                change = self.segment_length_change(0, probe_pose - pose, start_lengths=lengths)
+                pressure_change = probe - pressures
+                differential_length = change - change.mean()
+                work += (pressure_change - pressure_change.mean()) @ differential_length
+                squares += differential_length @ differential_length
+                pose, lengths, pressures = probe_pose, lengths + change, probe
+            if work <= 0.0 or squares <= 1e-14:
+                raise ValueError(
+                    f"the modal probes at level {level} gave no bending (differential length "
+                    f"change {np.sqrt(squares):.2e} m): the feedback pose does not respond to "
+                    "actuation")
+            gains.append(work / squares)
+        env.reset()
+        self.reset()
+        if not np.all(np.diff(means) > 0.0):
+            raise ValueError(f"the modal probes' common pressures gave no increasing extension "
+                             f"(mean chamber lengths {np.round(means, 5).tolist()} m at levels "
+                             f"{list(MODAL_LEVELS)}): the feedback pose does not respond to "
+                             "actuation")
+        return ModalLengthMap(np.array(means), np.array(commons), np.array(gains))
+
+    def _hold(self, env, pressures_pa: np.ndarray) -> np.ndarray:
+        """Command ``pressures_pa`` for ``probe_steps`` control steps; the feedback tip (m)."""
+        observation = None
+        for _ in range(self.probe_steps):
+            observation, *_ = env.step(self._action_for(pressures_pa))
+        return self._pose(observation)
+
+    def segment_length_change(self, segment: int, displacement_m: np.ndarray,
+                              start_lengths: np.ndarray | None = None) -> np.ndarray:
         """The length changes (m) of ``segment``'s three chambers that move the CC model's tip by
-        ``displacement_m`` (m) from the rest pose, the other segments at rest: nonlinear least
-        squares on :func:`~soft_gym.kinematics.cc_tip_pose` (see the module docstring)."""
-        rest_tip = cc_tip_pose(self.rest_lengths, self.d)[0]
+        ``displacement_m`` (m) from its pose at ``start_lengths`` (m; default: the rest
+        lengths), the other segments held: nonlinear least squares on
+        :func:`~soft_gym.kinematics.cc_tip_pose` (see the module docstring)."""
+        start = self.rest_lengths if start_lengths is None else np.asarray(start_lengths, float)
+        start_tip = cc_tip_pose(start, self.d)[0]
         chambers = slice(3 * segment, 3 * segment + 3)
 
         def residual(change: np.ndarray) -> np.ndarray:
-            lengths = self.rest_lengths.copy()
+            lengths = start.copy()
             lengths[chambers] += change
-            return cc_tip_pose(lengths, self.d)[0] - rest_tip - displacement_m
+            return cc_tip_pose(lengths, self.d)[0] - start_tip - displacement_m
 
         def jacobian(change: np.ndarray) -> np.ndarray:
-            lengths = self.rest_lengths.copy()
+            lengths = start.copy()
             lengths[chambers] += change
             return cc_jacobian(lengths, self.d)[:, chambers]
 
-        shortest = 0.5 * self.rest_lengths[chambers]  # keeps every trial length positive
+        # keeps every trial length at least half the rest length
+        shortest = start[chambers] - 0.5 * self.rest_lengths[chambers]
         fit = least_squares(residual, np.zeros(3), jac=jacobian, bounds=(-shortest, np.inf),
                             xtol=1e-12, ftol=1e-12)
         return fit.x
@@ -215,11 +312,22 @@ class CCModelController(BaselinePolicy):
         position = self._pose(observation)
         command = self.compensate(position, self._next_target(observation) - position)
         self.lengths = self.lengths + self.kp * self.length_step(position, position + command)
-        pressures = np.clip(self.p_low + self.alpha * (self.lengths - self.rest_lengths),
-                            self.p_low, self.p_high)
+        pressures = np.clip(self.model_pressures(self.lengths), self.p_low, self.p_high)
         # anti-windup: the model lengths follow what the saturated pressures can produce
-        self.lengths = self.rest_lengths + (pressures - self.p_low) / self.alpha
+        self.lengths = self.model_lengths(pressures)
         return self._action_for(pressures), state
+
+    def model_pressures(self, lengths_m: np.ndarray) -> np.ndarray:
+        """Eq. (27), or the modal map: the pressures (Pa, not clipped) for chamber lengths (m)."""
+        if self.modal_map is not None:
+            return self.modal_map.pressures(lengths_m)
+        return self.p_low + self.alpha * (lengths_m - self.rest_lengths)
+
+    def model_lengths(self, pressures_pa: np.ndarray) -> np.ndarray:
+        """The inverse of :meth:`model_pressures`: chamber lengths (m) for pressures (Pa)."""
+        if self.modal_map is not None:
+            return self.modal_map.lengths(pressures_pa)
+        return self.rest_lengths + (pressures_pa - self.p_low) / self.alpha
 
     def compensate(self, position: np.ndarray, desired: np.ndarray) -> np.ndarray:
         """The displacement handed to eq. (25) for the desired one (m); the pure model passes it
@@ -241,7 +349,9 @@ class CCModelController(BaselinePolicy):
             "name": self.name, "kp": self.kp, "null_space_gain": self.null_space_gain,
             "probe_fraction": self.probe_fraction, "probe_steps": self.probe_steps,
             "damping": self.damping, "controlled_axes": list(self.controlled_axes),
+            "length_map": self.length_map,
             "alpha": None if self.alpha is None else self.alpha.tolist(),
+            "modal_map": None if self.modal_map is None else self.modal_map.to_dict(),
         }, indent=2))
 
     @classmethod
@@ -250,10 +360,25 @@ class CCModelController(BaselinePolicy):
         file is refused with one ``ValueError`` naming the path and what is wrong."""
         require_soft_arm_env(env, cls.name)
         data = read_settings(path, cls.name)
-        alpha = data.pop("alpha")
+        alpha, modal_map = data.pop("alpha"), data.pop("modal_map", None)
         controller = _build_from_file(path, cls.name, lambda: cls(env, **data))
-        controller.alpha = _saved_alpha(path, alpha, len(controller.rest_lengths))
+        controller.restore_calibration(path, alpha, modal_map)
         return controller
+
+    def restore_calibration(self, path: str | Path, alpha: Any, modal_map: Any) -> None:
+        """Set the saved gains ``alpha`` and modal map read from ``path`` (checked: ``None`` or
+        valid, and the modal map present exactly when ``length_map`` is ``"modal"`` and the
+        controller is calibrated); ``ValueError`` naming the file otherwise."""
+        self.alpha = _saved_alpha(path, alpha, len(self.rest_lengths))
+        if (modal_map is not None) != (self.length_map == "modal" and self.alpha is not None):
+            raise ValueError(f"controller file {str(path)!r}: modal_map must be given exactly "
+                             f"when length_map is 'modal' and alpha is not null, got length_map "
+                             f"{self.length_map!r} and modal_map {modal_map!r}")
+        try:
+            self.modal_map = None if modal_map is None else ModalLengthMap.from_dict(modal_map)
+        except ValueError as error:
+            raise ValueError(f"controller file {str(path)!r}: invalid modal_map ({error})") \
+                from None
 
     # ------------------------------------------------------------------ helpers
     def _action_for(self, pressures_pa: np.ndarray) -> np.ndarray:
@@ -273,6 +398,18 @@ class CCModelController(BaselinePolicy):
 
     def _next_target(self, observation) -> np.ndarray:
         return np.asarray(self.env.observation_part(observation, "target"), dtype=float)[3:6]
+
+
+def _length_map(value: Any, spec) -> str:
+    """``length_map`` checked, ``None`` resolved for the arm ``spec`` (see the class)."""
+    if value is None:
+        return "modal" if spec.name in MODAL_ARMS else "chamber"
+    if not isinstance(value, str) or value not in LENGTH_MAPS:
+        raise ValueError(f"length_map must be one of {LENGTH_MAPS} or None, got {value!r}")
+    if value == "modal" and len(spec.segments) != 1:
+        raise ValueError(f"length_map 'modal' is for one-segment arms; the {spec.name} arm has "
+                         f"{len(spec.segments)} segments (use 'chamber')")
+    return value
 
 
 def _axes(value: Any) -> tuple[int, ...]:

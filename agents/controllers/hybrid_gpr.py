@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.controllers.cc_model import (CCModelController, _build_from_file, _saved_alpha,
+from agents.controllers.cc_model import (CCModelController, _build_from_file,
                                          read_json_object, read_settings)
 from agents.learners.sliding_gp import SlidingWindowGP
 from agents.policies import require_soft_arm_env
@@ -37,8 +37,8 @@ class HybridGPRController(CCModelController):
     """CC model + sliding-window GPR error compensator (wang2023 eqs. (25)-(29)).
 
     Args:
-        env, kp, null_space_gain, probe_fraction, probe_steps, damping, controlled_axes: as for
-            ``cc_model``.
+        env, kp, null_space_gain, probe_fraction, probe_steps, damping, controlled_axes,
+            length_map: as for ``cc_model``.
         window: GP window ``N_r_max`` (samples).
         n_init: samples before compensation starts (``N_c``).
         length_scale: GP length scale in the scaled input units.
@@ -64,10 +64,10 @@ class HybridGPRController(CCModelController):
                  signal_variance: float = 1.0, noise_variance: float = 1e-2,
                  min_displacement_m: float = 1e-5, max_effective_gain: float = 0.3,
                  learning_horizon: int = 1, min_relative_error: float = -0.5,
-                 max_turn_deg: float = 30.0) -> None:
+                 max_turn_deg: float = 30.0, length_map: str | None = None) -> None:
         super().__init__(env, kp=kp, null_space_gain=null_space_gain,
                          probe_fraction=probe_fraction, probe_steps=probe_steps, damping=damping,
-                         controlled_axes=controlled_axes)
+                         controlled_axes=controlled_axes, length_map=length_map)
         window = require_integer("window", window, 1)
         if isinstance(n_init, (bool, np.bool_)) or not isinstance(n_init, (int, np.integer)) \
                 or not 1 <= n_init <= window:
@@ -103,7 +103,7 @@ class HybridGPRController(CCModelController):
 
     def compensate(self, position: np.ndarray, desired: np.ndarray) -> np.ndarray:
         """``dp~* = dp* + dp_e_hat |dp*|`` (eq. (29)) once ``n_init`` samples are in."""
-        actuation = (self.p_low + self.alpha * (self.lengths - self.rest_lengths)) / self.p_high
+        actuation = self.model_pressures(self.lengths) / self.p_high
         features = np.r_[actuation, desired * _MM]
         command = desired
         size = float(np.linalg.norm(desired))
@@ -181,7 +181,7 @@ class HybridGPRController(CCModelController):
                              f"{'is a file, not' if directory.exists() else 'does not exist:'} "
                              "a directory written by save() (cc_model.json, hybrid.json, gp.npz)")
         base = read_settings(directory / "cc_model.json", cls.name)
-        alpha = base.pop("alpha")
+        alpha, modal_map = base.pop("alpha"), base.pop("modal_map", None)
         extra = read_json_object(directory / "hybrid.json", cls.name)
         samples = extra.pop("samples", None)
         if isinstance(samples, bool) or not isinstance(samples, int) or samples < 0:
@@ -192,6 +192,5 @@ class HybridGPRController(CCModelController):
                                       lambda: cls(env, window=gp.window, **base, **extra))
         controller.gp = gp
         controller.samples = samples
-        controller.alpha = _saved_alpha(directory / "cc_model.json", alpha,
-                                        len(controller.rest_lengths))
+        controller.restore_calibration(directory / "cc_model.json", alpha, modal_map)
         return controller
