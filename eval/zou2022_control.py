@@ -41,16 +41,18 @@ so an encoder-fed run under ``stereo faulted`` simulates the stereo pair beside 
 run's up to the fault's start (simulating the pair alone changes nothing), and after it differs
 only because the dark frames' noise is drawn from the env's one noise generator, which shifts the
 encoders' noise samples: measured with seed 0, 0.2-0.4 mm mean tip difference over the last cycle
-for ``cc_model`` and ``lwpr_rwr``. A loop that does not settle (``hybrid_gpr`` on this arm,
-oscillating with 55-95 mm error) amplifies that into a different trajectory (13-24 mm), so
-compare the encoder rows of the two conditions with that in mind. A difference before the
-fault's start would mean the fault leaks into an encoder source.
+for ``cc_model`` and ``lwpr_rwr`` (a loop that did not settle, as ``hybrid_gpr`` on this arm
+before its modal length map, amplified that into a different trajectory, 13-24 mm), so compare
+the encoder rows of the two conditions with that in mind. A difference before the fault's start
+would mean the fault leaks into an encoder source.
 
 Run time. The 18 runs take about 4 minutes on two busy cores once the DNN and ``lwpr_rwr``'s
 pre-training are in the calibration cache (a run: 1.5-4 s for ``cc_model`` / ``hybrid_gpr`` on an
 encoder source, 7-12 s with the dark pair rendered beside it, 8-21 s on ``stereo``, 8-25 s for
 ``lwpr_rwr``); cold, about 10.5 minutes, of which the 3000-sample DNN takes ~5 and
-``lwpr_rwr``'s pre-training ~2 (``stereo``: 74 s).
+``lwpr_rwr``'s pre-training ~2 (``stereo``: 74 s). The modal probes of ``cc_model`` and
+``hybrid_gpr`` (480 control steps per feedback source) add a set-up of 10-22 s on an encoder
+source and ~72 s on ``stereo`` (measured on two cores shared with a benchmark suite).
 
 Units. Records are SI (m, s, Pa); the table's errors are millimetres: the tracking error is the
 distance from the target presented at each step to the ground-truth tip after it (never the
