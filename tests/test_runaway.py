@@ -151,6 +151,76 @@ def test_loads_at_the_limit_hold_every_joint_on_its_stops(preset):
         assert farthest <= spec.max_reach_m and overshoot <= 1.1, (load, farthest, overshoot)
 
 
+def _bang_bang(env, seed: int, steps: int, hold: int = 10):
+    """Every chamber switched between its pre-pressure and p_max, drawn anew every ``hold``
+    control steps (whole segments fold as far as they go and swing the load); yields each step's
+    info after checking the joints are finite."""
+    sim = env.unwrapped.sim
+    rng = np.random.default_rng(seed)
+    env.reset(seed=seed)
+    for step in range(steps):
+        if step % hold == 0:
+            action = rng.choice([-1.0, 1.0], env.action_space.shape[0]).astype(np.float32)
+        _, _, _, _, info = env.step(action)
+        assert np.all(np.isfinite(sim.joint_positions())), (seed, step)
+        yield info
+
+
+@pytest.mark.parametrize("preset, mass_kg", [(p, None) for p in PRESETS] + [("ho2018", 0.0142)])
+def test_bang_bang_switching_under_a_swung_tip_mass_stays_physical(preset, mass_kg):
+    """Bang-bang actions under the heaviest tip mass the arm accepts (and ho2018's own 14.2 g
+    tip): no joint goes more than 10 % past its limit and the tip stays within reach (a taut
+    thread may reach into its band). Before substeps were split while the arm whips, ho2018
+    diverged on four of five such draws within 6-164 control steps, with either mass."""
+    spec = get_preset(preset)
+    mass_kg = spec.max_load_n / GRAVITY_M_S2 if mass_kg is None else mass_kg
+    env = gym.make("SoftArmReach-v0", preset=preset, feedback="ground_truth", episode_steps=1000,
+                   scenario={"name": "tip_mass", "mass_kg": mass_kg})
+    sim = env.unwrapped.sim
+    reach_m = spec.max_reach_m + float(np.sum(sim.arm.thread_band))
+    for seed in (0, 1):
+        farthest, overshoot = 0.0, 0.0
+        for info in _bang_bang(env, seed, 150):
+            q = sim.joint_positions()
+            farthest = max(farthest, float(np.linalg.norm(info["tip_position_m"])))
+            overshoot = max(overshoot, float(np.max(np.maximum(q / sim.arm.upper_limit,
+                                                               q / sim.arm.lower_limit))))
+        assert overshoot <= 1.1 and farthest <= reach_m, (seed, overshoot, farthest, reach_m)
+    env.close()
+
+
+def test_a_whipping_arm_splits_its_substeps_and_the_next_episode_starts_on_the_preset_step():
+    """The split engages while ho2018 whips (joint speeds of several rad/s) and never while it
+    tracks slowly; a reset restores PyBullet's step and the preset's, so an episode after a
+    whipping one matches the same seed in a fresh env bit for bit."""
+    spec = get_preset("ho2018")
+    kwargs = dict(preset="ho2018", feedback="ground_truth",
+                  scenario={"name": "tip_mass", "mass_kg": 0.0142})
+    env = gym.make("SoftArmTrack-v0", **kwargs)
+    sim = env.unwrapped.sim
+    pieces = [sim._refinement for _ in _bang_bang(env, 0, 60)]
+    assert max(pieces) > 1 and min(pieces) == 1, pieces
+
+    def calm_episode(env) -> np.ndarray:
+        observation, _ = env.reset(seed=3)
+        record = [observation]
+        for step in range(60):  # a slow ramp of one chamber
+            action = np.full(spec.n_chambers, -1.0, dtype=np.float32)
+            action[0] = -1.0 + step / 60.0
+            observation, _, _, _, info = env.step(action)
+            assert env.unwrapped.sim._refinement == 1, step
+            record += [observation, info["tip_position_m"]]
+        return np.concatenate([np.ravel(x) for x in record])
+
+    after_whipping = calm_episode(env)
+    step_s = sim.client.getPhysicsEngineParameters()["fixedTimeStep"]
+    assert step_s == pytest.approx(spec.physics_dt_s)
+    fresh = gym.make("SoftArmTrack-v0", **kwargs)
+    assert np.array_equal(after_whipping, calm_episode(fresh))
+    fresh.close()
+    env.close()
+
+
 @pytest.mark.parametrize("preset", PRESETS)
 def test_a_seed_fixes_an_episode_after_any_history(preset):
     """Every seeded episode, after a history of loaded episodes of every kind, matches the same

@@ -6,7 +6,8 @@ reports (``python -m soft_gym.demo`` prints the figures).
 
 Integration trade-off (``bench/integration_tradeoff.py``, ``bench/env_speed.py``). The joint
 springs are integrated semi-implicitly in joint space (``ArmSimulator._update_implicit_gains``),
-so no step size is unstable; the step is chosen for accuracy. Measured on wang2023 (physics only,
+so they set no step limit, and substeps are split while the arm whips (``ArmSimulator.
+_refinement_for``); the step is chosen for accuracy. Measured on wang2023 (physics only,
 commands held 0.5 s, deviation from the same run at a 4x smaller step; static errors with gravity
 and stiffening off):
 
