@@ -171,7 +171,8 @@ def test_bang_bang_switching_under_a_swung_tip_mass_stays_physical(preset, mass_
     """Bang-bang actions under the heaviest tip mass the arm accepts (and ho2018's own 14.2 g
     tip): no joint goes more than 10 % past its limit and the tip stays within reach (a taut
     thread may reach into its band). Before substeps were split while the arm whips, ho2018
-    diverged on four of five such draws within 6-164 control steps, with either mass."""
+    diverged on every one of five such draws at its heaviest tip (within 6-35 control steps)
+    and on four of five with 14.2 g (55-255)."""
     spec = get_preset(preset)
     mass_kg = spec.max_load_n / GRAVITY_M_S2 if mass_kg is None else mass_kg
     env = gym.make("SoftArmReach-v0", preset=preset, feedback="ground_truth", episode_steps=1000,
