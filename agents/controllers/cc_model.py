@@ -80,6 +80,7 @@ MODAL_ARMS = ("zou2022",)
 # common-pressure levels of the modal probes, as fractions of p_max - p_pre
 MODAL_LEVELS = (0.0, 0.25, 0.5, 0.75)
 
+
 class CCModelController(BaselinePolicy):
     """CC model-based controller (wang2023 eqs. (19)-(27)).
 
@@ -148,7 +149,7 @@ class CCModelController(BaselinePolicy):
         Returns:
             ``alpha`` (Pa/m), one gain per chamber; the controller's episode state is reset.
             With ``length_map="modal"`` the probes are :meth:`calibrate_modal`'s instead and
-            ``alpha`` holds the rest level's gains, ``common / bending`` per chamber.
+            ``alpha`` holds the modal map's bending gain at rest, the same for every chamber.
         """
         env = self.env if env is None else env
         if self.length_map == "modal":
