@@ -91,7 +91,15 @@ class ArmSimulator:
                                               deterministicOverlappingPairs=1)
         self.client.setTimeStep(self.physics_dt_s)
         self.client.setPhysicsEngineParameter(numSolverIterations=10)
+        self._client_id = self.client._client  # for direct ``pybullet`` calls on the hot path
         self.arm: ArmBody = build_arm(self.client, spec)
+        # links with a collision shape, and whether their contact detection is on (see
+        # _sync_contact_detection); the key of the world's bodies it was last decided for
+        self._collider_links = [
+            link for link in range(self.arm.n_joints)
+            if self.client.getCollisionShapeData(self.arm.body_id, link)]
+        self._contacts_on = True
+        self._bodies_key: tuple[int, int] = (-1, -1)
         self._nominal_inertia = self._read_link_inertia()
         # PyBullet builds its inverse-dynamics tree (behind calculateMassMatrix) on the first call
         # and never updates it when a link's mass changes later; build it now, from the nominal
@@ -171,9 +179,12 @@ class ArmSimulator:
         # the substep loop is the simulator's hot path: every name it uses is bound locally, the
         # joint states are read with one call, the arrays it writes are preallocated, and the
         # end stops are skipped with one test while every joint is in its free range
-        body, joints = self.arm.body_id, self._joints
-        get_states, set_motors = self.client.getJointStates, self.client.setJointMotorControlArray
-        simulate = self.client.stepSimulation
+        self._sync_contact_detection()
+        body, joints, client_id = self.arm.body_id, self._joints, self._client_id
+        # pybullet's functions called directly: BulletClient's per-call keyword merging costs
+        # about 1 us a call, three calls a substep
+        get_states, set_motors = pybullet.getJointStates, pybullet.setJointMotorControlArray
+        simulate = pybullet.stepSimulation
         torque_mode = pybullet.TORQUE_CONTROL
         count = len(joints)
         state = self._state  # [spring force K(q) q, v, v_previous, torque_previous]
@@ -190,7 +201,7 @@ class ArmSimulator:
         end = self._substep + n
         pieces = 0  # pieces of the current substep done (several while the arm whips)
         while self._substep < end:
-            states = get_states(body, joints)
+            states = get_states(body, joints, physicsClientId=client_id)
             q = np.array([s[0] for s in states])
             velocity[:] = [s[1] for s in states]
             if pieces == 0 and self._substep % per_actuation == 0:
@@ -211,8 +222,8 @@ class ArmSimulator:
             add(self._torque_offset, torque, out=torque)
             if self._forces:
                 torque += self._solve @ self._external_joint_torque(q)
-            set_motors(body, joints, torque_mode, forces=torque.tolist())
-            simulate()
+            set_motors(body, joints, torque_mode, forces=torque.tolist(), physicsClientId=client_id)
+            simulate(physicsClientId=client_id)
             previous_velocity[:] = velocity
             previous_torque[:] = torque
             pieces += 1
@@ -585,6 +596,8 @@ class ArmSimulator:
         now_s = self._substep * self.physics_dt_s
         for load in self.loads:
             load.update(self, now_s)
+        if self.loads:  # a load may have added a body
+            self._sync_contact_detection()
         pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
         if self._area_grows:  # effective_pressure_pa, with the growth looked up once
             pressure = pressure * (1.0 + self._area_growth * pressure / self.spec.p_max_pa)
@@ -609,7 +622,10 @@ class ArmSimulator:
         14.2 g tip, bang-bang actions) the links whip at 10-30 rad/s, 0.03-0.08 rad per 2.5 ms
         substep, and that explicit part diverged within a few control steps. Splitting only
         those substeps keeps ordinary motion on the preset's step (bit for bit)."""
-        fastest = float(np.max(np.abs(velocity) / self._fast_speed))
+        speed = np.abs(velocity)
+        if not (speed > self._fast_speed).any():  # the common case, decided in one test
+            return 1
+        fastest = float(np.max(speed / self._fast_speed))
         refinement = 1
         while fastest > refinement and refinement < _MAX_REFINEMENT:
             refinement *= 2
@@ -623,6 +639,37 @@ class ArmSimulator:
         self.client.setPhysicsEngineParameter(fixedTimeStep=self.physics_dt_s / refinement)
         self._previous_velocity_valid = False
         self._update_implicit_gains(q, self._implicit_stiffness)
+
+    def _sync_contact_detection(self) -> None:
+        """Switch the arm's contact detection off while nothing else in the world can touch it,
+        and back on as soon as something can.
+
+        Why: the arm never collides with itself, so while it is alone (no other body with a
+        collision shape: no obstacle, and the camera's scene, which is visual only unless built
+        with ``collide=True``) PyBullet's broadphase and narrowphase find nothing, yet cost about
+        a fifth of every ``stepSimulation``. Alone, the arm's links get an empty collision filter;
+        otherwise they keep PyBullet's own for a dynamic link (group 1, every mask bit), under
+        which the broadphase meets every body added since (tests/test_sim.py checks that
+        trajectories with and without the switch are the same bit for bit). The world is looked
+        at again whenever its number of bodies or its newest body changes.
+        """
+        client_id = self._client_id
+        count = pybullet.getNumBodies(physicsClientId=client_id)
+        key = (count, pybullet.getBodyUniqueId(count - 1, physicsClientId=client_id))
+        if key == self._bodies_key:
+            return
+        self._bodies_key = key
+        others = (pybullet.getBodyUniqueId(index, physicsClientId=client_id)
+                  for index in range(count))
+        touchable = any(
+            pybullet.getCollisionShapeData(uid, link, physicsClientId=client_id)
+            for uid in others if uid != self.arm.body_id
+            for link in range(-1, pybullet.getNumJoints(uid, physicsClientId=client_id)))
+        if touchable != self._contacts_on:
+            group, mask = (1, -1) if touchable else (0, 0)
+            for link in self._collider_links:
+                self.client.setCollisionFilterGroupMask(self.arm.body_id, link, group, mask)
+            self._contacts_on = touchable
 
     def _check_within_stops(self) -> None:
         """Raise if a joint has gone far past its end stop: the simulation has diverged, and

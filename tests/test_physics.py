@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pybullet
 import pytest
 from scipy.spatial.transform import Rotation
 
@@ -508,3 +509,42 @@ def test_library_load_map_matches_the_cross_product_reference():
             spec, pressures * (1.0 + growth * pressures / spec.p_max_pa))
         np.testing.assert_allclose(axial, reference_axial, rtol=1e-12)
         np.testing.assert_allclose(moment, reference_moment, rtol=1e-9, atol=1e-15)
+
+
+def _sphere(sim: ArmSimulator, centre_m, radius_m: float = 0.01) -> int:
+    """A fixed sphere with a collision shape in ``sim``'s world."""
+    shape = sim.client.createCollisionShape(pybullet.GEOM_SPHERE, radius=radius_m)
+    return sim.client.createMultiBody(0.0, shape, -1, list(map(float, centre_m)))
+
+
+def test_contact_detection_is_off_only_while_the_arm_is_alone_and_changes_no_motion(make_sim):
+    """The simulator skips collision detection while nothing can touch the arm; it must come
+    back for a body added later (here next to a resting arm, whose links' bounding boxes do not
+    move far enough to be looked at again on their own), and the trajectory must be the same bit
+    for bit as with detection kept on all along (a far-away collidable sphere keeps it on)."""
+    spec = get_preset("wang2023")
+    pressures = np.array([0.6, 0.1, 0.1]) * spec.p_max_pa
+    alone, kept_on = make_sim(spec), make_sim(spec)
+    _sphere(kept_on, [1.0, 1.0, 1.0])
+    tips = {}
+    for name, sim in (("alone", alone), ("kept_on", kept_on)):
+        sim.set_pressures(pressures)
+        sim.step_physics(1.0)
+        tips[name] = [sim.tip_pose()[0]]
+    assert not alone._contacts_on and kept_on._contacts_on
+    # a sphere just beside the bent tip, in the path of its swing back
+    swing = alone.tip_pose()[0] - np.array([0.0, 0.0, spec.length_m])
+    obstacle_centre = alone.tip_pose()[0] - 0.25 * swing
+    obstacles = {name: _sphere(sim, obstacle_centre, 0.008)
+                 for name, sim in (("alone", alone), ("kept_on", kept_on))}
+    touched = 0
+    for name, sim in (("alone", alone), ("kept_on", kept_on)):
+        sim.set_pressures(np.full(3, spec.p_pre_pa))
+        for _ in range(40):
+            sim.step_physics(spec.control_period_s)
+            tips[name].append(sim.tip_pose()[0])
+            if name == "alone":
+                touched += bool(sim.client.getContactPoints(sim.arm.body_id, obstacles[name]))
+    assert alone._contacts_on
+    assert touched > 0, "the arm never touched the obstacle: the test checks nothing"
+    np.testing.assert_array_equal(np.array(tips["alone"]), np.array(tips["kept_on"]))
