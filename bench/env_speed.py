@@ -7,7 +7,7 @@ For every arm preset (or the ``--presets`` subset) this script measures:
    resets are timed separately and are *not* part of the step rate.
 2. **Physics-only bound** -- on the same PyBullet client and body, after the env loop and one
    more ``reset`` (the arm rests, settled, with its last spring torques still applied),
-   ``client.stepSimulation()`` is called ``steps * substeps_per_control`` times with nothing else
+   ``pybullet.stepSimulation`` is called ``steps * substeps_per_control`` times with nothing else
    (no spring-torque updates, no pneumatics, no observations). Its wall time is expressed as the
    equivalent "env steps per second" and the ratio ``env / physics`` says which fraction of the
    raw PyBullet rate the full environment reaches (1 would mean zero Python overhead).
@@ -187,14 +187,14 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
         substeps = int(round(control_period_s / physics_dt_s))
 
         # 1. + 4. the env loop, with the time spent inside stepSimulation accumulated
-        client = sim.client
-        step_simulation = client.stepSimulation
+        client_id = sim._client_id
+        step_simulation = sim._step_simulation  # pybullet.stepSimulation, as the substep loop calls it
         in_step = [0.0]
         clock = time.perf_counter
 
-        def timed_step_simulation():
+        def timed_step_simulation(**kwargs):
             t = clock()
-            step_simulation()
+            step_simulation(**kwargs)
             in_step[0] += clock() - t
 
         env.action_space.seed(seed)
@@ -208,7 +208,7 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
         reference = SoMoReference(seed) if reference_steps > 0 else None
         blocks = max(1, min(REFERENCE_BLOCKS, steps))
         reference_s, reference_done, block_ratios = 0.0, 0, []
-        client.stepSimulation = timed_step_simulation  # shadows BulletClient.__getattr__
+        sim._step_simulation = timed_step_simulation
         try:
             for block in range(blocks):
                 block_actions = actions[block * steps // blocks:(block + 1) * steps // blocks]
@@ -237,7 +237,7 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
                     if count and block_actions:
                         block_ratios.append((len(block_actions) / block_s) / (count / elapsed))
         finally:
-            del client.stepSimulation
+            sim._step_simulation = step_simulation
             if reference is not None:
                 reference.close()
         in_loop_physics_s = in_step[0]
@@ -248,7 +248,7 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
         n_substeps = steps * substeps
         t0 = time.perf_counter()
         for _ in range(n_substeps):
-            step_simulation()
+            step_simulation(physicsClientId=client_id)
         physics_s = time.perf_counter() - t0
 
         # 3. reset time

@@ -92,6 +92,7 @@ class ArmSimulator:
         self.client.setTimeStep(self.physics_dt_s)
         self.client.setPhysicsEngineParameter(numSolverIterations=10)
         self._client_id = self.client._client  # for direct ``pybullet`` calls on the hot path
+        self._step_simulation = pybullet.stepSimulation  # bench/env_speed.py times it here
         self.arm: ArmBody = build_arm(self.client, spec)
         # links with a collision shape, and whether their contact detection is on (see
         # _sync_contact_detection); the key of the world's bodies it was last decided for
@@ -184,7 +185,7 @@ class ArmSimulator:
         # pybullet's functions called directly: BulletClient's per-call keyword merging costs
         # about 1 us a call, three calls a substep
         get_states, set_motors = pybullet.getJointStates, pybullet.setJointMotorControlArray
-        simulate = pybullet.stepSimulation
+        simulate = self._step_simulation
         torque_mode = pybullet.TORQUE_CONTROL
         count = len(joints)
         state = self._state  # [spring force K(q) q, v, v_previous, torque_previous]
