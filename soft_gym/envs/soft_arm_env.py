@@ -564,10 +564,10 @@ class SoftArmEnv(gym.Env):
             return np.array(self._measurement[part])
         if part == "pose":
             position, quaternion = self.feedback_pose()
-            value = np.r_[position, quaternion]
+            value = np.concatenate((position, quaternion))
         elif part == "target":
             current, upcoming = self.task.target(self._step)
-            value = np.r_[current, upcoming]
+            value = np.concatenate((current, upcoming))
         elif part == "shape":
             value = np.asarray(self.feedback_source.shape_points(self._estimate, self.sim),
                                dtype=float).ravel()
