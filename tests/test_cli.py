@@ -22,11 +22,17 @@ ROOT = Path(__file__).resolve().parent.parent
 DEFAULT = re.compile(r"\(default:\s+[^)]+\)")
 
 
-def _bench_main(name: str):
-    """``main`` of ``bench/<name>.py`` (the bench scripts are not a package)."""
+def _bench_module(name: str):
+    """``bench/<name>.py`` imported (the bench scripts are not a package)."""
     spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "bench" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
+    return module
+
+
+def _bench_main(name: str):
+    """``parse_args`` (or ``main``) of ``bench/<name>.py``."""
+    module = _bench_module(name)
     return getattr(module, "parse_args", None) or module.main
 
 
@@ -41,6 +47,7 @@ COMMANDS = {
     "bench env_speed": ("env_speed", [], "--steps"),
     "bench gp_speed": ("gp_speed", [], "--window"),
     "bench integration_tradeoff": ("integration_tradeoff", [], "--links"),
+    "bench revision_speed": ("revision_speed", [], "--rounds"),
     "bench sensor_speed": ("sensor_speed", [], "--steps"),
     "bench train_speed": ("train_speed", [], "--algo"),
 }
@@ -349,3 +356,27 @@ def test_train_refuses_a_run_directory_that_holds_a_run(tmp_path, capsys):
     (run_dir / "config.yaml").write_text("{}")
     assert_one_line_error(train_main, ["--out", str(tmp_path), "--timesteps", "64"], "--name",
                           capsys)
+
+
+def test_revision_speed_refuses_an_unknown_revision_before_any_work(tmp_path, capsys):
+    out = tmp_path / "revision.json"
+    assert_one_line_error(_bench_module("revision_speed").main,
+                          ["--against", "no-such-revision", "--json", str(out)], "--against",
+                          capsys, out=out, also="no-such-revision")
+
+
+def test_revision_speed_times_this_tree_against_a_revision_in_turns(tmp_path, capsys):
+    """Against HEAD (the same code, extracted from git): both trees run and give figures of the
+    same order, each round's ratio is theirs, and the JSON holds every round."""
+    module = _bench_module("revision_speed")
+    out = tmp_path / "speed" / "revision.json"
+    assert module.main(["--against", "HEAD", "--presets", "wang2023", "--steps", "30",
+                        "--rounds", "2", "--json", str(out)]) == 0
+    table = capsys.readouterr().out
+    assert "revision HEAD = " in table and "wang2023" in table
+    row = json.loads(out.read_text())["rows"][0]
+    assert len(row["this_tree_steps_per_wall_s"]) == len(row["revision_steps_per_cpu_s"]) == 2
+    for ours, theirs, ratio in zip(row["this_tree_steps_per_cpu_s"],
+                                   row["revision_steps_per_cpu_s"], row["cpu_ratios"]):
+        assert ratio == pytest.approx(ours / theirs)
+    assert all(0.2 < ratio < 5.0 for ratio in row["wall_ratios"] + row["cpu_ratios"])
