@@ -95,12 +95,12 @@ class ArmSimulator:
         self._step_simulation = pybullet.stepSimulation  # bench/env_speed.py times it here
         self.arm: ArmBody = build_arm(self.client, spec)
         # links with a collision shape, and whether their contact detection is on (see
-        # _sync_contact_detection); the key of the world's bodies it was last decided for
+        # _sync_contact_detection)
         self._collider_links = [
             link for link in range(self.arm.n_joints)
             if self.client.getCollisionShapeData(self.arm.body_id, link)]
         self._contacts_on = True
-        self._bodies_key: tuple[int, int] = (-1, -1)
+        self._body_count = 0  # bodies in the world at the last look
         self._nominal_inertia = self._read_link_inertia()
         # PyBullet builds its inverse-dynamics tree (behind calculateMassMatrix) on the first call
         # and never updates it when a link's mass changes later; build it now, from the nominal
@@ -597,8 +597,9 @@ class ArmSimulator:
         now_s = self._substep * self.physics_dt_s
         for load in self.loads:
             load.update(self, now_s)
-        if self.loads:  # a load may have added a body
-            self._sync_contact_detection()
+        if self.loads and pybullet.getNumBodies(
+                physicsClientId=self._client_id) != self._body_count:
+            self._sync_contact_detection()  # a load added or removed a body
         pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
         if self._area_grows:  # effective_pressure_pa, with the growth looked up once
             pressure = pressure * (1.0 + self._area_growth * pressure / self.spec.p_max_pa)
@@ -647,25 +648,28 @@ class ArmSimulator:
 
         Why: the arm never collides with itself, so while it is alone (no other body with a
         collision shape: no obstacle, and the camera's scene, which is visual only unless built
-        with ``collide=True``) PyBullet's broadphase and narrowphase find nothing, yet cost about
-        a fifth of every ``stepSimulation``. Alone, the arm's links get an empty collision filter;
-        otherwise they keep PyBullet's own for a dynamic link (group 1, every mask bit), under
-        which the broadphase meets every body added since (tests/test_sim.py checks that
-        trajectories with and without the switch are the same bit for bit). The world is looked
-        at again whenever its number of bodies or its newest body changes.
+        with ``collide=True``) PyBullet's broadphase and narrowphase find nothing, yet cost
+        2.5-10 % of a ground-truth step. Alone, the arm's links get an empty collision filter;
+        otherwise they keep PyBullet's own for a dynamic link (group 1, every mask bit), and
+        setting it again puts them back in the broadphase, which then meets every body added
+        meanwhile (tests/test_physics.py checks trajectories against detection kept on all
+        along). The world is looked at whole at every ``step_physics`` call (PyBullet reuses a
+        removed body's id, so no cheaper key tells a visual body from a collidable one that took
+        its place; 1-2 us a body), and again at an actuation update when a load changed the
+        number of bodies.
         """
         client_id = self._client_id
-        count = pybullet.getNumBodies(physicsClientId=client_id)
-        key = (count, pybullet.getBodyUniqueId(count - 1, physicsClientId=client_id))
-        if key == self._bodies_key:
-            return
-        self._bodies_key = key
-        others = (pybullet.getBodyUniqueId(index, physicsClientId=client_id)
-                  for index in range(count))
-        touchable = any(
-            pybullet.getCollisionShapeData(uid, link, physicsClientId=client_id)
-            for uid in others if uid != self.arm.body_id
-            for link in range(-1, pybullet.getNumJoints(uid, physicsClientId=client_id)))
+        count = self._body_count = pybullet.getNumBodies(physicsClientId=client_id)
+        touchable = False
+        for index in range(count):
+            uid = pybullet.getBodyUniqueId(index, physicsClientId=client_id)
+            if uid == self.arm.body_id:
+                continue
+            links = pybullet.getNumJoints(uid, physicsClientId=client_id)
+            if any(pybullet.getCollisionShapeData(uid, link, physicsClientId=client_id)
+                   for link in range(-1, links)):
+                touchable = True
+                break
         if touchable != self._contacts_on:
             group, mask = (1, -1) if touchable else (0, 0)
             for link in self._collider_links:

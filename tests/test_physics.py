@@ -548,3 +548,24 @@ def test_contact_detection_is_off_only_while_the_arm_is_alone_and_changes_no_mot
     assert alone._contacts_on
     assert touched > 0, "the arm never touched the obstacle: the test checks nothing"
     np.testing.assert_array_equal(np.array(tips["alone"]), np.array(tips["kept_on"]))
+
+
+def test_contact_detection_sees_a_collidable_body_that_reuses_a_removed_bodys_id(make_sim):
+    """PyBullet hands a removed body's id to the next body made: a visual-only marker swapped for
+    a sphere against the tip between two steps leaves the body count and ids as they were, and
+    the sphere must still be touched."""
+    spec = get_preset("wang2023")
+    sim = make_sim(spec)
+    sim.step_physics(0.2)
+    client = sim.client
+    marker = client.createMultiBody(
+        0.0, -1, client.createVisualShape(pybullet.GEOM_SPHERE, radius=0.005), [0.5, 0.5, 0.5])
+    sim.step_physics(spec.control_period_s)
+    assert not sim._contacts_on
+    client.removeBody(marker)
+    tip = sim.tip_pose()[0]
+    sphere = _sphere(sim, tip + np.array([0.0, 0.0, 0.004]), 0.005)
+    assert sphere == marker and client.getNumBodies() == 2
+    sim.step_physics(spec.control_period_s)
+    assert sim._contacts_on
+    assert client.getContactPoints(sim.arm.body_id, sphere)
