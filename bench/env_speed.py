@@ -188,7 +188,7 @@ def time_env(preset: str, task: str, steps: int, resets: int, seed: int,
 
         # 1. + 4. the env loop, with the time spent inside stepSimulation accumulated
         client_id = sim._client_id
-        step_simulation = sim._step_simulation  # pybullet.stepSimulation, as the substep loop calls it
+        step_simulation = sim._step_simulation  # pybullet.stepSimulation, called by the loop
         in_step = [0.0]
         clock = time.perf_counter
 
