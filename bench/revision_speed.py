@@ -35,10 +35,9 @@ from pathlib import Path
 
 from soft_gym._cli import HelpFormatter, check_output_dir, positive_int
 from soft_gym.robots.presets import PRESETS
+from soft_gym.sensing.feedback_base import FEEDBACK_SOURCES
 
 ROOT = Path(__file__).resolve().parent.parent
-
-FEEDBACKS = ("ground_truth", "em", "fbg", "camera", "fused")
 
 CHILD = """
 import sys, time
@@ -100,8 +99,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="git revision to compare with (commit, tag or branch)")
     parser.add_argument("--presets", nargs="+", choices=list(PRESETS), default=list(PRESETS),
                         metavar="NAME", help=f"arm presets, from {list(PRESETS)}")
-    parser.add_argument("--feedback", choices=FEEDBACKS, default="ground_truth",
-                        help="feedback source of the env ('fused': camera + vision + F-emp)")
+    parser.add_argument("--feedback", choices=sorted(FEEDBACK_SOURCES), default="ground_truth",
+                        metavar="SOURCE",
+                        help=f"feedback source of the env, from {sorted(FEEDBACK_SOURCES)} "
+                             "('fused': camera + vision + F-emp)")
     parser.add_argument("--steps", type=positive_int, default=2000,
                         help="timed env steps per process")
     parser.add_argument("--rounds", type=positive_int, default=3,
