@@ -1,4 +1,10 @@
-"""One parser for the package's "name plus parameters" descriptions.
+"""The registries of named parts, and one parser for "name plus parameters" descriptions.
+
+Every family of named parts (sensors, loads, visual faults, feedback sources, baselines) is one
+:class:`Registry`, filled by explicit :meth:`Registry.register` calls in its package's
+``__init__`` (so ``import soft_gym.sensors`` is all it takes to see every sensor, and no module
+registers itself as a side effect of being imported). Error messages and docs take their name
+lists from the registry, never from a hand-kept list.
 
 The factories :func:`soft_gym.scenarios.make_scenario`, :func:`soft_gym.sensors.faults.make_faults`,
 :func:`soft_gym.sensors.make_sensor` and :func:`agents.policies.make_policy` take something by
@@ -20,10 +26,71 @@ parameter (``kind``, with the list index where there is one), the value and what
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterable, NamedTuple, Sequence
+import importlib
+from collections.abc import Iterator, Mapping
+from typing import Any, Callable, Generic, Iterable, NamedTuple, Sequence, TypeVar
+
+T = TypeVar("T")
 
 FORMS = ("none", "name", "dict", "instance", "list")
 """Every form a description may take (see the module docstring)."""
+
+
+class Registry(Mapping[str, T], Generic[T]):
+    """Named parts of one kind, in registration order: a read-only mapping name -> part.
+
+    A part is registered as the object itself or, where importing it costs start-up time that
+    most users never need (PyTorch, OpenCV's stereo code), as a ``"module:attribute"`` string
+    that is imported on first access (``lazy=True``). Either way ``registry[name]`` gives the
+    object; an unknown name raises ``ValueError`` naming the kind, the name and the registered
+    names.
+
+    Args:
+        kind: what a part is, for error messages (``"sensor"``, ``"feedback source"``).
+    """
+
+    def __init__(self, kind: str) -> None:
+        self.kind = kind
+        self._entries: dict[str, Any] = {}
+        self._lazy: set[str] = set()
+
+    def register(self, name: str, part: T | str, *, lazy: bool = False) -> None:
+        """Add ``part`` under ``name`` (``lazy=True``: ``part`` is ``"module:attribute"``).
+
+        Raises:
+            ValueError: an empty or already registered ``name``, or a lazy part that is not a
+                ``"module:attribute"`` string.
+        """
+        if not isinstance(name, str) or not name or name in self._entries:
+            raise ValueError(f"{self.kind} name must be a new non-empty string, got {name!r} "
+                             f"(registered: {list(self._entries)})")
+        if lazy and not (isinstance(part, str) and part.count(":") == 1):
+            raise ValueError(f"a lazy {self.kind} must be given as 'module:attribute', got "
+                             f"{part!r}")
+        self._entries[name] = part
+        if lazy:
+            self._lazy.add(name)
+
+    def __getitem__(self, name: str) -> T:
+        if not isinstance(name, str) or name not in self._entries:
+            raise ValueError(f"{self.kind} must be one of {list(self._entries)}, got {name!r}")
+        if name in self._lazy:
+            module_name, attribute = self._entries[name].split(":")
+            self._entries[name] = getattr(importlib.import_module(module_name), attribute)
+            self._lazy.discard(name)
+        return self._entries[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._entries
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def __repr__(self) -> str:
+        return f"Registry({self.kind!r}, {list(self._entries)})"
 
 
 class Spec(NamedTuple):
