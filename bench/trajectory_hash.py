@@ -72,7 +72,7 @@ CASES: dict[str, dict] = {
     "zou2022_truth_randomised": {"preset": "zou2022", "feedback": "ground_truth",
                                  "randomization": True, "task": "track", "path": "star"},
     "wang2023_start_render": {"preset": "wang2023", "feedback": "ground_truth", "steps": 30,
-                              "start_m": [0.02, 0.0, 0.13], "render": True},
+                              "start_m": [-0.028, 0.0, 0.09], "render": True},
 }
 """Case name -> env keyword arguments, plus ``steps`` (default 200), ``task`` and ``render``."""
 
