@@ -80,7 +80,7 @@ from soft_gym._cli import HelpFormatter
 from soft_gym.envs.soft_arm_env import TASKS
 from soft_gym.envs.registration import TASK_IDS
 from soft_gym.robots import PRESETS, get_preset
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 REFERENCE_REFINEMENT = 4
 REFERENCE_BLOCKS = 10

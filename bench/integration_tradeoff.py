@@ -27,7 +27,7 @@ from soft_gym._cli import HelpFormatter
 from soft_gym.robots.pneumatics import chamber_loads
 from soft_gym.robots.presets import PRESETS
 from soft_gym.robots.spec import ArmSpec
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 
 def variant(spec: ArmSpec, n_links: int, dt_s: float, linear: bool = False) -> ArmSpec:

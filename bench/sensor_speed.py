@@ -32,7 +32,7 @@ from soft_gym.sensing.exploration import spiral_fractions
 from soft_gym.sensing.vision_pose import VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 
 def stats(samples_s: list[float]) -> dict:

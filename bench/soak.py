@@ -42,7 +42,7 @@ from tqdm import tqdm
 
 import soft_gym  # noqa: F401  (registers the ids)
 from soft_gym._cli import HelpFormatter, int_at_least
-from soft_gym._pybullet import pybullet  # imported without its banner
+from soft_gym.engines.pybullet.quiet_import import pybullet  # imported without its banner
 from soft_gym.robots.presets import PRESETS, get_preset
 
 PROPRIOCEPTION = {"wang2023": ("fbg",), "ho2018": ("em",), "zhao2021": ("strain",),

@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> None:
     from soft_gym.sensing.cc_shape import cc_shape_points
     from soft_gym.sensing.shape_dnn import ShapeDNN, default_stereo
     from soft_gym.sensing.stereo_shape import estimate_stereo_shape
-    from soft_gym.sim import ArmSimulator
+    from soft_gym.engines.pybullet.simulator import ArmSimulator
 
     cv2.setNumThreads(1)
     torch.set_num_threads(1)

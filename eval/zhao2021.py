@@ -113,7 +113,7 @@ def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True
     """Table III, the mean backbone error and Table IV on the SR model of ``config``."""
     from soft_gym.scenarios.loads import TipMass
     from soft_gym.sensing.backbone_fit import mean_backbone_error_m, resample_by_arc_length
-    from soft_gym.sim import ArmSimulator
+    from soft_gym.engines.pybullet.simulator import ArmSimulator
 
     spec = get_preset(PRESET)
     gauges = StrainGauges()
@@ -184,7 +184,7 @@ def reachable_point(point_m: np.ndarray, scenario=(), tries: int = 12) -> np.nda
     loads; else the nearest tip position the drive's pressure search finds, or the first point
     on the way from there towards the middle of the workspace (all chambers at half pressure)
     that the drive reaches, in 5 % steps (m, rounded to 0.1 mm)."""
-    from soft_gym.sim import ArmSimulator
+    from soft_gym.engines.pybullet.simulator import ArmSimulator
     from soft_gym.tasks.positioning import drive_tip_to
 
     spec = get_preset(PRESET)

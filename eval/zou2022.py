@@ -56,7 +56,7 @@ from soft_gym.sensing.shape_dnn import (STEREO_INTRINSICS, ShapeDNNConfig, axis_
 from soft_gym.sensing.stereo_shape import estimate_stereo_shape
 from soft_gym.sensors.encoder import ChamberEncoders
 from soft_gym.sensors.stereo import StereoCamera
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 EXPERIMENTS = ("table3", "table4", "faults", "control")
 PRESET = "zou2022"

@@ -4,7 +4,7 @@ Importing the package registers the environment ids (see :mod:`soft_gym.envs.reg
 """
 
 # first: the package's first ``import pybullet`` happens there, without its banner on stdout
-import soft_gym._pybullet  # noqa: F401,I001
+import soft_gym.engines.pybullet.quiet_import  # noqa: F401,I001
 from soft_gym.envs.registration import register_envs, registered_ids
 
 register_envs()

@@ -18,7 +18,7 @@ import numpy as np
 from soft_gym._cli import HelpFormatter, finite_float
 from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.robots.presets import PRESETS
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 PATTERNS = {
     "rest": lambda n: np.zeros(n),

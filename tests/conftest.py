@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 
 @pytest.fixture

@@ -9,8 +9,11 @@ of the repository it reaches (``from soft_gym.sensors import fbg`` is an import 
 ``soft_gym.sensors.fbg``; ``from soft_gym.scenarios import Push`` of ``soft_gym.scenarios``).
 
 The rules: no two modules import each other, directly or around a longer cycle; nothing in
-``soft_gym`` imports ``agents``, ``train`` or ``eval``; and no file cites the design document
-that lived outside the repository (the code cites docs/architecture.md and the papers instead).
+``soft_gym`` imports ``agents``, ``train`` or ``eval``; only the engine package
+(``soft_gym.engines``) imports a physics engine, and everything else uses a simulator through
+:class:`soft_gym.simulator.Simulator` and :class:`~soft_gym.simulator.World` alone; and no file
+cites the design document that lived outside the repository (the code cites
+docs/architecture.md and the papers instead).
 """
 
 from __future__ import annotations
@@ -25,6 +28,10 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("soft_gym", "agents", "train", "eval")
 LOWER_LAYER = "soft_gym"
 UPPER_LAYERS = ("agents", "train", "eval")
+
+ENGINE_PACKAGE = "soft_gym.engines"
+ENGINE_LIBRARIES = ("pybullet", "pybullet_utils", "pybullet_data", "mujoco")
+"""Physics engines' own packages: only :data:`ENGINE_PACKAGE` imports them."""
 
 OLD_CITATIONS = ("DESIGN" + ".md", "papers" + "/README")
 """Citations of the design document outside the repository (spelt apart so that this file does
@@ -189,10 +196,10 @@ def test_the_import_graph_covers_every_package():
     for package in PACKAGES:
         assert package in modules, f"package {package} has no __init__.py under {ROOT}"
     graph = _graph()
-    assert "soft_gym.sim" in graph["soft_gym.envs.soft_arm_env"]
-    assert "soft_gym.robots.spec" in graph["soft_gym.sim"]
+    assert "soft_gym.engines" in graph["soft_gym.envs.soft_arm_env"]
+    assert "soft_gym.robots.spec" in graph["soft_gym.engines.pybullet.simulator"]
     # an import inside a function body counts (tasks.workspace imports the simulator lazily)
-    assert "soft_gym.sim" in graph["soft_gym.tasks.workspace"]
+    assert "soft_gym.engines.pybullet.simulator" in graph["soft_gym.tasks.workspace"]
     assert "soft_gym.kinematics" in graph["agents.controllers.cc_model"]
 
 
@@ -223,6 +230,74 @@ def test_soft_gym_imports_no_agents_train_or_eval():
              and found.name.split(".")[0] in UPPER_LAYERS]
     assert not wrong, ("soft_gym is the bottom layer and must not import agents, train or eval "
                        "(docs/architecture.md, \"Layers and packages\"):\n" + "\n".join(wrong))
+
+
+def test_only_the_engine_package_imports_a_physics_engine():
+    wrong = [f"{found.path.relative_to(ROOT)}:{found.line} imports {found.name}"
+             for found in _all_imports()
+             if found.name.split(".")[0] in ENGINE_LIBRARIES
+             and not found.importer.startswith(ENGINE_PACKAGE)]
+    assert not wrong, ("only soft_gym/engines/ may call a physics engine; use the simulator "
+                       "interface (docs/architecture.md, \"The simulator interface\"):\n"
+                       + "\n".join(wrong))
+
+
+def _is_simulator(node: ast.expr) -> bool:
+    """Whether an expression names a simulator: ``sim``, ``simulator`` or ``<anything>.sim``."""
+    return ((isinstance(node, ast.Name) and node.id in ("sim", "simulator"))
+            or (isinstance(node, ast.Attribute) and node.attr == "sim"))
+
+
+def _interface_breaches(tree: ast.AST) -> list[tuple[int, str]]:
+    """``(line, attribute)`` of every read of a simulator attribute that the interface does not
+    name (``sim.client``), and of every world attribute outside :class:`World`."""
+    from soft_gym.simulator import SIMULATOR_NAMES, WORLD_NAMES
+
+    breaches = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Attribute):
+            continue
+        if _is_simulator(node.value) and node.attr not in SIMULATOR_NAMES:
+            breaches.append((node.lineno, f"sim.{node.attr}"))
+        elif (isinstance(node.value, ast.Attribute) and node.value.attr == "world"
+              and _is_simulator(node.value.value) and node.attr not in WORLD_NAMES):
+            breaches.append((node.lineno, f"sim.world.{node.attr}"))
+    return sorted(breaches)
+
+
+def test_the_interface_check_finds_a_breach():
+    tree = ast.parse("sim.client.getNumBodies()\nenv.sim.arm.body_id\nsim.tip_pose()\n"
+                     "self.sim.world.render_camera(k, r, p, l)\nsim.world.client\n")
+    assert _interface_breaches(tree) == [(1, "sim.client"), (2, "sim.arm"),
+                                         (5, "sim.world.client")]
+
+
+def test_outside_the_engines_a_simulator_is_used_through_its_interface_alone():
+    breaches = [f"{path.relative_to(ROOT)}:{line} reads {attribute}"
+                for module, (path, _) in _modules().items()
+                if not module.startswith(ENGINE_PACKAGE)
+                for line, attribute in _interface_breaches(
+                    ast.parse(path.read_text(encoding="utf-8")))]
+    assert not breaches, ("use soft_gym.simulator.Simulator's and World's methods (or add one "
+                          "to the interface and every engine):\n" + "\n".join(breaches))
+
+
+def test_every_engine_implements_the_interface():
+    from soft_gym.engines import ENGINES
+    from soft_gym.robots import get_preset
+    from soft_gym.simulator import SIMULATOR_NAMES, WORLD_NAMES, Simulator, World
+
+    for name in ENGINES:
+        sim = ENGINES[name](get_preset("wang2023"))
+        try:
+            assert isinstance(sim, Simulator) and isinstance(sim.world, World), name
+            missing = sorted(attribute for attribute in SIMULATOR_NAMES
+                             if not hasattr(sim, attribute))
+            missing += sorted(f"world.{attribute}" for attribute in WORLD_NAMES
+                              if not hasattr(sim.world, attribute))
+            assert not missing, f"engine {name!r} lacks {missing}"
+        finally:
+            sim.close()
 
 
 def _repository_files():

@@ -21,7 +21,7 @@ from soft_gym.sensing.stereo_shape import (ASESConfig, arm_mask, estimate_stereo
                                            tip_occlusion)
 from soft_gym.sensors.faults import LowLight, MovingOccluder
 from soft_gym.sensors.stereo import StereoCamera
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 ZOU = get_preset("zou2022")
 GREY = (0.45, 0.45, 0.5, 1.0)

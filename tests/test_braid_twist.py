@@ -19,7 +19,7 @@ from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import SegmentSpec
 from soft_gym.sensing.cc_shape import cc_shape_points
 from soft_gym.sensing.shape_dnn import true_shape_points
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 ZOU = get_preset("zou2022")
 

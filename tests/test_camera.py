@@ -9,13 +9,14 @@ import pytest
 from pybullet_utils import bullet_client
 
 from soft_gym.robots import get_preset
-from soft_gym.sensors.camera import EyeInHandCamera, render
+from soft_gym.engines.pybullet.world import render_camera
+from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.faults import (FAULT_PRESETS, FAULTS, LEDGlare, LowLight, MotionBlur,
                                      MovingOccluder, SensorNoise, make_faults)
 from soft_gym.sensors.intrinsics import CameraIntrinsics
-from soft_gym.sensors.scene import build_scene
+from soft_gym.engines.pybullet.scene import build_scene
 from soft_gym.sensors.stereo import StereoCamera
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 
 def _sim(preset: str = "wang2023", pressures=None, seconds: float = 0.0) -> ArmSimulator:
@@ -143,7 +144,7 @@ def test_scene_is_seeded_and_stays_out_of_the_arms_way():
             assert a.getBasePositionAndOrientation(i) == b.getBasePositionAndOrientation(j)
         # seen from the base: nothing comes closer than the ground minus the tallest brick
         wide = CameraIntrinsics(width=200, height=200, hfov_deg=120.0)
-        _, depth = render(a, wide, np.eye(3), np.zeros(3), np.array([0.0, 0.0, -1.0]))
+        _, depth = render_camera(a, wide, np.eye(3), np.zeros(3), np.array([0.0, 0.0, -1.0]))
         assert depth.min() > 0.09 + 0.06 - 0.012 - 1e-4
         assert np.median(depth) < 0.16
         assert all(a.getCollisionShapeData(i, -1) == () for i in ids_a)

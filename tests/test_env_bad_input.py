@@ -202,7 +202,7 @@ def test_load_constructors_refuse_bad_parameters(make, pattern):
 def test_absolute_load_bounds_hold_on_an_arm_that_bears_more():
     """An arm strong enough to bear them still gets no load beyond ``MAX_MASS_KG`` or
     ``MAX_FORCE_N`` (the bounds hold whatever the arm)."""
-    from soft_gym.sim import ArmSimulator
+    from soft_gym.engines.pybullet.simulator import ArmSimulator
 
     class StrongArm(ArmSpec):
         @property

@@ -59,7 +59,7 @@ from soft_gym.sensing.femp import FEmpEstimator
 from soft_gym.sensing.pipeline import SensingPipeline
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber, FBGLayout
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 N_INIT = 450
 """Calibration steps that initialise F-emp (wang2023's ``N0``, the pipeline's default)."""

@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import types
 
 import numpy as np
 import pytest
 
+from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym.robots import get_preset
 from soft_gym.sensors.fbg import FBGFiber, FBGLayout, fbg_strain
 from arm_variants import vertex_arcs
@@ -46,8 +46,6 @@ class StandIn:
         self.twist = np.zeros(n) if twist is None else np.asarray(twist)
         self.forces = np.zeros((n, 3)) if forces is None else np.asarray(forces)
         self.frames = frames or {}              # link -> quaternion (x, y, z, w) of its frame
-        self.arm = types.SimpleNamespace(body_id=7, station_link=[100 + i for i in range(n)])
-        self.client = self
 
     def curvature_profile(self):
         return None, self.curvature.copy()
@@ -61,12 +59,10 @@ class StandIn:
     def link_contact_forces(self):
         return self.forces.copy()
 
-    def getLinkStates(self, body_id, links, computeForwardKinematics=0):  # noqa: N802 (PyBullet)
-        """PyBullet's answer: without forward kinematics, the frames as they were at rest."""
-        assert body_id == 7
+    def link_rotations(self, links):
         rest = (0.0, 0.0, 0.0, 1.0)
-        return [(None,) * 5 + (self.frames.get(link - 100, rest) if computeForwardKinematics
-                               else rest,) for link in links]
+        return quaternion_to_matrix(np.array([self.frames.get(int(link), rest)
+                                              for link in links]))
 
 
 def _helix(spec, layout: FBGLayout):

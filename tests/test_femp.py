@@ -8,7 +8,7 @@ import pytest
 from soft_gym.robots import get_preset
 from soft_gym.sensing.femp import FEmpEstimator
 from soft_gym.sensors.fbg import FBGFiber
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 
 @pytest.fixture(scope="module")

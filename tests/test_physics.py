@@ -1,4 +1,4 @@
-"""Physics checks of :class:`soft_gym.sim.ArmSimulator` against independent analytic references.
+"""Physics checks of :class:`soft_gym.engines.pybullet.simulator.ArmSimulator` against independent analytic references.
 
 Every reference is computed here with plain trigonometry and the textbook beam formulas, using
 only the segment properties of the spec (``E I``, ``E A``, ``A_c``, ``d``, ``L``):
@@ -28,7 +28,7 @@ from scipy.spatial.transform import Rotation
 from soft_gym.kinematics import cc_forward
 from soft_gym.robots import get_preset
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 from arm_variants import linear, pneumatic_loads_reference, variant  # noqa: F401
 

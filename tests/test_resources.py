@@ -4,7 +4,7 @@ and the library prints nothing on standard output.
 Memory is the process's resident set size (``/proc/self/statm``, Linux only); the bounds sit well
 between the leak-free growth (allocator noise, under 0.05 MB per cycle) and the leak these tests
 guard against (PyBullet keeping every mesh list handed to ``createVisualShape``: 0.6 MB per
-camera scene, :data:`soft_gym.sensors.scene._MESHES_GIVEN`).
+camera scene, :data:`soft_gym.engines.pybullet.scene._MESHES_GIVEN`).
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ import pytest
 from pybullet_utils import bullet_client
 
 import soft_gym  # noqa: F401  (registers the environment ids)
-from soft_gym._pybullet import c_stdout_silenced
-from soft_gym.sensors.scene import build_scene
+from soft_gym.engines.pybullet.quiet_import import c_stdout_silenced
+from soft_gym.engines.pybullet.scene import build_scene
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -19,7 +19,7 @@ from soft_gym.robots.spec import GRAVITY_M_S2
 from soft_gym.robots.stops import EndStops
 from soft_gym.scenarios import Push, SwayingMass, TipMass
 from soft_gym.scenarios.randomization import RandomizationConfig
-from soft_gym.sim import ArmSimulator, PhysicsDivergedError
+from soft_gym.engines.pybullet.simulator import ArmSimulator, PhysicsDivergedError
 
 PRESETS = ("wang2023", "zhao2021", "zou2022", "ho2018")
 

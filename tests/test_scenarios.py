@@ -7,7 +7,7 @@ import pytest
 
 from soft_gym.robots import get_preset
 from soft_gym.scenarios import FillingLoad, Flick, ObstacleRod, Push, SwayingMass, make_scenario
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 
 def _bent_sim(*loads) -> ArmSimulator:

@@ -23,7 +23,7 @@ from soft_gym.sensors.em_tracker import EMTracker
 from soft_gym.sensors.encoder import ChamberEncoders
 from soft_gym.sensors.fbg import FBGFiber, FBGLayout, fbg_strain, rest_vertex_arcs
 from soft_gym.sensors.strain_gauge import StrainGauges
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 from arm_variants import linear, pneumatic_loads_reference, variant  # noqa: F401
 

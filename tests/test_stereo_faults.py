@@ -20,7 +20,7 @@ from soft_gym.sensing.stereo_shape import estimate_stereo_shape
 from soft_gym.sensors.faults import (LowLight, MovingOccluder, copy_faults, faults_per_sensor,
                                      make_faults)
 from soft_gym.sensors.stereo import OCCLUDER_FRACTION, StereoCamera
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 GREY = (0.45, 0.45, 0.5, 1.0)
 """A neutral plate: the default skin colour lies inside ASES's orange HSV range."""

@@ -14,7 +14,7 @@ from soft_gym.robots import get_preset
 from soft_gym.sensing.exploration import spiral_fractions
 from soft_gym.sensing.vision_pose import VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 
 def _run(faults=None, steps: int = 1200, turn_s: float = 8.0, high: float = 0.3, seed: int = 0):

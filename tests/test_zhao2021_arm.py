@@ -24,7 +24,7 @@ from soft_gym.robots.presets import (
     paper_pressures_to_chambers,
 )
 from soft_gym.robots.spec import SegmentSpec
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 BAR_PA = 1e5
 THREAD_M = 0.150

@@ -27,7 +27,7 @@ from soft_gym.sensing.stereo_shape import (ASESConfig, arm_mask, estimate_stereo
                                            resample_polyline, train_som)
 from soft_gym.sensing.zou_feedback import tangent_quaternion
 from soft_gym.sensors.encoder import ChamberEncoders
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 ZOU = get_preset("zou2022")
 D = float(ZOU.chamber_offset_m[0])

@@ -94,7 +94,6 @@ def resolve(request: TrainRequest) -> tuple[TrainSettings, dict]:
 def versions() -> dict[str, str]:
     """Python, package versions and the git revision of this checkout."""
     import gymnasium
-    import pybullet  # noqa: F401
     import stable_baselines3
     import torch
     from importlib.metadata import PackageNotFoundError, version

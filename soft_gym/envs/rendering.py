@@ -33,7 +33,6 @@ from typing import Any, Sequence
 
 import cv2
 import numpy as np
-import pybullet
 
 BACKGROUND = (236, 240, 245)
 FLOOR = (212, 219, 204)
@@ -169,28 +168,6 @@ def _pixel(point: np.ndarray) -> tuple[int, int]:
     return int(round(float(point[0]))), int(round(float(point[1])))
 
 
-def _hide_bodies(client, keep: list[int]) -> list[tuple[int, int, list[float]]]:
-    """Make every visual shape of the bodies not in ``keep`` transparent (TinyRenderer then
-    skips it) and return (body, link, colour) to restore them with.
-
-    The frame keeps only the arm's and the loads' pixels, so the eye-in-hand camera's textured
-    scenery, the stereo backdrop and the faults' bodies would be drawn for nothing: hidden, a
-    wang2023 frame with the camera's scenery costs ~3 ms instead of ~18 ms. Colours only change
-    for the one ``getCameraImage`` call and are put back exactly; nothing else reads them.
-    """
-    hidden = []
-    for index in range(client.getNumBodies()):
-        body = client.getBodyUniqueId(index)
-        if body in keep:
-            continue
-        for shape in client.getVisualShapeData(body):
-            colour = list(shape[7])
-            if colour[3] > 0.0:
-                client.changeVisualShape(body, shape[1], rgbaColor=[0.0, 0.0, 0.0, 0.0])
-                hidden.append((body, shape[1], colour))
-    return hidden
-
-
 MAX_RENDER_PX = 4096
 """Largest frame side (px) a renderer draws."""
 
@@ -228,7 +205,7 @@ class SceneRenderer:
         heights = workspace @ self.up
         lateral = float(np.max(np.abs(workspace @ np.stack([first, second], axis=1)))) + radius
         self.extent_m = max(float(np.ptp(heights)), 2.0 * lateral)
-        # the base plate: the far face of PyBullet's base mount (soft_gym.robots.builder), a
+        # the base plate: the far face of the base mount (soft_gym.engines.pybullet.builder), a
         # disc normal to the arm's rest axis (base z) behind the base
         first_segment = spec.segments[0]
         mount_m = 0.004 + (first_segment.max_extension_ratio - 1.0) * first_segment.link_length_m
@@ -279,26 +256,28 @@ class SceneRenderer:
     def scene(self, sim) -> tuple[np.ndarray, np.ndarray]:
         """PyBullet's colour image (H, W, 3) of ``sim`` and the mask of pixels (H, W) showing the
         arm or a load's body (every other body, e.g. the eye-in-hand camera's scenery, is left
-        out of the image: see :func:`_hide_bodies`)."""
+        out of the image).
+
+        The frame keeps only the arm's and the loads' pixels, so the eye-in-hand camera's
+        textured scenery, the stereo backdrop and the faults' bodies would be drawn for nothing:
+        hidden (made transparent for this one frame, their colours then put back exactly), a
+        wang2023 frame with the camera's scenery costs ~3 ms instead of ~18 ms.
+        """
         view, projection = self.camera.bullet_matrices()
-        bodies = [sim.arm.body_id] + [body for body in (getattr(load, "_body", -1)
-                                                        for load in sim.loads) if body >= 0]
-        hidden = _hide_bodies(sim.client, bodies)
+        bodies = [sim.world.arm_body] + [body for body in (getattr(load, "_body", -1)
+                                                           for load in sim.loads) if body >= 0]
+        hidden = sim.world.hide_all_but(bodies)
         try:
-            _, _, rgba, _, segmentation = sim.client.getCameraImage(
-                self.width, self.height, view, projection, lightDirection=self._light,
-                shadow=0, renderer=pybullet.ER_TINY_RENDERER)
+            rgb, _, segmentation = sim.world.render(self.width, self.height, view, projection,
+                                                    self._light, segmentation=True)
         finally:
-            for body, link, colour in hidden:
-                sim.client.changeVisualShape(body, link, rgbaColor=colour)
-        rgb = np.asarray(rgba, dtype=np.uint8).reshape(self.height, self.width, 4)[:, :, :3]
-        mask = np.isin(np.asarray(segmentation).reshape(self.height, self.width), bodies)
-        return rgb, mask
+            sim.world.unhide(hidden)
+        return rgb, np.isin(segmentation, bodies)
 
     def render(self, sim, target_m: np.ndarray | None = None,
                next_target_m: np.ndarray | None = None, path_m: np.ndarray | None = None,
                estimate_m: np.ndarray | None = None) -> np.ndarray:
-        """One frame (H, W, 3) ``uint8`` of ``sim`` (an :class:`~soft_gym.sim.ArmSimulator`) with
+        """One frame (H, W, 3) ``uint8`` of ``sim`` (a :class:`~soft_gym.simulator.Simulator`) with
         the current and next target, the path polyline and the feedback estimate (m, base
         frame; ``None`` leaves one out)."""
         image = self._background.copy()
@@ -370,7 +349,7 @@ class SceneRenderer:
         scale = max(0.3, min(self.width, self.height) / 600)
         for load in sim.loads:
             if isinstance(load, SwayingMass) and load._body >= 0:
-                ball = np.asarray(sim.client.getBasePositionAndOrientation(load._body)[0])
+                ball = sim.world.body_position(load._body)
                 cv2.line(image, tip_px, _pixel(camera.project(ball)), MASS, 1, cv2.LINE_AA)
             elif isinstance(load, _TipMassBase) and load.active(time_s):
                 mass = load.extra_mass_kg(time_s)

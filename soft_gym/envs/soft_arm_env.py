@@ -117,7 +117,7 @@ from soft_gym.sensing.feedback import (CalibrationContext, FeedbackEstimate,
                                        make_feedback_source)
 from soft_gym.sensing.measurement import Measurement, measure
 from soft_gym.sensors import SENSORS, make_sensor
-from soft_gym.sim import ArmSimulator
+from soft_gym.engines import make_simulator
 from soft_gym.tasks import ReachTask, TrackTask
 from soft_gym.tasks.positioning import drive_tip_to
 from soft_gym.tasks.tasks import within_reach
@@ -258,7 +258,7 @@ class SoftArmEnv(gym.Env):
                       TrackTask(self.spec_arm, path=name, cycles=cycles, speed_m_s=speed_m_s,
                                 waypoints_m=waypoints_m) for name in paths]
         self.task = self.tasks[0]
-        self.sim = ArmSimulator(self.spec_arm)
+        self.sim = make_simulator(self.spec_arm)
         for load in self.loads:
             self.sim.add_load(load)
         self.obs_parts = obs
@@ -284,7 +284,7 @@ class SoftArmEnv(gym.Env):
         gravity = float(np.linalg.norm(self.spec_arm.gravity_base))
         fixed_load_n = heaviest_total_load_n(self.loads, gravity)
         self.randomizer = None if config is None else DomainRandomizer(
-            config, n_links=len(self.sim.arm.station_link), with_camera="image" in self.sensors,
+            config, n_links=self.sim.n_links, with_camera="image" in self.sensors,
             max_load_n=self.spec_arm.max_load_n - fixed_load_n)
         self._draw = None
         self._sensor_config = sensor_config
@@ -473,7 +473,7 @@ class SoftArmEnv(gym.Env):
         for load in self.loads + draw.scenario:
             self.sim.add_load(load)
         self.sim.set_stiffness_scale(draw.stiffness_scale)
-        self.sim.supply.set_time_constant_scale(draw.time_constant_scale)
+        self.sim.set_time_constant_scale(draw.time_constant_scale)
         for sensor in self.sensors.values():
             sensor.set_noise_scale(draw.sensor_noise_scale)
         if "image" in self.sensors:

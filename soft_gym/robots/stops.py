@@ -2,7 +2,7 @@
 
 A soft arm stops lengthening or bending at a limit: a braided sleeve or zhao2021's central thread
 at full extension, the chamber walls folding against each other at full bend. Each joint of the
-discrete beam (:mod:`soft_gym.robots.builder`) gets that limit as a locking spring: over the last
+discrete beam (:mod:`soft_gym.engines.pybullet.builder`) gets that limit as a locking spring: over the last
 ``band`` of its range towards a limit the stiffness rises linearly from zero to ``stiffness``
 (``STOP_STIFFNESS_FACTOR`` times the joint's material stiffness) and stays there beyond the limit,
 like the locking stretch of a Gent hyperelastic solid. The force is smooth (C1), so the

@@ -31,7 +31,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import pybullet
 
 from soft_gym._timing import TimeWindow
 from soft_gym._validation import (as_finite_array, require_bool, require_non_negative,
@@ -104,7 +103,7 @@ class _Timed(TimeWindow):
 class _TipMassBase(_Timed):
     """Adds a time-varying point mass at the tip.
 
-    The simulator carries it as a tip payload (:meth:`soft_gym.sim.ArmSimulator.set_tip_payload`):
+    The simulator carries it as a tip payload (:meth:`soft_gym.engines.pybullet.simulator.ArmSimulator.set_tip_payload`):
     the tip link's mass and inertia grow and the weight acts at the tip. Detaching or clearing
     the loads restores the link exactly as it was built.
     """
@@ -203,46 +202,34 @@ class SwayingMass(_Timed):
 
     def attach(self, sim) -> None:
         _check_peak_mass(self, "mass_kg", self.mass_kg)
-        client = sim.client
-        shape = client.createCollisionShape(pybullet.GEOM_SPHERE, radius=self.radius_m)
-        visual = client.createVisualShape(pybullet.GEOM_SPHERE, radius=self.radius_m,
-                                          rgbaColor=[0.2, 0.4, 0.9, 1])
         tip, _ = sim.tip_pose()
         down = sim.gravity / max(np.linalg.norm(sim.gravity), 1e-9)
-        self._body = client.createMultiBody(self.mass_kg, shape, visual,
-                                            (tip + down * self.length_m).tolist())
+        self._body = sim.world.add_body("sphere", radius_m=self.radius_m, mass_kg=self.mass_kg,
+                                        position_m=(tip + down * self.length_m).tolist(),
+                                        rgba=(0.2, 0.4, 0.9, 1))
         # no collision between the ball and the arm it hangs from
-        for link in range(-1, sim.arm.n_joints):
-            client.setCollisionFilterPair(self._body, sim.arm.body_id, -1, link, 0)
-        last = sim.arm.tip_link
-        # constraint pivots are given in the link's centre-of-mass frame
-        com = np.asarray(client.getDynamicsInfo(sim.arm.body_id, last)[3])
-        pivot = np.array([0.0, 0.0, sim.arm.station_rest_length[-1]]) - com
-        self._constraint = client.createConstraint(
-            sim.arm.body_id, last, self._body, -1, pybullet.JOINT_POINT2POINT, [0, 0, 0],
-            pivot.tolist(), (-down * self.length_m).tolist())
-        client.changeConstraint(self._constraint, maxForce=1e3)
+        sim.world.ignore_arm_collisions(self._body)
+        self._constraint = sim.world.tether_to_tip(self._body, -down * self.length_m)
 
     def update(self, sim, time_s: float) -> None:
         if self._body < 0:
             return
         if not self.active(time_s) and time_s > 0:
-            sim.client.changeConstraint(self._constraint, maxForce=0.0)
+            sim.world.set_tether_force(self._constraint, 0.0)
         elif self.active(time_s):
-            sim.client.changeConstraint(self._constraint, maxForce=1e3)
+            sim.world.set_tether_force(self._constraint, 1e3)
 
     def reset(self, sim) -> None:
         """Put the ball back at rest under the tip (called when the arm is reset)."""
         tip, _ = sim.tip_pose()
         down = sim.gravity / max(np.linalg.norm(sim.gravity), 1e-9)
-        sim.client.resetBasePositionAndOrientation(self._body, (tip + down * self.length_m).tolist(),
-                                                   [0, 0, 0, 1])
-        sim.client.resetBaseVelocity(self._body, [0, 0, 0], [0, 0, 0])
+        sim.world.set_body_pose(self._body, (tip + down * self.length_m).tolist(), [0, 0, 0, 1])
+        sim.world.stop_body(self._body)
 
     def detach(self, sim) -> None:
         if self._body >= 0:
-            sim.client.removeConstraint(self._constraint)
-            sim.client.removeBody(self._body)
+            sim.world.remove_tether(self._constraint)
+            sim.world.remove_body(self._body)
             self._body = -1
 
 
@@ -276,12 +263,12 @@ class Push(_Timed):
         self.on_tip_cap = require_bool("on_tip_cap", self.on_tip_cap)
 
     def _link_index(self, sim) -> int:
-        n = len(sim.arm.station_link)
+        n = sim.n_links
         if isinstance(self.link, (bool, np.bool_)) or not isinstance(self.link, (int, np.integer)) \
                 or not -n <= self.link < n:
             raise ValueError(f"link must be an integer in [{-n}, {n - 1}] for this arm "
                              f"({n} links), got {self.link!r}")
-        return int(sim.arm.station_link[self.link])
+        return int(self.link) % n
 
     def attach(self, sim) -> None:
         _check_peak_force(self, "impulse_ns / duration_s" if isinstance(self, Flick)
@@ -302,8 +289,8 @@ class Push(_Timed):
         key = f"push{id(self)}"
         force = np.array(self.force_n) * self.scale(time_s)
         if self.on_tip_cap:
-            sim.set_external_force(key, sim.arm.tip_link, force,
-                                   (0.0, 0.0, sim.arm.station_rest_length[-1]), on_body=False)
+            sim.set_external_force(key, -1, force, (0.0, 0.0, sim.link_rest_lengths_m[-1]),
+                                   on_body=False)
         else:
             sim.set_external_force(key, self._link_index(sim), force)
 
@@ -386,20 +373,17 @@ class ObstacleRod(_Timed):
         angle = math.acos(float(np.clip(axis @ z, -1, 1)))
         if np.linalg.norm(rotation_axis) < 1e-9:
             rotation_axis = np.array([1.0, 0.0, 0.0])
-        orientation = pybullet.getQuaternionFromAxisAngle(rotation_axis.tolist(), angle)
-        client = sim.client
-        shape = client.createCollisionShape(pybullet.GEOM_CYLINDER, radius=self.radius_m,
-                                            height=self.length_m)
-        visual = client.createVisualShape(pybullet.GEOM_CYLINDER, radius=self.radius_m,
-                                          length=self.length_m, rgbaColor=[0.7, 0.7, 0.75, 1])
-        self._body = client.createMultiBody(0.0, shape, visual, list(self.point_m), orientation)
+        self._body = sim.world.add_body(
+            "cylinder", radius_m=self.radius_m, length_m=self.length_m,
+            position_m=list(self.point_m), axis_angle=(rotation_axis.tolist(), angle),
+            rgba=(0.7, 0.7, 0.75, 1))
 
     def update(self, sim, time_s: float) -> None:
         pass
 
     def detach(self, sim) -> None:
         if self._body >= 0:
-            sim.client.removeBody(self._body)
+            sim.world.remove_body(self._body)
             self._body = -1
 
 

@@ -208,7 +208,7 @@ def collect_dataset(spec: ArmSpec, encoders, stereo=None,
         progress: show a progress bar.
     """
     from soft_gym.sensing.stereo_shape import ASESConfig, estimate_stereo_shape
-    from soft_gym.sim import ArmSimulator
+    from soft_gym.engines.pybullet.simulator import ArmSimulator
 
     if not isinstance(spec, ArmSpec):
         raise ValueError(f"spec must be an ArmSpec, got {spec!r}")

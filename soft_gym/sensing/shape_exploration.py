@@ -105,7 +105,7 @@ def collect_exploration(spec: ArmSpec, gauges, n_free: int = 4000, n_loaded: int
         progress: show a progress bar.
     """
     from soft_gym.scenarios.loads import TipMass
-    from soft_gym.sim import ArmSimulator
+    from soft_gym.engines.pybullet.simulator import ArmSimulator
 
     n_free = require_integer("n_free", n_free, 0)
     n_loaded = require_integer("n_loaded", n_loaded, 0)

@@ -4,7 +4,7 @@ Wang et al. 2023 fix an endoscopic camera (depth of field 8-150 mm) and an LED o
 run monocular ORB-SLAM2 on its frames at 20 Hz (one per 0.05 s control step) while the arm moves
 over a LEGO-constructed scene. Here the frame is rendered by PyBullet's TinyRenderer (CPU, works
 in DIRECT mode) from the tip pose composed with a fixed camera offset, looking along the tip's
-+z axis, at the feature-rich scene of :func:`soft_gym.sensors.scene.build_scene`; the visual
++z axis, at the feature-rich scene of :func:`soft_gym.engines.pybullet.scene.build_scene`; the visual
 faults of :mod:`soft_gym.sensors.faults` (occluder, low light, LED glare, motion blur, noise)
 are applied to every frame.
 
@@ -21,7 +21,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pybullet
 from gymnasium import spaces
 
 from soft_gym._quaternion import quaternion_to_matrix
@@ -29,30 +28,6 @@ from soft_gym._validation import as_finite_array
 from soft_gym.sensors.base import Sensor
 from soft_gym.sensors.faults import FrameContext, VisualFault, replace_faults
 from soft_gym.sensors.intrinsics import CameraIntrinsics, as_intrinsics
-from soft_gym.sensors.scene import build_scene
-
-
-def view_matrix(rotation: np.ndarray, position: np.ndarray) -> list[float]:
-    """OpenGL view matrix (16 floats, column-major) of a camera with world-from-camera pose
-    ``(rotation, position)`` in OpenCV axes (x right, y down, z forward)."""
-    gl_rotation = rotation * np.array([1.0, -1.0, -1.0])  # OpenGL: y up, looking along -z
-    matrix = np.eye(4)
-    matrix[:3, :3] = gl_rotation.T
-    matrix[:3, 3] = -gl_rotation.T @ position
-    return matrix.T.reshape(-1).tolist()
-
-
-def render(client, intrinsics: CameraIntrinsics, rotation: np.ndarray, position: np.ndarray,
-           light_direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Render RGB (uint8 (H, W, 3)) and metric depth (m, (H, W)) with TinyRenderer."""
-    width, height = intrinsics.width, intrinsics.height
-    image = client.getCameraImage(
-        width, height, view_matrix(rotation, position), intrinsics.projection_matrix(),
-        lightDirection=list(light_direction), shadow=0, renderer=pybullet.ER_TINY_RENDERER,
-        flags=pybullet.ER_NO_SEGMENTATION_MASK)
-    rgb = np.asarray(image[2], dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
-    depth = intrinsics.depth_from_buffer(np.asarray(image[3]).reshape(height, width))
-    return np.ascontiguousarray(rgb), depth
 
 
 class EyeInHandCamera(Sensor):
@@ -66,8 +41,9 @@ class EyeInHandCamera(Sensor):
             (default none: clean frames). See :meth:`set_faults`.
         rate_hz: frames per second; ``None`` renders at every read (wang2023 runs ORB-SLAM2 at
             the 20 Hz control rate).
-        scene: build the feature-rich scene (:func:`~soft_gym.sensors.scene.build_scene`) in the
-            simulator's client at the first reset; ``False`` leaves the world as it is.
+        scene: build the feature-rich scene (the world's ``build_scene``,
+            :func:`soft_gym.engines.pybullet.scene.build_scene`) at the first reset; ``False``
+            leaves the world as it is.
         scene_seed: seed of the scene layout. The scene is the robot's surroundings: it is built
             once per simulator and does not change with the episode's seed.
         scene_options: extra keyword arguments for ``build_scene``.
@@ -102,7 +78,7 @@ class EyeInHandCamera(Sensor):
             raise ValueError(f"scene_options must be None or a dict, got {scene_options!r}")
         self.scene_options = dict(scene_options or {})
         self.faults: list[VisualFault] = []
-        self._client: Any = None
+        self._world: Any = None
         self.scene_body_ids: list[int] = []
         self.set_faults(faults)
         self.last_pose: tuple[np.ndarray, np.ndarray] | None = None
@@ -112,21 +88,21 @@ class EyeInHandCamera(Sensor):
     # ------------------------------------------------------------------ set-up
     def set_faults(self, faults: Any) -> None:
         """Replace the faults (any ``make_faults`` description); their bodies move along."""
-        self.faults = replace_faults(self.faults, faults, self._client,
-                                     lambda fault: fault.attach(self._client, self.intrinsics),
+        self.faults = replace_faults(self.faults, faults, self._world,
+                                     lambda fault: fault.attach(self._world, self.intrinsics),
                                      self.rng)
 
     def _setup(self, sim) -> None:
-        """Build the scene and the faults' bodies once per simulator client."""
-        if self._client is sim.client:
+        """Build the scene and the faults' bodies once per simulator world."""
+        if self._world is sim.world:
             return
-        self._client = sim.client
+        self._world = sim.world
         if self.scene:
             options = {"seed": self.scene_seed, **self.scene_options}
-            self.scene_body_ids = build_scene(sim.client, sim.spec.length_m, **options)
+            self.scene_body_ids = sim.world.build_scene(sim.spec.length_m, **options)
         for fault in self.faults:
             if fault.geometric:
-                fault.attach(sim.client, self.intrinsics)
+                fault.attach(sim.world, self.intrinsics)
 
     def reset(self, sim, rng: np.random.Generator) -> None:
         """Start an episode: build the scene if needed and draw the faults' episode parameters."""
@@ -164,9 +140,9 @@ class EyeInHandCamera(Sensor):
         """
         self._setup(sim)
         for fault in self.faults:
-            fault.park(sim.client)
+            fault.park(sim.world)
         rotation, position = self.camera_pose(sim)
-        return render(sim.client, self.intrinsics, rotation, position, self.light_direction)
+        return sim.world.render_camera(self.intrinsics, rotation, position, self.light_direction)
 
     def render_depth(self, sim) -> np.ndarray:
         """Metric depth along the optical axis (m, (H, W)) without faults, for calibration
@@ -190,8 +166,9 @@ class EyeInHandCamera(Sensor):
         context = self._context(sim, rotation, position)
         for fault in self.faults:
             if fault.geometric:
-                fault.place(sim.client, context)
-        rgb, depth = render(sim.client, self.intrinsics, rotation, position, self.light_direction)
+                fault.place(sim.world, context)
+        rgb, depth = sim.world.render_camera(self.intrinsics, rotation, position,
+                                             self.light_direction)
         context.depth = depth
         image_faults = [fault for fault in self.faults
                         if not fault.geometric and fault.strength_at(context.time_s) > 0.0]
@@ -210,4 +187,4 @@ class EyeInHandCamera(Sensor):
         return spaces.Box(0, 255, (self.intrinsics.height, self.intrinsics.width, 3), np.uint8)
 
 
-__all__ = ["EyeInHandCamera", "view_matrix", "render"]
+__all__ = ["EyeInHandCamera"]

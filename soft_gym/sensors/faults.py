@@ -51,7 +51,6 @@ from typing import Any, Callable, ClassVar, Sequence
 
 import cv2
 import numpy as np
-import pybullet
 
 from soft_gym._quaternion import matrix_to_quaternion
 from soft_gym._registry import FORMS, Spec, build, parse_spec
@@ -166,22 +165,22 @@ class VisualFault(TimeWindow):
     def reset(self, rng: np.random.Generator) -> None:
         """Start an episode: draw this fault's random parameters from ``rng``."""
 
-    def attach(self, client, intrinsics: CameraIntrinsics, *, baseline_m: float = 0.0,
+    def attach(self, world, intrinsics: CameraIntrinsics, *, baseline_m: float = 0.0,
                default_distance_m: float = EYE_IN_HAND_OCCLUDER_M) -> None:
-        """Create this fault's bodies in ``client`` (geometry faults only).
+        """Create this fault's bodies in the simulator's ``world`` (geometry faults only).
 
         ``baseline_m``: the rig's spread of optical centres along the camera x axis (m; 0 for
         one camera); ``default_distance_m``: the camera's distance for a body whose own is
         ``None`` (m).
         """
 
-    def detach(self, client) -> None:
-        """Remove this fault's bodies from ``client``."""
+    def detach(self, world) -> None:
+        """Remove this fault's bodies from ``world``."""
 
-    def place(self, client, context: FrameContext) -> None:
+    def place(self, world, context: FrameContext) -> None:
         """Move this fault's bodies for the frame about to be rendered (geometry faults only)."""
 
-    def park(self, client) -> None:
+    def park(self, world) -> None:
         """Move this fault's bodies out of every camera's view (geometry faults only)."""
 
     def apply(self, image: np.ndarray, context: FrameContext) -> np.ndarray:
@@ -243,7 +242,7 @@ class MovingOccluder(VisualFault):
     stage: ClassVar[int] = 0
     geometric: ClassVar[bool] = True
     _body: int = field(default=-1, init=False, repr=False)
-    _client: Any = field(default=None, init=False, repr=False)
+    _world: Any = field(default=None, init=False, repr=False)
     _half_size_m: float = field(default=0.0, init=False, repr=False)
     _distance_m: float = field(default=EYE_IN_HAND_OCCLUDER_M, init=False, repr=False)
     _phase: float = field(default=0.0, init=False, repr=False)
@@ -284,7 +283,7 @@ class MovingOccluder(VisualFault):
         """The distance in use (m): ``distance_m``, or the camera's default once attached."""
         return self._distance_m
 
-    def attach(self, client, intrinsics: CameraIntrinsics, *, baseline_m: float = 0.0,
+    def attach(self, world, intrinsics: CameraIntrinsics, *, baseline_m: float = 0.0,
                default_distance_m: float = EYE_IN_HAND_OCCLUDER_M) -> None:
         distance = self.distance_m if self.distance_m is not None else float(default_distance_m)
         if intrinsics.near_m >= distance:
@@ -298,23 +297,19 @@ class MovingOccluder(VisualFault):
                                    + 0.5 * baseline,
                                    distance * intrinsics.height / (2 * intrinsics.fy))
         self._half_size_m = 1.2 * half_diagonal
-        visual = client.createVisualShape(
-            pybullet.GEOM_BOX, halfExtents=[self._half_size_m, self._half_size_m, 2e-4],
-            rgbaColor=list(self.rgba))
-        self._body = client.createMultiBody(0.0, -1, visual, list(_PARKED_POSITION))
-        self._client = client
+        self._body = world.add_body(
+            "box", half_extents_m=[self._half_size_m, self._half_size_m, 2e-4], collide=False,
+            rgba=self.rgba, position_m=list(_PARKED_POSITION))
+        self._world = world
 
-    def detach(self, client) -> None:
-        if self._body >= 0 and client is self._client:
-            try:
-                client.removeBody(self._body)
-            except pybullet.error:
-                pass
-        self._body, self._client = -1, None
+    def detach(self, world) -> None:
+        if self._body >= 0 and world is self._world:
+            world.remove_body(self._body)
+        self._body, self._world = -1, None
 
-    def park(self, client) -> None:
-        if self._body >= 0 and client is self._client:
-            client.resetBasePositionAndOrientation(self._body, list(_PARKED_POSITION), [0, 0, 0, 1])
+    def park(self, world) -> None:
+        if self._body >= 0 and world is self._world:
+            world.set_body_pose(self._body, list(_PARKED_POSITION), [0, 0, 0, 1])
 
     def motion(self, time_s: float) -> tuple[float, int]:
         """The profile ``s(t)`` in [0, 1] and the side index (into right/left/bottom/top)."""
@@ -334,12 +329,12 @@ class MovingOccluder(VisualFault):
             return 0.0
         return self.strength_at(time_s) * self.motion(time_s)[0]
 
-    def place(self, client, context: FrameContext) -> None:
+    def place(self, world, context: FrameContext) -> None:
         if self._body < 0:
             return
         fraction = self.covered_fraction(context.time_s)
         if fraction <= 0.0:
-            self.park(client)
+            self.park(world)
             return
         _, side = self.motion(context.time_s)
         direction = np.array(_SIDES[side])
@@ -353,8 +348,8 @@ class MovingOccluder(VisualFault):
         centre = (edge + self._half_size_m) * direction
         local = np.array([centre[0], centre[1], distance])
         position = context.position + context.rotation @ local
-        client.resetBasePositionAndOrientation(self._body, position.tolist(),
-                                               matrix_to_quaternion(context.rotation).tolist())
+        world.set_body_pose(self._body, position.tolist(),
+                            matrix_to_quaternion(context.rotation).tolist())
 
 
 def _add_sensor_noise(image: np.ndarray, shot_gain: float, read_noise_dn: float,
@@ -657,18 +652,18 @@ def make_faults(faults: Any) -> list[VisualFault]:
     return made
 
 
-def replace_faults(current: list[VisualFault], faults: Any, client,
+def replace_faults(current: list[VisualFault], faults: Any, world,
                    attach: Callable[[VisualFault], None],
                    rng: np.random.Generator) -> list[VisualFault]:
     """A camera's new faults for the description ``faults``, in stage order: the geometric ones
-    of ``current`` leave the simulator ``client`` and, where the camera is already built
-    (``client`` not ``None``), the new geometric ones are placed by ``attach`` and every new one
+    of ``current`` leave the simulator's ``world`` and, where the camera is already built
+    (``world`` not ``None``), the new geometric ones are placed by ``attach`` and every new one
     is reset with ``rng``."""
     new = sorted(make_faults(faults), key=lambda fault: fault.stage)
-    if client is not None:
+    if world is not None:
         for fault in current:
             if fault.geometric:
-                fault.detach(client)
+                fault.detach(world)
         for fault in new:
             if fault.geometric:
                 attach(fault)

@@ -68,7 +68,6 @@ from typing import Callable
 import numpy as np
 from gymnasium import spaces
 
-from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym._validation import require_non_negative, require_positive
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensors.base import Sensor
@@ -504,10 +503,7 @@ class FBGFiber(Sensor):
         if not np.any(on_loaded):
             return pressing
         links = np.unique(self._grating_link[on_loaded])
-        states = sim.client.getLinkStates(sim.arm.body_id,
-                                          [int(sim.arm.station_link[i]) for i in links],
-                                          computeForwardKinematics=1)
-        rotations = quaternion_to_matrix(np.array([state[5] for state in states]))
+        rotations = sim.link_rotations(links)
         for link, rotation in zip(links, rotations):
             gratings = np.flatnonzero(self._grating_link == link)
             normals = self._normals_local[gratings] @ rotation.T  # outward normals, base frame

@@ -46,12 +46,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pybullet
 from gymnasium import spaces
 
 from soft_gym._validation import as_finite_array, require_positive
 from soft_gym.sensors.base import Sensor
-from soft_gym.sensors.camera import render
 from soft_gym.sensors.faults import FrameContext, VisualFault, replace_faults
 from soft_gym.sensors.intrinsics import CameraIntrinsics, as_intrinsics
 
@@ -125,7 +123,7 @@ class StereoCamera(Sensor):
         if not np.isfinite(noise_std_dn) or noise_std_dn < 0:
             raise ValueError(f"noise_std_dn must be a finite number >= 0, got {noise_std_dn!r}")
         self.noise_std_dn = float(noise_std_dn)
-        self._client: Any = None
+        self._world: Any = None
         self._occluder_distance_m = 0.0
         self.backdrop_id = -1
         self.poses: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -165,18 +163,18 @@ class StereoCamera(Sensor):
 
     # ------------------------------------------------------------------ set-up
     def _attach(self, fault: VisualFault) -> None:
-        fault.attach(self._client, self.intrinsics, baseline_m=self.baseline_m,
+        fault.attach(self._world, self.intrinsics, baseline_m=self.baseline_m,
                      default_distance_m=self._occluder_distance_m)
 
     def set_faults(self, faults: Any) -> None:
         """Replace the faults (any ``make_faults`` description); their bodies move along."""
-        self.faults = replace_faults(self.faults, faults, self._client, self._attach, self.rng)
+        self.faults = replace_faults(self.faults, faults, self._world, self._attach, self.rng)
 
     def _setup(self, sim) -> None:
         """Place the backdrop and the faults' bodies once per simulator client."""
-        if self._client is sim.client:
+        if self._world is sim.world:
             return
-        self._client = sim.client
+        self._world = sim.world
         distance, _ = self._layout(sim)
         self._occluder_distance_m = OCCLUDER_FRACTION * distance
         if self.backdrop:
@@ -196,11 +194,10 @@ class StereoCamera(Sensor):
             raise ValueError(f"backdrop_distance_m must put the backdrop before far_m="
                              f"{self.intrinsics.far_m} (camera at {distance:.3f} m), got "
                              f"{self.backdrop_distance_m!r}")
-        visual = sim.client.createVisualShape(
-            pybullet.GEOM_BOX, halfExtents=[1.2 * half_w, 0.005, 1.2 * half_h],
-            rgbaColor=list(self.backdrop_rgba))
         position = target + (self.backdrop_distance_m + 0.005) * rotation[:, 2]
-        self.backdrop_id = sim.client.createMultiBody(0.0, -1, visual, position.tolist())
+        self.backdrop_id = sim.world.add_body(
+            "box", half_extents_m=[1.2 * half_w, 0.005, 1.2 * half_h], collide=False,
+            rgba=self.backdrop_rgba, position_m=position.tolist())
 
     def reset(self, sim, rng: np.random.Generator) -> None:
         """Start an episode: place the backdrop in ``sim``'s world once and draw the faults'
@@ -241,12 +238,12 @@ class StereoCamera(Sensor):
         if geometric:
             rig = self.rig_context(sim)
             for fault in geometric:
-                fault.place(sim.client, rig)
+                fault.place(sim.world, rig)
         image_faults = [fault for fault in self.faults
                         if not fault.geometric and fault.strength_at(sim.time_s) > 0.0]
         for side, (rotation, centre) in self.poses.items():
-            rgb, depth = render(sim.client, self.intrinsics, rotation, centre,
-                                self.light_direction)
+            rgb, depth = sim.world.render_camera(self.intrinsics, rotation, centre,
+                                                 self.light_direction)
             if image_faults:
                 context = self._context(sim, side, rotation, centre, depth)
                 image = rgb.astype(np.float32)
@@ -260,7 +257,7 @@ class StereoCamera(Sensor):
                 rgb = np.clip(np.rint(noisy), 0, 255).astype(np.uint8)
             reading[side] = rgb
         for fault in geometric:  # an obstacle of this pair only: out of the other cameras' view
-            fault.park(sim.client)
+            fault.park(sim.world)
         matrices = self.projection_matrices(sim)
         reading["P_left"], reading["P_right"] = matrices["left"], matrices["right"]
         return reading

@@ -30,7 +30,7 @@ def drive_tip_to(sim, start_m: np.ndarray, hold_s: float = 1.0, tolerance_m: flo
     """Find and hold chamber pressures that put the tip at ``start_m`` (m, base frame).
 
     Args:
-        sim: the :class:`~soft_gym.sim.ArmSimulator` (its loads stay as they are).
+        sim: the :class:`~soft_gym.engines.pybullet.simulator.ArmSimulator` (its loads stay as they are).
         start_m: wanted tip position (m).
         hold_s: time each trial pressure is held before the tip is read (s).
         tolerance_m: distance at which the search stops (m).

@@ -22,7 +22,7 @@ def reachable_tips(spec: ArmSpec, n_samples: int = 96, hold_s: float = 0.4,
     """
     key = spec
     if key not in _CACHE:
-        from soft_gym.sim import ArmSimulator  # local: avoid a cycle at import time
+        from soft_gym.engines.pybullet.simulator import ArmSimulator  # local: avoid a cycle at import time
 
         sim = ArmSimulator(spec)
         rng = np.random.default_rng(seed)
@@ -40,7 +40,7 @@ def reachable_tips(spec: ArmSpec, n_samples: int = 96, hold_s: float = 0.4,
 
 def rest_tip(spec: ArmSpec) -> np.ndarray:
     """Tip position at rest under the pre-pressure and gravity (m)."""
-    from soft_gym.sim import ArmSimulator
+    from soft_gym.engines.pybullet.simulator import ArmSimulator
 
     sim = ArmSimulator(spec)
     sim.reset(settle_s=1.0)

@@ -1,23 +1,23 @@
-"""The arm simulator: one PyBullet client, one arm, its pneumatics and the loads acting on it.
+"""The arm simulator in PyBullet: one client, one arm, its pneumatics and the loads acting on it.
 
-This is ``env.unwrapped.sim`` (docs/architecture.md, "Simulator public face"). Everything is in
-the arm's base frame, which is
-PyBullet's world frame here; the mount only decides the gravity vector.
+This is ``env.unwrapped.sim``, the PyBullet implementation of
+:class:`soft_gym.simulator.Simulator` (docs/architecture.md, "The simulator interface"). Everything
+is in the arm's base frame, which is PyBullet's world frame here; the mount only decides the
+gravity vector.
 """
 
 from __future__ import annotations
-
-from typing import Protocol
 
 import numpy as np
 import pybullet
 from pybullet_utils import bullet_client
 
-from soft_gym._pybullet import c_stdout_silenced
+from soft_gym.engines.pybullet.quiet_import import c_stdout_silenced
 from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
-from soft_gym.robots.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
+from soft_gym.engines.pybullet.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
+from soft_gym.engines.pybullet.world import PyBulletWorld
 from soft_gym.robots.pneumatics import (
     PneumaticSupply,
     chamber_area_growth,
@@ -28,6 +28,7 @@ from soft_gym.robots.pneumatics import (
 from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
 from soft_gym.robots.stops import STOP_STIFFNESS_FACTOR, THREAD_STIFFNESS_FACTOR, EndStops
 from soft_gym.scenarios.loads import heaviest_total_load_n
+from soft_gym.simulator import Load
 
 
 _IMPLICIT_FRACTION = 0.25
@@ -52,20 +53,6 @@ class PhysicsDivergedError(RuntimeError):
     """The simulation left the physical range (a joint far past its end stop)."""
 
 
-class Load(Protocol):
-    """What the simulator expects of a scenario element (see :mod:`soft_gym.scenarios`)."""
-
-    def attach(self, sim: "ArmSimulator") -> None: ...
-
-    def update(self, sim: "ArmSimulator", time_s: float) -> None: ...
-
-    def reset(self, sim: "ArmSimulator") -> None: ...
-
-    def detach(self, sim: "ArmSimulator") -> None: ...
-
-    def peak_load_n(self, gravity_m_s2: float) -> float: ...
-
-
 class ArmSimulator:
     """A soft arm in its own PyBullet physics client.
 
@@ -76,7 +63,8 @@ class ArmSimulator:
     Attributes:
         spec: the :class:`~soft_gym.robots.spec.ArmSpec`.
         client: the ``BulletClient`` (DIRECT mode).
-        arm: the built :class:`~soft_gym.robots.builder.ArmBody`.
+        arm: the built :class:`~soft_gym.engines.pybullet.builder.ArmBody`.
+        world: the bodies and cameras around the arm (:class:`PyBulletWorld`).
         time_s: simulated time since the last reset (s).
     """
 
@@ -94,6 +82,8 @@ class ArmSimulator:
         self._client_id = self.client._client  # for direct ``pybullet`` calls on the hot path
         self._step_simulation = pybullet.stepSimulation  # bench/env_speed.py times it here
         self.arm: ArmBody = build_arm(self.client, spec)
+        self.world = PyBulletWorld(self.client, self.arm.body_id, self.arm.tip_link,
+                                   np.array([0.0, 0.0, self.arm.station_rest_length[-1]]))
         # links with a collision shape, and whether their contact detection is on (see
         # _sync_contact_detection)
         self._collider_links = [
@@ -251,7 +241,7 @@ class ArmSimulator:
         if np.linalg.norm(force) > self.spec.max_load_n:
             raise ValueError(f"force_n must be at most {self.spec.max_load_n:.3g} N in magnitude "
                              f"on the {self.spec.name} arm (max_load_n), got {force.tolist()}")
-        self.set_external_force("tip", self.arm.tip_link, force,
+        self.set_external_force("tip", -1, force,
                                 local_point_m=(0.0, 0.0, self.arm.station_rest_length[-1]),
                                 on_body=False)
 
@@ -294,17 +284,6 @@ class ArmSimulator:
         d = self.spec.chamber_offset_m[:, None]
         lengths = arc[:, None] + d * (theta_x[:, None] * np.sin(sigma) - theta_y[:, None] * np.cos(sigma))
         return lengths.reshape(-1)
-
-    def link_curvatures(self) -> np.ndarray:
-        """Curvature vector (kx, ky) of every link (1/m), shape (n_links, 2).
-
-        The joint at a link's proximal end bends by ``theta``; over the link's current length the
-        curvature is ``(theta_y, -theta_x) / ds`` (convention of :mod:`soft_gym.kinematics`).
-        """
-        q = self.joint_positions()
-        bend = q[self.arm.station_bend_joints]
-        length = self.arm.station_rest_length + q[self.arm.station_axial_joint]
-        return np.stack([bend[:, 1], -bend[:, 0]], axis=1) / length[:, None]
 
     def curvature_profile(self) -> tuple[np.ndarray, np.ndarray]:
         """Backbone curvature at every vertex, for sensors that integrate strain along the arm.
@@ -371,6 +350,24 @@ class ArmSimulator:
         """Current chamber pressures (Pa)."""
         return self.supply.pressure_pa.copy()
 
+    @property
+    def n_links(self) -> int:
+        """Links of the discretised backbone (the arm's links, base to tip)."""
+        return len(self._station_links)
+
+    @property
+    def link_rest_lengths_m(self) -> np.ndarray:
+        """Every link's rest length (m), base to tip, shape (n_links,)."""
+        return self.arm.station_rest_length.copy()
+
+    def link_rotations(self, links: np.ndarray) -> np.ndarray:
+        """World-from-link rotation matrices of the arm's ``links`` (indices, 0 at the base),
+        shape (len(links), 3, 3)."""
+        states = self.client.getLinkStates(self.arm.body_id,
+                                           [int(self.arm.station_link[i]) for i in links],
+                                           computeForwardKinematics=1)
+        return quaternion_to_matrix(np.array([state[5] for state in states]))
+
     # ------------------------------------------------------------------ state
     def joint_positions(self) -> np.ndarray:
         """Joint positions (rad or m), in the multibody's joint order."""
@@ -379,10 +376,6 @@ class ArmSimulator:
             self._positions = np.fromiter((s[0] for s in states), dtype=float, count=len(states))
             self._positions_substep = self._substep
         return self._positions.copy()
-
-    def joint_velocities(self) -> np.ndarray:
-        states = self.client.getJointStates(self.arm.body_id, self._joints)
-        return np.fromiter((s[1] for s in states), dtype=float, count=len(states))
 
     def reset(self, pressure_pa: np.ndarray | None = None, settle_s: float = 0.0) -> None:
         """Set pressures (Pa; ``None``: the pre-pressure), put the arm at rest (straight without
@@ -443,6 +436,10 @@ class ArmSimulator:
         self._damping = self.arm.damping_time_s * self._stiffness0
         self._implicit_stiffness = np.zeros(self.arm.n_joints)  # forces a gain refresh
 
+    def set_time_constant_scale(self, scale: float) -> None:
+        """Multiply the pneumatic supply's time constants by ``scale`` (domain randomisation)."""
+        self.supply.set_time_constant_scale(scale)
+
     def add_load(self, load: Load) -> None:
         """Attach a scenario element; it is updated at the actuation rate.
 
@@ -474,11 +471,13 @@ class ArmSimulator:
     def set_external_force(self, key: str, link: int, force_n: np.ndarray,
                            local_point_m: tuple[float, float, float] | None = None,
                            on_body: bool = True) -> None:
-        """Hold a force (N, base frame) on ``link`` at ``local_point_m`` (m, link frame; default
-        the middle of the link), applied every physics substep until replaced or set to zero.
+        """Hold a force (N, base frame) on the arm's ``link`` (0 at the base, negative counts
+        from the tip: -1 is the last link) at ``local_point_m`` (m, link frame; default the
+        middle of the link), applied every physics substep until replaced or set to zero.
         ``on_body=False`` marks a force on the tip cap rather than on the body's surface (see
         :meth:`link_contact_forces`).
         """
+        link = int(self.arm.station_link[link])
         force = np.asarray(force_n, dtype=float)
         if not np.any(force):
             self._forces.pop(key, None)
@@ -792,8 +791,8 @@ class ArmSimulator:
         inertia = nominal_inertia + payload * lever_m**2 * np.array([1.0, 1.0, 0.0])
         self._set_link_inertia(link, nominal_mass + payload, inertia)
         weight = payload * self.gravity
-        self.set_external_force("payload_tip", link, weight, tuple(tip_point), on_body=False)
-        self.set_external_force("payload_com", link, -weight, tuple(com), on_body=False)
+        self.set_external_force("payload_tip", -1, weight, tuple(tip_point), on_body=False)
+        self.set_external_force("payload_com", -1, -weight, tuple(com), on_body=False)
 
     def _external_joint_torque(self, q: np.ndarray) -> np.ndarray:
         """Generalised force (N m or N per joint) of the held external forces at ``q``.

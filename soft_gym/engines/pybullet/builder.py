@@ -13,7 +13,7 @@ cylinder and visual. The station joints are the discrete elastic beam: bending j
 constant-curvature arc of a pure moment), axial compliance ``ds / (E A)``, torsion ``ds / (G J)``.
 
 The builder only records each joint's compliance, its share of each segment's pressure load,
-stiffening, damping and limits; :class:`soft_gym.sim.ArmSimulator` turns them into joint torques
+stiffening, damping and limits; :class:`soft_gym.engines.pybullet.simulator.ArmSimulator` turns them into joint torques
 every substep with a semi-implicit (stable-PD) update, with the pressure moment entering as the
 rest angle ``q_rest = sum(M_seg * compliance_part)``.
 """
