@@ -77,7 +77,7 @@ import pybullet
 
 import soft_gym  # noqa: F401  (registers the environment ids)
 from soft_gym._cli import HelpFormatter
-from soft_gym.envs.soft_arm_env import TASKS
+from soft_gym.envs.config import TASKS
 from soft_gym.envs.registration import TASK_IDS
 from soft_gym.robots import PRESETS, get_preset
 from soft_gym.engines.pybullet.simulator import ArmSimulator

@@ -35,7 +35,7 @@ from pathlib import Path
 
 from soft_gym._cli import HelpFormatter, check_output_dir, positive_int
 from soft_gym.robots.presets import PRESETS
-from soft_gym.sensing.feedback_base import FEEDBACK_SOURCES
+from soft_gym.sensing import FEEDBACK_SOURCES
 
 ROOT = Path(__file__).resolve().parent.parent
 

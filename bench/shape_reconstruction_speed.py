@@ -37,8 +37,8 @@ def main(argv: list[str] | None = None) -> None:
     from soft_gym.robots.presets import get_preset
     from soft_gym.sensing.backbone_fit import fit_backbone
     from soft_gym.sensing.sfe_pd import sequences
-    from soft_gym.sensing.shape_reconstruction import (ReconstructionConfig,
-                                                       cached_reconstruction, exploration_of)
+    from soft_gym.procedures.zhao2021_exploration import cached_reconstruction, exploration_of
+    from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
     from soft_gym.sensors.strain_gauge import StrainGauges
 
     torch.set_num_threads(1)

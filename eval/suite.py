@@ -317,7 +317,7 @@ def parse_suite(data: Any, source: str = "<suite>", text: str | None = None) -> 
     """A :class:`SuiteSpec` from the parsed YAML ``data`` (``source`` names it in errors)."""
     from agents.policies import BASELINES
     from soft_gym.robots.presets import PRESETS
-    from soft_gym.sensing.feedback_base import FEEDBACK_SOURCES
+    from soft_gym.sensing import FEEDBACK_SOURCES
     from soft_gym.tasks.paths import PATH_SHAPES
     import soft_gym.sensing.feedback  # noqa: F401  (registers the feedback sources)
 

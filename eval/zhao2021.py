@@ -54,7 +54,8 @@ from agents.policies import make_policy
 from soft_gym.robots.presets import (base_point_from_paper, get_preset,
                                      paper_point_from_base, paper_pressures_to_chambers)
 from soft_gym.sensing.shape_exploration import key_points_from_backbone
-from soft_gym.sensing.shape_reconstruction import ReconstructionConfig, cached_reconstruction
+from soft_gym.procedures.zhao2021_exploration import cached_reconstruction
+from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensors.strain_gauge import StrainGauges
 
 EXPERIMENTS = ("shape", "p2p", "sway", "circle")
@@ -113,7 +114,7 @@ def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True
     """Table III, the mean backbone error and Table IV on the SR model of ``config``."""
     from soft_gym.scenarios.loads import TipMass
     from soft_gym.sensing.backbone_fit import mean_backbone_error_m, resample_by_arc_length
-    from soft_gym.engines.pybullet.simulator import ArmSimulator
+    from soft_gym.engines import make_simulator
 
     spec = get_preset(PRESET)
     gauges = StrainGauges()
@@ -126,7 +127,7 @@ def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True
     step_pa = float(p_max.min()) / 16.0
 
     def measure(pressures: np.ndarray, load_kg: float = 0.0) -> dict:
-        sim = ArmSimulator(spec)
+        sim = make_simulator(spec)
         try:
             if load_kg > 0:
                 sim.add_load(TipMass(mass_kg=load_kg))
@@ -184,11 +185,11 @@ def reachable_point(point_m: np.ndarray, scenario=(), tries: int = 12) -> np.nda
     loads; else the nearest tip position the drive's pressure search finds, or the first point
     on the way from there towards the middle of the workspace (all chambers at half pressure)
     that the drive reaches, in 5 % steps (m, rounded to 0.1 mm)."""
-    from soft_gym.engines.pybullet.simulator import ArmSimulator
-    from soft_gym.tasks.positioning import drive_tip_to
+    from soft_gym.engines import make_simulator
+    from soft_gym.procedures.positioning import drive_tip_to
 
     spec = get_preset(PRESET)
-    sim = ArmSimulator(spec)
+    sim = make_simulator(spec)
     try:
         for load in copy.deepcopy(list(scenario)):
             sim.add_load(load)

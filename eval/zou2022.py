@@ -51,12 +51,13 @@ from tqdm import tqdm
 
 from soft_gym.robots.presets import get_preset
 from soft_gym.sensing.cc_shape import cc_shape_points
+from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
 from soft_gym.sensing.shape_dnn import (STEREO_INTRINSICS, ShapeDNNConfig, axis_errors_mm,
-                                        cached_shape_dnn, default_stereo, true_shape_points)
+                                        default_stereo, true_shape_points)
 from soft_gym.sensing.stereo_shape import estimate_stereo_shape
 from soft_gym.sensors.encoder import ChamberEncoders
 from soft_gym.sensors.stereo import StereoCamera
-from soft_gym.engines.pybullet.simulator import ArmSimulator
+from soft_gym.engines import make_simulator
 
 EXPERIMENTS = ("table3", "table4", "faults", "control")
 PRESET = "zou2022"
@@ -165,7 +166,7 @@ def run_table4(dnn, seed: int = 0, progress: bool = True) -> dict:
     true shape."""
     spec = get_preset(PRESET)
     d_m = spec.segments[0].chamber_offset_m
-    sim = ArmSimulator(spec)
+    sim = make_simulator(spec)
     try:
         sim.reset(settle_s=0.5)  # then through the supply's lag: a step reset would jolt it
         sim.set_pressures(bend_pressures_pa(0.0))
@@ -229,7 +230,7 @@ def run_faults(n_poses: int = 20, seed: int = 0, progress: bool = True,
     rng = np.random.default_rng([seed, 9])
     step_pa = 1e4  # the data set's 0.1 bar grid
     levels = np.floor((spec.p_max_pa - spec.p_pre_pa) / step_pa + 1e-9).astype(int) + 1
-    sim = ArmSimulator(spec)
+    sim = make_simulator(spec)
     errors: dict[str, list] = {name: [] for name in conditions}
     try:
         sim.reset(settle_s=1.0)

@@ -18,7 +18,7 @@ import numpy as np
 from soft_gym._cli import HelpFormatter, finite_float
 from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.robots.presets import PRESETS
-from soft_gym.engines.pybullet.simulator import ArmSimulator
+from soft_gym.engines import make_simulator
 
 PATTERNS = {
     "rest": lambda n: np.zeros(n),
@@ -34,7 +34,7 @@ def run(presets: list[str], hold_s: float) -> list[dict]:
     rows = []
     for name in presets:
         spec = PRESETS[name]
-        sim = ArmSimulator(spec)
+        sim = make_simulator(spec)
         sim.reset(settle_s=1.0)
         rest_tip = sim.tip_pose()[0]
         for pattern, make in PATTERNS.items():

@@ -198,8 +198,7 @@ def test_the_import_graph_covers_every_package():
     graph = _graph()
     assert "soft_gym.engines" in graph["soft_gym.envs.soft_arm_env"]
     assert "soft_gym.robots.spec" in graph["soft_gym.engines.pybullet.simulator"]
-    # an import inside a function body counts (tasks.workspace imports the simulator lazily)
-    assert "soft_gym.engines.pybullet.simulator" in graph["soft_gym.tasks.workspace"]
+    assert "soft_gym.engines" in graph["soft_gym.procedures.workspace"]
     assert "soft_gym.kinematics" in graph["agents.controllers.cc_model"]
 
 
@@ -230,6 +229,20 @@ def test_soft_gym_imports_no_agents_train_or_eval():
              and found.name.split(".")[0] in UPPER_LAYERS]
     assert not wrong, ("soft_gym is the bottom layer and must not import agents, train or eval "
                        "(docs/architecture.md, \"Layers and packages\"):\n" + "\n".join(wrong))
+
+
+ESTIMATION_AND_TASKS = ("soft_gym.sensing", "soft_gym.tasks")
+"""Packages that never drive a simulator: an estimator has its readings, a task its targets."""
+
+
+def test_sensing_and_tasks_never_import_a_simulator():
+    wrong = [f"{found.path.relative_to(ROOT)}:{found.line} imports {found.name}"
+             for found in _all_imports()
+             if found.importer.startswith(ESTIMATION_AND_TASKS)
+             and (_resolve(found.name) or "").startswith((ENGINE_PACKAGE, "soft_gym.simulator", "soft_gym.procedures",
+                                                          "soft_gym.envs"))]
+    assert not wrong, ("estimators and tasks never hold a simulator: move what drives one into "
+                       "soft_gym/procedures/ and hand its result down:\n" + "\n".join(wrong))
 
 
 def test_only_the_engine_package_imports_a_physics_engine():

@@ -8,7 +8,7 @@ the path's last target has been presented and acted on, a reach episode after ``
 
 The track reference trajectory is rebuilt here from the public path functions
 (``soft_gym.tasks.paths``: ``PathSpec`` and ``make_reference_trajectory``) and the reachable set
-(``soft_gym.tasks.workspace.reachable_tips``), never read back from ``task.target``. The eval
+(``soft_gym.procedures.workspace.reachable_tips``), never read back from ``task.target``. The eval
 runner's per-step records are checked against a hand-written loop over the same env.
 """
 
@@ -23,7 +23,7 @@ from agents.policies import BaselinePolicy
 from eval.runner import run_episode
 from soft_gym.robots.presets import get_preset
 from soft_gym.tasks.paths import PathSpec, make_reference_trajectory
-from soft_gym.tasks.workspace import reachable_tips
+from soft_gym.procedures.workspace import reachable_tips
 
 PRESET = "wang2023"
 SEED = 3

@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 
 import soft_gym  # noqa: F401
-from soft_gym.envs.soft_arm_env import MAX_ACTION_RATE_WEIGHT, MAX_SETTLE_S, SoftArmEnv
+from soft_gym.envs.config import MAX_ACTION_RATE_WEIGHT, MAX_SETTLE_S
+from soft_gym.envs.soft_arm_env import SoftArmEnv
 from soft_gym.scenarios import FillingLoad, Flick, ObstacleRod, Push, SwayingMass, TipMass
 from soft_gym.scenarios.loads import (MAX_FILL_RATE_KG_S, MAX_FORCE_N, MAX_MASS_KG,
                                       MAX_SWAY_LENGTH_M)

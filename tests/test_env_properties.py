@@ -27,7 +27,7 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import soft_gym  # noqa: E402,F401
-from soft_gym.envs.soft_arm_env import MAX_ACTION_RATE_WEIGHT, MAX_SETTLE_S  # noqa: E402
+from soft_gym.envs.config import MAX_ACTION_RATE_WEIGHT, MAX_SETTLE_S  # noqa: E402
 from soft_gym.robots import get_preset  # noqa: E402
 from soft_gym.robots.spec import GRAVITY_M_S2  # noqa: E402
 

@@ -110,7 +110,7 @@ def test_bad_options_are_refused(env):
 
 def test_network_learns_the_exploration_and_reloads_identically(tmp_path):
     from soft_gym.robots.presets import get_preset
-    from soft_gym.sensing.shape_exploration import collect_exploration
+    from soft_gym.procedures.zhao2021_exploration import collect_exploration
     from soft_gym.sensors.strain_gauge import StrainGauges
 
     data = collect_exploration(get_preset("zhao2021"), StrainGauges(), n_free=360, n_loaded=0,

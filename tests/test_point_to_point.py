@@ -10,7 +10,7 @@ from gymnasium.utils.env_checker import check_env
 
 import soft_gym  # noqa: F401
 from soft_gym.robots import get_preset
-from soft_gym.tasks.workspace import reachable_tips
+from soft_gym.procedures.workspace import reachable_tips
 
 TIPS = reachable_tips(get_preset("wang2023"))
 START, GOAL = TIPS[3], TIPS[7]

@@ -135,7 +135,7 @@ def test_camera_panel_sits_beside_the_scene_and_shows_the_faulted_frame():
         env.reset(seed=0)
         env.step(np.zeros(env.action_space.shape, np.float32))
         frame = render_frame(env, ("scene", "camera"))
-        camera = env.unwrapped._measurement["image"]
+        camera = env.unwrapped.measurement["image"]
         width = SIZE[0] + round(camera.shape[1] * SIZE[1] / camera.shape[0])
         assert frame.shape == (SIZE[1], width, 3) and frame.dtype == np.uint8
         np.testing.assert_array_equal(frame[:, :SIZE[0]], env.render())
@@ -159,11 +159,11 @@ def test_stereo_panel_shows_both_images_and_the_som_centreline():
     env.reset(seed=0)
     env.step(np.zeros(env.action_space.shape, np.float32))
     unwrapped = env.unwrapped
-    reading = unwrapped._measurement["stereo"]
+    reading = unwrapped.measurement["stereo"]
     side = round(reading["left"].shape[1] * SIZE[1] / reading["left"].shape[0])
     frame = render_frame(env)
     assert frame.shape == (SIZE[1], SIZE[0] + 2 * side, 3)
-    som = unwrapped._estimate.details["som_px"]
+    som = unwrapped.estimate.details["som_px"]
     factor = SIZE[1] / reading["left"].shape[0]
     for k, name in enumerate(("left", "right")):
         panel = frame[:, SIZE[0] + k * side:SIZE[0] + (k + 1) * side]

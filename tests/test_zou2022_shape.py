@@ -20,9 +20,9 @@ import soft_gym  # noqa: F401
 from soft_gym.robots.presets import get_preset
 from soft_gym.sensing.cc_shape import arc_parameters, cc_shape, cc_shape_points
 from soft_gym.sensing.measurement import Measurement
+from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
 from soft_gym.sensing.shape_dnn import (ShapeDNN, ShapeDNNConfig, axis_errors_mm,
-                                        cached_shape_dnn, default_stereo, rotate_about_axis,
-                                        true_shape_points)
+                                        default_stereo, rotate_about_axis, true_shape_points)
 from soft_gym.sensing.stereo_shape import (ASESConfig, arm_mask, estimate_stereo_shape,
                                            resample_polyline, train_som)
 from soft_gym.sensing.zou_feedback import tangent_quaternion

@@ -19,7 +19,7 @@ is one command held for ``settle_s`` (1 s, 20 env steps at the usual 0.05 s cont
 :meth:`predict` returns the held command between decisions.
 
 The network is trained on the same random exploration as the shape reconstruction
-(:func:`soft_gym.sensing.shape_reconstruction.cached_reconstruction`, on a private copy of the arm
+(:func:`soft_gym.procedures.zhao2021_exploration.cached_reconstruction`, on a private copy of the arm
 with the env's gauge model; cached on disk), from pairs of consecutive samples with the ground
 truth tip of the exploration (the paper's RGB-D camera).
 
@@ -191,7 +191,7 @@ class LocalIKASDMController(BaselinePolicy):
         training report."""
         from soft_gym.sensing.calibration_cache import cached, sensor_description
         from soft_gym.sensing.shape_exploration import GAUGE_SETTINGS
-        from soft_gym.sensing.shape_reconstruction import exploration_of
+        from soft_gym.procedures.zhao2021_exploration import exploration_of
 
         spec = self.env.spec_arm
         gauges = self._gauges()

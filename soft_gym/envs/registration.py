@@ -9,11 +9,11 @@ listing the ones it takes (rather than Python's ``TypeError``).
 
 from __future__ import annotations
 
-import inspect
 from typing import Any
 
 from gymnasium.envs.registration import register, registry
 
+from soft_gym.envs.config import check_arguments
 from soft_gym.envs.soft_arm_env import SoftArmEnv
 from soft_gym.robots.presets import PRESETS, get_preset
 from soft_gym.robots.spec import ArmSpec
@@ -33,18 +33,10 @@ def registered_ids() -> list[str]:
     return list(TASK_IDS.values()) + [preset_env_id(t, p) for t in TASK_IDS for p in PRESETS]
 
 
-def _check_keywords(kwargs: dict[str, Any]) -> None:
-    """Refuse keyword arguments :class:`SoftArmEnv` does not take, naming them."""
-    known = [name for name in inspect.signature(SoftArmEnv.__init__).parameters if name != "self"]
-    unknown = sorted(name for name in kwargs if name not in known)
-    if unknown:
-        raise ValueError(f"unknown env keyword argument(s) {unknown}: the env takes {known}")
-
-
 def make_env(**kwargs: Any) -> SoftArmEnv:
     """The entry point of the generic ids: ``SoftArmEnv(**kwargs)``, refusing unknown keyword
     arguments with a ``ValueError`` that names them."""
-    _check_keywords(kwargs)
+    check_arguments(kwargs)
     return SoftArmEnv(**kwargs)
 
 
@@ -62,7 +54,7 @@ def make_alias_env(alias_preset: str, **kwargs: Any) -> SoftArmEnv:
     Raises:
         ValueError: ``preset`` names another arm than the alias.
     """
-    _check_keywords(kwargs)
+    check_arguments(kwargs)
     preset = kwargs.pop("preset", alias_preset)
     if not (isinstance(preset, (str, ArmSpec))
             and (preset == alias_preset or preset == get_preset(alias_preset))):

@@ -440,11 +440,11 @@ def scene_view(env) -> np.ndarray:
     renderer = _SCENE_RENDERERS.get(unwrapped)
     if renderer is None:
         renderer = _SCENE_RENDERERS[unwrapped] = unwrapped.make_renderer()
-    target, upcoming = unwrapped.task.target(unwrapped._step)
+    target, upcoming = unwrapped.task.target(unwrapped.step_count)
     return renderer.render(
         unwrapped.sim, target_m=target, next_target_m=upcoming,
-        path_m=getattr(unwrapped.task, "polyline_m", None),
-        estimate_m=None if unwrapped._estimate is None else unwrapped.feedback_pose()[0])
+        path_m=unwrapped.task.path_m,
+        estimate_m=None if unwrapped.estimate is None else unwrapped.feedback_pose()[0])
 
 
 def render_frame(env, panels: Sequence[str] = PANELS) -> np.ndarray:
@@ -526,14 +526,14 @@ def _blank(unwrapped, name: str, height: int) -> np.ndarray:
 
 def _image_panel(unwrapped, height: int) -> list[np.ndarray]:
     """The eye-in-hand frame with the estimates written on it."""
-    measurement = unwrapped._measurement
+    measurement = unwrapped.measurement
     if measurement is None or "image" not in measurement.readings:
         panel = _blank(unwrapped, "image", height)
         _band(panel, [_line("eye-in-hand: no frame yet")], top=True, scale=_text_scale(height))
         return [panel]
     panel, _ = _scaled(measurement["image"], height)
     scale = _text_scale(height)
-    estimates = (unwrapped._estimate.details if unwrapped._estimate is not None else {}) or {}
+    estimates = (unwrapped.estimate.details if unwrapped.estimate is not None else {}) or {}
     header = [_line(f"eye-in-hand  t {measurement.time_s:5.2f} s")]
     if "reprojection_error_px" in estimates:
         error_px = float(estimates["reprojection_error_px"])
@@ -566,14 +566,14 @@ def _image_panel(unwrapped, height: int) -> list[np.ndarray]:
 
 def _stereo_panels(unwrapped, height: int) -> list[np.ndarray]:
     """The stereo pair, each image at ``height`` with the SOM centreline found in it."""
-    measurement = unwrapped._measurement
+    measurement = unwrapped.measurement
     scale = _text_scale(height)
     if measurement is None or "stereo" not in measurement.readings:
         panels = [_blank(unwrapped, "stereo", height), _blank(unwrapped, "stereo", height)]
         _band(panels[0], [_line("stereo: no frame yet")], top=True, scale=scale)
         return panels
     reading = measurement["stereo"]
-    details = (unwrapped._estimate.details if unwrapped._estimate is not None else {}) or {}
+    details = (unwrapped.estimate.details if unwrapped.estimate is not None else {}) or {}
     som = details.get("som_px", {})
     panels = []
     for side in ("left", "right"):

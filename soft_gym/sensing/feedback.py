@@ -1,15 +1,15 @@
 """Feedback sources: where the env's ``pose`` observation comes from, one small class each.
 
-A source declares the sensors it needs (the env simulates them), may calibrate once when the env
-is made, and turns one step's :class:`~soft_gym.sensing.measurement.Measurement` into a
-:class:`FeedbackEstimate` (tip pose, and the backbone where the source has one). ``feedback=`` of
-the env takes a registered name; a new estimator (strain-gauge shape reconstruction, a stereo
-centreline) is one subclass registered with :func:`register_feedback_source`. See
-docs/architecture.md, "Feedback sources".
+A source declares the sensors it needs (the env simulates them), may be calibrated once when the
+env is made (by a procedure of :mod:`soft_gym.procedures.calibration`), and turns one step's
+:class:`~soft_gym.sensing.measurement.Measurement` into a :class:`FeedbackEstimate` (tip pose, and
+the backbone where the source has one). ``feedback=`` of the env takes a registered name
+(:data:`soft_gym.sensing.FEEDBACK_SOURCES`); a new estimator is one subclass registered there.
+See docs/architecture.md, "Feedback sources".
 
 | name           | sensors         | estimate                                                     |
 |----------------|-----------------|--------------------------------------------------------------|
-| `ground_truth` | none            | the simulator's tip pose and backbone                        |
+| `ground_truth` | `truth`         | the simulator's tip pose and backbone                        |
 | `em`           | `em`            | the EM tracker's noisy tip pose (ho2018)                     |
 | `camera`       | `image`, `fbg`  | the eye-in-hand vision tracker (wang2023 Section III-B)      |
 | `fbg`          | `image`, `fbg`  | F-emp, the online ELM on the FBG shifts (wang2023 eqs. 9-17) |
@@ -19,8 +19,8 @@ docs/architecture.md, "Feedback sources".
 | `stereo`       | `stereo`        | zou2022's ASES: HSV mask, SOM centreline, triangulation      |
 | `encoder_dnn`  | `encoder`       | zou2022's DNN on the chamber lengths, trained on ASES labels |
 
-The protocol and the registry live in :mod:`soft_gym.sensing.feedback_base`; the zou2022 sources
-in :mod:`soft_gym.sensing.zou_feedback`.
+The protocol lives in :mod:`soft_gym.sensing.feedback_base`, the zou2022 sources in
+:mod:`soft_gym.sensing.zou_feedback`.
 """
 
 from __future__ import annotations
@@ -30,41 +30,40 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from soft_gym.sensing.feedback_base import (FEEDBACK_SOURCES, CalibrationContext,  # noqa: F401
-                                            FeedbackEstimate, FeedbackSource,
-                                            make_feedback_source, register_feedback_source)
+from soft_gym._validation import require_positive
+from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.measurement import Measurement
-from soft_gym.sensing.zou_feedback import (EncoderCCFeedback, EncoderDNNFeedback,  # noqa: F401
-                                           StereoFeedback)  # registered on import (zou2022)
+from soft_gym.sensing.pipeline import SensingPipeline
+from soft_gym.sensing.shape_exploration import key_points_from_backbone
+from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
 
 
-@register_feedback_source
 class GroundTruthFeedback(FeedbackSource):
-    """The simulator's own tip pose and backbone (no sensor, no noise)."""
+    """The simulator's own tip pose and backbone, read by the privileged ``truth`` sensor
+    (:class:`~soft_gym.sensors.truth.TruthSensor`; no noise, no lag)."""
 
     name = "ground_truth"
+    sensors = ("truth",)
     estimates_shape = True
 
-    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
-        position, quaternion = sim.tip_pose()
-        return FeedbackEstimate(position, quaternion, shape_m=sim.backbone())
+    def estimate(self, measurement: Measurement) -> FeedbackEstimate:
+        truth = measurement["truth"]
+        return FeedbackEstimate(truth["position_m"], truth["quaternion"],
+                                shape_m=truth["backbone_m"])
 
-    def shape_points(self, estimate: FeedbackEstimate, sim) -> np.ndarray:
+    def shape_points(self, estimate: FeedbackEstimate) -> np.ndarray:
         """The base and the simulated key points (only when the env has a ``shape`` part)."""
-        from soft_gym.sensing.shape_exploration import key_points_from_backbone
-
-        return np.vstack([estimate.shape_m[0], key_points_from_backbone(sim.spec,
+        return np.vstack([estimate.shape_m[0], key_points_from_backbone(self.spec,
                                                                          estimate.shape_m)])
 
 
-@register_feedback_source
 class EMFeedback(FeedbackSource):
     """The electromagnetic tracker's tip pose (ho2018's Aurora coil; 0.8 mm / 0.7 deg noise)."""
 
     name = "em"
     sensors = ("em",)
 
-    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+    def estimate(self, measurement: Measurement) -> FeedbackEstimate:
         reading = np.asarray(measurement["em"], dtype=float)
         return FeedbackEstimate(reading[:3], reading[3:])
 
@@ -73,9 +72,10 @@ class _PipelineFeedback(FeedbackSource):
     """The wang2023 robot's own sensing: eye-in-hand camera + FBG, F-emp and eq. (18) fusion.
 
     The pipeline (:class:`~soft_gym.sensing.pipeline.SensingPipeline`) is calibrated when the env
-    is made (vision map at rest, F-emp from the spiral exploration labelled by the camera) or
-    taken from the calibration cache (:mod:`soft_gym.sensing.calibration_cache`), keeps learning
-    across episodes, and returns to its calibrated state on :meth:`restore`.
+    is made (vision map at rest, F-emp from the spiral exploration labelled by the camera:
+    :func:`soft_gym.procedures.wang2023_calibration.calibrate_pipeline`) or taken from the
+    calibration cache (:mod:`soft_gym.sensing.calibration_cache`), keeps learning across
+    episodes, and returns to its calibrated state on :meth:`restore`.
     """
 
     sensors = ("image", "fbg")
@@ -83,8 +83,7 @@ class _PipelineFeedback(FeedbackSource):
     output: ClassVar[str] = ""
 
     def __init__(self, options: dict | None = None) -> None:
-        from soft_gym.sensing.pipeline import SensingPipeline
-
+        self.spec = None
         self.options = dict(options or {})
         known = set(SensingPipeline.OPTIONS)
         unknown = sorted(set(self.options) - known)
@@ -96,24 +95,12 @@ class _PipelineFeedback(FeedbackSource):
     def sensor_options(self) -> dict[str, dict]:
         return {"fbg": {"rate_hz": None}}  # F-emp reads the fiber every control step
 
-    def calibrate(self, context: CalibrationContext, use_cache: bool = True) -> None:
-        from soft_gym.sensing.calibration_cache import cached
-        from soft_gym.sensing.pipeline import SensingPipeline
+    def calibration_key(self) -> dict[str, Any]:
+        return {"sensing": repr(sorted(self.options.items()))}
 
-        self.pipeline = SensingPipeline(context.sensors["image"], context.sensors["fbg"],
-                                        **self.options)
-        sim, camera = context.sim, self.pipeline.camera
-
-        def compute() -> tuple:
-            faults = camera.faults
-            camera.set_faults(None)  # calibration happens in a clear view
-            sim.reset(settle_s=context.settle_s)
-            self.pipeline.calibrate(sim, np.random.default_rng(0))
-            camera.set_faults(faults)
-            return (self.pipeline.vision, self.pipeline.femp, self.pipeline.calibration_samples)
-
-        key = {**context.key, "sensing": repr(sorted(self.options.items()))}
-        self._calibrated = cached(key, compute, use_cache=use_cache)
+    def set_calibration(self, calibration: tuple[SensingPipeline, tuple]) -> None:
+        """Take a pipeline and its calibrated ``(vision, femp, samples)`` state."""
+        self.pipeline, self._calibrated = calibration
         self.restore()
 
     def restore(self) -> None:
@@ -121,7 +108,7 @@ class _PipelineFeedback(FeedbackSource):
         self.pipeline.vision, self.pipeline.femp = vision, femp
         self.pipeline.calibration_samples = samples
 
-    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+    def estimate(self, measurement: Measurement) -> FeedbackEstimate:
         estimates = self.pipeline.observe(measurement)
         position, quaternion = getattr(estimates, self.output)
         details = {"camera": estimates.camera[0].copy(), "femp": estimates.femp[0].copy(),
@@ -134,7 +121,6 @@ class _PipelineFeedback(FeedbackSource):
         return FeedbackEstimate(np.array(position), np.array(quaternion), details=details)
 
 
-@register_feedback_source
 class CameraFeedback(_PipelineFeedback):
     """The vision tracker's tip pose alone (wang2023 Section III-B)."""
 
@@ -142,7 +128,6 @@ class CameraFeedback(_PipelineFeedback):
     output = "camera"
 
 
-@register_feedback_source
 class FEmpFeedback(_PipelineFeedback):
     """F-emp's tip pose from the FBG fiber (wang2023 eqs. (9)-(17)), trained online by the camera."""
 
@@ -150,7 +135,6 @@ class FEmpFeedback(_PipelineFeedback):
     output = "femp"
 
 
-@register_feedback_source
 class FusedFeedback(_PipelineFeedback):
     """Camera and F-emp fused by wang2023 eq. (18)."""
 
@@ -158,14 +142,14 @@ class FusedFeedback(_PipelineFeedback):
     output = "fused"
 
 
-@register_feedback_source
 class StrainShapeFeedback(FeedbackSource):
     """zhao2021's shape reconstruction from the strain gauges (Section III): the SFE-PD networks'
     key points, the backbone fitted through them, the tip at the last key point.
 
     Calibration is the paper's model preparation (Section VI-A): a random exploration of a
     private copy of the arm with the env's gauge model, then the networks' training
-    (:mod:`soft_gym.sensing.shape_reconstruction`; cached on disk). The networks read the last
+    (:func:`soft_gym.procedures.zhao2021_exploration.cached_reconstruction`; cached on disk).
+    The networks read the commanded pressures from the measurement (what the controller sent). The networks read the last
     ``w + 1 = 6`` steps of commanded pressures and readings; in the paper a step is one command
     and 1 s of settling, so the source keeps the state of every ``history_step_s`` (1 s) of
     simulated time and hands the networks the last five of them plus the present one.
@@ -181,9 +165,7 @@ class StrainShapeFeedback(FeedbackSource):
     estimates_shape = True
 
     def __init__(self, options: dict | None = None) -> None:
-        from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
-        from soft_gym._validation import require_positive
-
+        self.spec = None
         options = dict(options or {})
         self.history_step_s = require_positive("history_step_s",
                                                options.pop("history_step_s", 1.0))
@@ -194,14 +176,9 @@ class StrainShapeFeedback(FeedbackSource):
         self._next_history_s = 0.0
         self._last_time_s = -np.inf
 
-    def calibrate(self, context: CalibrationContext, use_cache: bool = True) -> None:
-        from soft_gym.sensing.shape_reconstruction import cached_reconstruction
-
-        # the paper's exploration and training take ~10 minutes on one core: show their bars
-        # (nothing is shown when the model comes from the cache)
-        self.reconstructor, self.report = cached_reconstruction(
-            context.sim.spec, context.sensors["strain"], self.config, use_cache=use_cache,
-            progress=True)
+    def set_calibration(self, calibration: tuple[Any, dict[str, Any]]) -> None:
+        """Take the trained reconstructor and its training report."""
+        self.reconstructor, self.report = calibration
         self.restore()
 
     def restore(self) -> None:
@@ -209,8 +186,8 @@ class StrainShapeFeedback(FeedbackSource):
         self._next_history_s = 0.0
         self._last_time_s = -np.inf
 
-    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
-        state = np.concatenate([np.asarray(sim.supply.command_pa, dtype=float),
+    def estimate(self, measurement: Measurement) -> FeedbackEstimate:
+        state = np.concatenate([np.asarray(measurement.command_pa, dtype=float),
                                 np.asarray(measurement["strain"], dtype=float)])
         if measurement.time_s + 1e-9 < self._last_time_s:
             self.restore()  # the clock went back: a new episode, whose history starts afresh
@@ -222,7 +199,7 @@ class StrainShapeFeedback(FeedbackSource):
             self._history = self._history[1:] + [state]
             self._next_history_s += self.history_step_s
         steps = np.array(self._history + [state])
-        n = sim.spec.n_chambers
+        n = self.spec.n_chambers
         shape = self.reconstructor.reconstruct(steps[:, :n], steps[:, n:])
         return FeedbackEstimate(shape.tip_position_m, shape.tip_quaternion,
                                 shape_m=shape.backbone_m,

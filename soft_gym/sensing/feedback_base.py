@@ -1,17 +1,24 @@
-"""The feedback-source protocol: what a source is, what it returns, and the registry by name.
+"""The feedback-source protocol: what a source is, what it is given, and what it returns.
 
-Kept apart from the sources themselves (:mod:`soft_gym.sensing.feedback`,
-:mod:`soft_gym.sensing.zou_feedback`) so that every module defining sources imports this one and
-none imports another. See docs/architecture.md, "Feedback sources".
+A source estimates from one step's :class:`~soft_gym.sensing.measurement.Measurement` alone (the
+sensors' readings and the commands sent), as a real robot's estimator does: it never holds the
+simulator. What it learns before the first step (a calibration) is computed by a procedure
+(:mod:`soft_gym.procedures.calibration`) that drives a private simulator and hands the result
+to :meth:`FeedbackSource.set_calibration`. Kept apart from the sources themselves
+(:mod:`soft_gym.sensing.feedback`, :mod:`soft_gym.sensing.zou_feedback`), so every module
+defining sources imports this one and none imports another; the registry
+(:data:`soft_gym.sensing.FEEDBACK_SOURCES`) is filled in the package's ``__init__``. See
+docs/architecture.md, "Feedback sources".
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, Callable, ClassVar
 
 import numpy as np
 
+from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing.measurement import Measurement
 
 
@@ -39,13 +46,23 @@ class FeedbackEstimate:
 
 @dataclass(frozen=True)
 class CalibrationContext:
-    """What a source may use to calibrate: the simulator (the arm at rest, loads attached), its
-    sensors, and the cache key of everything else that changes a calibration."""
+    """What a source knows of the arm and what a calibration procedure may build.
 
-    sim: Any
-    sensors: dict[str, Any]
-    settle_s: float
-    key: dict[str, Any]
+    Attributes:
+        spec: the arm (:class:`~soft_gym.robots.spec.ArmSpec`).
+        settle_s: rest before a calibration starts (s).
+        key: the calibration cache key of everything else that changes a calibration (arm,
+            fixed loads, settle time, sensor settings).
+        make_sensor: a fresh sensor by name, configured as the env's own but without visual
+            faults (calibration happens in a clear view).
+        make_loads: fresh copies of the env's fixed loads, for a private simulator.
+    """
+
+    spec: ArmSpec
+    settle_s: float = 0.0
+    key: dict[str, Any] = field(default_factory=dict)
+    make_sensor: Callable[[str], Any] | None = None
+    make_loads: Callable[[], list] = list
 
 
 class FeedbackSource:
@@ -60,53 +77,44 @@ class FeedbackSource:
     sensors: ClassVar[tuple[str, ...]] = ()
     """Sensor names the source reads (see :data:`soft_gym.sensors.SENSORS`)."""
     calibrates: ClassVar[bool] = False
-    """Whether :meth:`calibrate` does anything (``reset(options={"recalibrate": True})``)."""
+    """Whether a calibration procedure must run before the first estimate
+    (:data:`soft_gym.procedures.calibration.CALIBRATIONS`; ``reset(options={"recalibrate":
+    True})`` runs it again)."""
     estimates_shape: ClassVar[bool] = False
     """Whether the source gives the backbone points of the env's ``shape`` part
     (:meth:`shape_points`)."""
 
     def __init__(self, options: dict | None = None) -> None:
         if options:
-            raise ValueError(f"sensing options are for the camera/F-emp pipeline (feedback "
-                             f"'fused', 'camera' or 'fbg'); feedback {self.name!r} takes none, "
-                             f"got {sorted(options)}")
+            raise ValueError(f"feedback {self.name!r} takes no sensing options, got "
+                             f"{sorted(options)}")
+        self.spec: ArmSpec | None = None
 
     def sensor_options(self) -> dict[str, dict]:
         """Default keyword arguments of the sensors the source needs (the user's override)."""
         return {}
 
-    def calibrate(self, context: CalibrationContext, use_cache: bool = True) -> None:
-        """Calibrate from the arm at rest (default: nothing to calibrate)."""
+    def prepare(self, context: CalibrationContext) -> None:
+        """Learn the arm the source estimates for (called once, when the env is made)."""
+        self.spec = context.spec
+
+    def calibration_key(self) -> dict[str, Any]:
+        """What besides the context's key changes this source's calibration (its options)."""
+        return {}
+
+    def set_calibration(self, calibration: Any) -> None:
+        """Take a calibration procedure's result and :meth:`restore` to it (calibrating
+        sources only)."""
+        raise ValueError(f"feedback {self.name!r} does not calibrate")
 
     def restore(self) -> None:
         """Return to the state right after calibration (``reset(seed=...)``)."""
 
-    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+    def estimate(self, measurement: Measurement) -> FeedbackEstimate:
         """The estimate from one step's measurement."""
         raise NotImplementedError
 
-    def shape_points(self, estimate: FeedbackEstimate, sim) -> np.ndarray:
+    def shape_points(self, estimate: FeedbackEstimate) -> np.ndarray:
         """``P_0..P_6`` (m, (7, 3)) of this step's ``estimate``, asked for only by an env with a
         ``shape`` part (default: the estimate's ``shape_points_m``)."""
         return estimate.shape_points_m
-
-
-FEEDBACK_SOURCES: dict[str, type[FeedbackSource]] = {}
-"""Registered feedback sources by name."""
-
-
-def register_feedback_source(cls: type[FeedbackSource]) -> type[FeedbackSource]:
-    """Class decorator: make ``cls`` available as ``feedback=cls.name``."""
-    if not cls.name or cls.name in FEEDBACK_SOURCES:
-        raise ValueError(f"feedback source name must be new and non-empty, got {cls.name!r}")
-    FEEDBACK_SOURCES[cls.name] = cls
-    return cls
-
-
-def make_feedback_source(name: str, options: dict | None = None) -> FeedbackSource:
-    """Build the registered source ``name`` with its options."""
-    if not isinstance(name, str) or name not in FEEDBACK_SOURCES:
-        raise ValueError(f"feedback must be one of {sorted(FEEDBACK_SOURCES)}, got {name!r}")
-    if options is not None and not isinstance(options, dict):
-        raise ValueError(f"sensing must be None or a dict of options, got {options!r}")
-    return FEEDBACK_SOURCES[name](options)

@@ -1,7 +1,8 @@
 """One control step's measurement: every active sensor read once, at one simulated time.
 
-The env takes a :class:`Measurement` after the physics of each control step (and at reset); the
-observation, ``info`` and the feedback source all read that object, so a camera frame is rendered
+The env takes a :class:`Measurement` after the physics of each control step (and at reset) with
+:func:`soft_gym.sensors.reading.measure`; the observation, ``info`` and the feedback source all
+read that object, so a camera frame is rendered
 once per step and every consumer sees the same noisy sample. See docs/architecture.md, "One env
 step".
 """
@@ -24,11 +25,14 @@ class Measurement:
         depth_m: camera sensor name -> metric depth (m, H x W) of the same frame, for the map
             building of the vision tracker (wang2023 scales its monocular map with the EM
             tracker; the simulated depth buffer gives the metric scale directly).
+        command_pa: the chamber pressures last commanded (Pa, (n_chambers,)), what the
+            controller sent; ``None`` where no command was recorded.
     """
 
     time_s: float
     readings: Mapping[str, Any]
     depth_m: Mapping[str, np.ndarray] = field(default_factory=dict)
+    command_pa: np.ndarray | None = None
 
     def __getitem__(self, name: str) -> Any:
         try:
@@ -36,15 +40,3 @@ class Measurement:
         except KeyError:
             raise ValueError(f"sensor must be one of the measured {sorted(self.readings)}, "
                              f"got {name!r}") from None
-
-
-def measure(sensors: Mapping[str, Any], sim) -> Measurement:
-    """Read every sensor in ``sensors`` (name -> :class:`~soft_gym.sensors.base.Sensor`) once."""
-    time_s = sim.time_s
-    readings, depth = {}, {}
-    for name, sensor in sensors.items():
-        readings[name] = sensor.read(sim, time_s)
-        frame_depth = getattr(sensor, "last_depth", None)
-        if frame_depth is not None:
-            depth[name] = frame_depth
-    return Measurement(time_s=time_s, readings=readings, depth_m=depth)

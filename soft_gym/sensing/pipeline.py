@@ -9,10 +9,13 @@ Each control step:
    truth);
 4. eq. (18) fuses the two (:mod:`soft_gym.sensing.fusion`).
 
-:meth:`SensingPipeline.calibrate` builds the vision map at the rest pose (known pose, depth
-buffer) and initialises F-emp from ``n_init`` steps of the predefined spiral exploration
-(:mod:`soft_gym.sensing.exploration`) labelled by the camera. The pipeline is the robot's sensing:
-it persists across episodes unless recalibrated.
+Calibration builds the vision map at the rest pose (known pose, depth buffer) and initialises
+F-emp from ``n_init`` steps of the predefined spiral exploration
+(:mod:`soft_gym.sensing.exploration`) labelled by the camera. The pipeline never drives the arm:
+:func:`soft_gym.procedures.wang2023_calibration.calibrate_pipeline` runs the exploration on a
+simulator and hands each step to :meth:`SensingPipeline.begin_calibration`,
+:meth:`~SensingPipeline.calibration_sample` and :meth:`~SensingPipeline.finish_calibration`.
+The pipeline is the robot's sensing: it persists across episodes unless recalibrated.
 """
 
 from __future__ import annotations
@@ -22,11 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from soft_gym._quaternion import quaternion_to_matrix
-from soft_gym.robots.actuation import pressure_at_fraction
-from soft_gym.sensing.exploration import spiral_fractions
 from soft_gym.sensing.femp import FEmpEstimator
 from soft_gym.sensing.fusion import PoseFusion
-from soft_gym.sensing.measurement import Measurement, measure
+from soft_gym.sensing.measurement import Measurement
 from soft_gym.sensing.vision_pose import VisionEstimate, VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber
@@ -111,49 +112,50 @@ class SensingPipeline:
     def is_calibrated(self) -> bool:
         return self.femp is not None and self.femp.is_ready
 
-    def reset(self, sim, rng: np.random.Generator) -> None:
-        """Start an episode: sensors take the episode's generator; learned state persists."""
-        self.camera.reset(sim, rng)
-        self.fbg.reset(sim, rng)
+    @property
+    def calibration_steps(self) -> int:
+        """Steps of the calibration's exploration: ``map_steps`` for the map, then ``n_init``."""
+        return self.map_steps + self.n_init
 
-    def calibrate(self, sim, rng: np.random.Generator) -> int:
-        """Vision map at the current (rest) pose, then F-emp from the spiral exploration
-        (``map_steps`` steps for the map alone, then ``n_init`` labelled steps).
-
-        Leaves the arm wherever the exploration ends: the caller resets it. Returns the number
-        of camera-labelled samples F-emp was initialised with.
-        """
-        self.reset(sim, rng)
+    def begin_calibration(self, image: np.ndarray, depth_m: np.ndarray,
+                          camera_pose: np.ndarray) -> None:
+        """Start a calibration: the vision map from a clean frame at the rest pose (uint8 RGB,
+        metric depth in m, and the world-from-camera transform (4, 4) it was taken from)."""
         tip_from_camera = np.eye(4)
         tip_from_camera[:3, 3] = self.camera.offset_m
         self.vision = VisionPoseEstimator(self.camera.K(), tip_from_camera, **self.vision_options)
-        image, depth = self.camera.render_clean(sim)
-        self.vision.calibrate(image, depth, self.camera.pose_matrix(sim))
-        spec = sim.spec
-        sensors = {"image": self.camera, "fbg": self.fbg}
-        shifts, positions, quaternions = [], [], []
-        threshold = self.femp_options["update_threshold_px"]
-        for k in range(self.map_steps + self.n_init):
-            fraction = spiral_fractions(k * spec.control_period_s, spec.n_segments,
-                                        **self.exploration)
-            sim.set_pressures(pressure_at_fraction(spec, fraction))
-            sim.step_physics(spec.control_period_s)
-            measurement = measure(sensors, sim)
-            estimate = self.vision.update(measurement["image"], measurement.depth_m["image"])
-            if k < self.map_steps:
-                continue
-            if not estimate.lost and estimate.reprojection_error_px < threshold:
-                shifts.append(np.asarray(measurement["fbg"], dtype=float))
-                positions.append(estimate.position_m)
-                quaternions.append(estimate.quaternion)
-        if len(shifts) < 10:
+        self.vision.calibrate(image, depth_m, camera_pose)
+
+    def calibration_sample(self, step: int, measurement: Measurement
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Track one exploration step's frame; returns the FBG shifts with the camera's pose
+        (position m, quaternion) that label them, or ``None`` for a map-only step or a frame
+        the camera does not trust."""
+        estimate = self.vision.update(measurement["image"], measurement.depth_m["image"])
+        if step < self.map_steps:
+            return None
+        if estimate.lost or estimate.reprojection_error_px >= self.femp_options[
+                "update_threshold_px"]:
+            return None
+        return (np.asarray(measurement["fbg"], dtype=float), estimate.position_m,
+                estimate.quaternion)
+
+    def finish_calibration(self, samples: list[tuple[np.ndarray, np.ndarray, np.ndarray]]
+                           ) -> int:
+        """Initialise F-emp from the camera-labelled samples; returns how many there were.
+
+        Raises:
+            ValueError: fewer than 10 samples (the camera could not track the exploration).
+        """
+        if len(samples) < 10:
             raise ValueError(
-                f"calibration gave {len(shifts)} camera-labelled samples out of n_init="
+                f"calibration gave {len(samples)} camera-labelled samples out of n_init="
                 f"{self.n_init}: the camera could not track the exploration")
+        shifts, positions, quaternions = (np.array(column) for column in zip(*samples))
         self.femp = FEmpEstimator(**self.femp_options)
-        self.femp.initialize(np.array(shifts), np.array(positions), np.array(quaternions))
-        self.calibration_samples = len(shifts)
-        return len(shifts)
+        self.femp.initialize(shifts, positions, quaternions)
+        self.calibration_samples = len(samples)
+        return len(samples)
 
     def observe(self, measurement: Measurement) -> PoseEstimates:
         """Estimate from one step's camera frame and FBG reading: F-emp predicts, the vision

@@ -35,7 +35,7 @@ calibration cache (:mod:`soft_gym.sensing.calibration_cache`) under their recipe
 from __future__ import annotations
 
 import copy
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -190,119 +190,6 @@ def true_shape_points(spec: ArmSpec, backbone_m: np.ndarray) -> np.ndarray:
     backbone = np.asarray(backbone_m, dtype=float)
     return np.concatenate([backbone[..., :1, :], key_points_from_backbone(spec, backbone)],
                           axis=-2)
-
-
-def collect_dataset(spec: ArmSpec, encoders, stereo=None,
-                    config: ShapeDNNConfig = ShapeDNNConfig(), ases_config=None,
-                    progress: bool = True) -> ZouDataset:
-    """Random pressure exploration of ``spec`` labelled by ASES (zou2022 Section 5.1 (1)).
-
-    Args:
-        spec: the arm (one or more three-chamber segments).
-        encoders: the :class:`~soft_gym.sensors.encoder.ChamberEncoders` model whose readings
-            are the inputs (a private copy is used, its noise seeded from ``config.seed``).
-        stereo: the :class:`~soft_gym.sensors.stereo.StereoCamera` labelling the samples (a
-            private copy, in a clear view); ``None``: :func:`default_stereo`.
-        config: samples, grid, settling, augmentation, split and seed.
-        ases_config: :class:`~soft_gym.sensing.stereo_shape.ASESConfig` (``None``: defaults).
-        progress: show a progress bar.
-    """
-    from soft_gym.sensing.stereo_shape import ASESConfig, estimate_stereo_shape
-    from soft_gym.engines.pybullet.simulator import ArmSimulator
-
-    if not isinstance(spec, ArmSpec):
-        raise ValueError(f"spec must be an ArmSpec, got {spec!r}")
-    if not isinstance(config, ShapeDNNConfig):
-        raise ValueError(f"config must be a ShapeDNNConfig, got {config!r}")
-    ases_config = ASESConfig() if ases_config is None else ases_config
-    rng = np.random.default_rng(config.seed)
-    encoder = copy.copy(encoders)
-    encoder.rng, encoder._last = np.random.default_rng([config.seed, 1]), None
-    camera = _private_camera(default_stereo() if stereo is None else stereo, config.seed)
-    p_max = spec.p_max_pa
-    levels = np.floor((p_max - spec.p_pre_pa) / config.pressure_step_pa + 1e-9).astype(int) + 1
-    n = config.n_samples
-    pressures = np.empty((n, spec.n_chambers))
-    lengths = np.empty((n, spec.n_chambers))
-    labels = np.full((n, N_POINTS, 3), np.nan)
-    truth = np.empty((n, N_POINTS, 3))
-    lost = np.zeros(n, dtype=bool)
-    sim = ArmSimulator(spec)
-    try:
-        sim.reset(settle_s=config.settle_s)
-        for i in tqdm(range(n), desc=f"{spec.name} exploration", disable=not progress,
-                      leave=False):
-            command = spec.p_pre_pa + config.pressure_step_pa * rng.integers(0, levels)
-            sim.set_pressures(command)
-            sim.step_physics(config.settle_s)
-            pressures[i] = command
-            lengths[i] = encoder.sample(sim)
-            truth[i] = true_shape_points(spec, sim.backbone())
-            reading = camera.sample(sim)
-            shape = estimate_stereo_shape(reading["left"], reading["right"], reading["P_left"],
-                                          reading["P_right"], ases_config)
-            lost[i] = shape.lost
-            labels[i] = shape.points_m
-    finally:
-        sim.close()
-    good = np.flatnonzero(~lost)
-    if good.size < 10:
-        raise ValueError(f"ASES lost the arm in {int(lost.sum())} of {n} samples: too few left "
-                         "to train (check the stereo camera and the ASES settings)")
-    augmented = np.zeros(n, dtype=bool)
-    if config.augment:
-        for i in np.flatnonzero(lost):  # the paper's supplement: a good sample, turned
-            source, turns = int(rng.choice(good)), int(rng.choice((1, 2)))
-            lengths[i], labels[i] = rotate_about_axis(lengths[source], labels[source], turns)
-            _, truth[i] = rotate_about_axis(lengths[source], truth[source], turns)
-            pressures[i] = rotate_about_axis(pressures[source], np.zeros(3), turns)[0]
-            augmented[i] = True
-        keep = np.arange(n)
-    else:
-        keep = good
-    data = ZouDataset(pressures[keep], lengths[keep], labels[keep], truth[keep],
-                      augmented[keep], int(lost.sum()))
-    order = rng.permutation(len(data))
-    n_train = int(round(config.train_fraction * len(data)))
-    n_validation = max(1, int(round(config.validation_fraction * len(data))))
-    data.train = np.sort(order[:n_train])
-    data.validation = np.sort(order[n_train:n_train + n_validation])
-    data.test = np.sort(order[n_train + n_validation:])
-    return data
-
-
-def _private_camera(stereo, seed: int):
-    """A copy of ``stereo`` for a private simulator: unbound, its noise seeded."""
-    from soft_gym.sensors.stereo import StereoCamera
-
-    if not isinstance(stereo, StereoCamera):
-        raise ValueError(f"stereo must be a StereoCamera, got {stereo!r}")
-    camera = copy.copy(stereo)
-    camera._client, camera.backdrop_id, camera.poses = None, -1, {}
-    camera.rng, camera._last = np.random.default_rng([seed, 2]), None
-    return camera
-
-
-_STEREO_SETTINGS = ("intrinsics", "baseline_m", "distance_m", "target_m", "backdrop",
-                    "backdrop_distance_m", "backdrop_rgba", "light_direction", "noise_std_dn")
-_ENCODER_SETTINGS = ("resolution_m", "noise_std_m")
-
-
-def cached_dataset(spec: ArmSpec, encoders, stereo=None,
-                   config: ShapeDNNConfig = ShapeDNNConfig(), ases_config=None,
-                   use_cache: bool = True, progress: bool = True) -> ZouDataset:
-    """:func:`collect_dataset`, built once per recipe and kept in the calibration cache."""
-    from soft_gym.sensing.calibration_cache import cached, sensor_description
-    from soft_gym.sensing.stereo_shape import ASESConfig
-
-    stereo = default_stereo() if stereo is None else stereo
-    ases_config = ASESConfig() if ases_config is None else ases_config
-    parts = {"what": "zou2022 shape data set", "arm": repr(spec),
-             "encoders": sensor_description(encoders, _ENCODER_SETTINGS),
-             "stereo": sensor_description(stereo, _STEREO_SETTINGS),
-             "ases": ases_config.describe(), "recipe": config.dataset_recipe()}
-    return cached(parts, lambda: collect_dataset(spec, encoders, stereo, config, ases_config,
-                                                 progress), use_cache=use_cache)
 
 
 # ---------------------------------------------------------------------------------- network
@@ -532,50 +419,6 @@ class ShapeDNN:
         return array
 
 
-# ---------------------------------------------------------------------------------- pipeline
-def train_shape_dnn(spec: ArmSpec, encoders, stereo=None,
-                    config: ShapeDNNConfig = ShapeDNNConfig(), ases_config=None,
-                    use_cache: bool = True,
-                    progress: bool = True) -> tuple[ShapeDNN, dict[str, Any]]:
-    """The data set (from the cache where built before) and the DNN trained on it.
-
-    Returns the DNN and a report: the data set (:class:`ZouDataset`), the training's
-    per-epoch MSE (m^2) and the epoch kept.
-    """
-    data = cached_dataset(spec, encoders, stereo, config, ases_config, use_cache, progress)
-    dnn = ShapeDNN(spec.n_chambers, config.hidden_widths, config.seed)
-    report = dnn.fit(data.lengths_m, data.labels_m, data.train, data.validation,
-                     epochs=config.epochs, batch_size=config.batch_size,
-                     learning_rate=config.learning_rate, l2=config.l2, progress=progress)
-    return dnn, {"data": data, "training_mse": report.training_mse,
-                 "validation_mse": report.validation_mse, "best_epoch": report.best_epoch}
-
-
-def cached_shape_dnn(spec: ArmSpec, encoders, stereo=None,
-                     config: ShapeDNNConfig = ShapeDNNConfig(), ases_config=None,
-                     use_cache: bool = True,
-                     progress: bool = True) -> tuple[ShapeDNN, dict[str, Any]]:
-    """:func:`train_shape_dnn`, from the calibration cache where run before with the same arm,
-    sensors and configuration."""
-    from soft_gym.sensing.calibration_cache import cached, sensor_description
-    from soft_gym.sensing.stereo_shape import ASESConfig
-
-    stereo = default_stereo() if stereo is None else stereo
-    ases_config = ASESConfig() if ases_config is None else ases_config
-
-    def compute() -> dict[str, Any]:
-        dnn, report = train_shape_dnn(spec, encoders, stereo, config, ases_config, use_cache,
-                                      progress)
-        return {"state": dnn.state(), "report": report}
-
-    parts = {"what": "zou2022 shape DNN", "arm": repr(spec),
-             "encoders": sensor_description(encoders, _ENCODER_SETTINGS),
-             "stereo": sensor_description(stereo, _STEREO_SETTINGS),
-             "ases": ases_config.describe(), "config": asdict(config)}
-    result = cached(parts, compute, use_cache=use_cache)
-    return ShapeDNN.from_state(result["state"]), result["report"]
-
-
 def axis_errors_mm(estimate_m: np.ndarray, reference_m: np.ndarray) -> dict[str, np.ndarray]:
     """Table 3's criteria: per-axis MAE and RMSE (mm) of ``estimate_m`` against
     ``reference_m`` (both (..., 3), m), and the mean 3-D point distance (mm)."""
@@ -586,6 +429,5 @@ def axis_errors_mm(estimate_m: np.ndarray, reference_m: np.ndarray) -> dict[str,
 
 
 __all__ = ["PAPER_SAMPLES", "HIDDEN_WIDTHS", "STEREO_INTRINSICS", "ShapeDNNConfig", "ZouDataset",
-           "rotate_about_axis", "default_stereo", "true_shape_points", "collect_dataset",
-           "cached_dataset", "build_network", "TrainingReport", "ShapeDNN", "train_shape_dnn",
-           "cached_shape_dnn", "axis_errors_mm"]
+           "rotate_about_axis", "default_stereo", "true_shape_points", "build_network",
+           "TrainingReport", "ShapeDNN", "axis_errors_mm"]

@@ -6,15 +6,15 @@ the backbone is fitted through ``O, P_1..P_6`` (:mod:`soft_gym.sensing.backbone_
 eqs. 7-10). The tip is ``P_6`` (Section IV: "robot's tip is the key point P_2N"), its orientation
 the fitted backbone's tangent there.
 
-:func:`train_reconstruction` builds the whole thing the paper's way: the random exploration of
-:mod:`soft_gym.sensing.shape_exploration` (6000 samples, 4000 free and 2000 with a 75 g tip),
-then the networks' training; :func:`cached_reconstruction` keeps the result in the calibration
-cache (:mod:`soft_gym.sensing.calibration_cache`), so an env or a controller reuses it.
+:func:`fit_reconstruction` trains the networks on an exploration record; the paper's whole
+recipe (the random exploration of 6000 samples, 4000 free and 2000 with a 75 g tip, then the
+training, kept in the calibration cache so an env or a controller reuses it) drives a private
+simulator and lives in :mod:`soft_gym.procedures.zhao2021_exploration`.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -140,21 +140,15 @@ class ShapeReconstructor:
         return cls(SFEPDPredictor.load(path), n_points)
 
 
-def exploration_of(spec: ArmSpec, gauges, config: ReconstructionConfig, use_cache: bool = True,
-                   progress: bool = True):
-    """The exploration record ``config`` asks for (:func:`cached_exploration`)."""
-    from soft_gym.sensing.shape_exploration import cached_exploration
+def fit_reconstruction(spec: ArmSpec, data, config: ReconstructionConfig = ReconstructionConfig(),
+                       progress: bool = True) -> tuple[ShapeReconstructor, dict[str, Any]]:
+    """Train the SFE-PD networks on an exploration record (zhao2021 VI-A).
 
-    return cached_exploration(spec, gauges, n_free=config.n_free, n_loaded=config.n_loaded,
-                              load_kg=config.load_kg, seed=config.seed, use_cache=use_cache,
-                              progress=progress)
-
-
-def train_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig = ReconstructionConfig(),
-                         use_cache: bool = True,
-                         progress: bool = True) -> tuple[ShapeReconstructor, dict[str, Any]]:
-    """Explore ``spec`` with ``gauges`` on (or take the cached exploration) and train the SFE-PD
-    networks (zhao2021 VI-A).
+    Args:
+        spec: the arm.
+        data: the exploration (:class:`~soft_gym.sensing.shape_exploration.ShapeDataset`).
+        config: the training's settings.
+        progress: show a progress bar.
 
     Returns the reconstructor and a report: the training's per-network validation RMSE
     (normalised) and its iterations.
@@ -164,7 +158,6 @@ def train_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig = R
     from soft_gym.sensing.sfe_pd import SFEPDPredictor
     from soft_gym.sensing.shape_exploration import N_KEY_POINTS
 
-    data = exploration_of(spec, gauges, config, use_cache, progress)
     predictor = SFEPDPredictor(N_KEY_POINTS, spec.n_chambers,
                                data.readings.shape[1], seed=config.seed, dropout=config.dropout)
     threads = torch.get_num_threads()
@@ -180,22 +173,3 @@ def train_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig = R
         "iterations": report.iterations,
         "validation_rmse": report.validation_rmse.tolist(),
         "training_rmse": report.training_rmse.tolist()}
-
-
-def cached_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig,
-                          key: dict[str, Any] | None = None, use_cache: bool = True,
-                          progress: bool = True) -> tuple[ShapeReconstructor, dict[str, Any]]:
-    """:func:`train_reconstruction`, from the calibration cache where it has been run before
-    with the same arm, gauges, configuration and ``key`` (anything else that matters)."""
-    from soft_gym.sensing.calibration_cache import cached, sensor_description
-    from soft_gym.sensing.shape_exploration import GAUGE_SETTINGS
-
-    def compute() -> dict[str, Any]:
-        reconstructor, report = train_reconstruction(spec, gauges, config, use_cache, progress)
-        return {"state": reconstructor.state(), "report": report}
-
-    parts = {"what": "zhao2021 shape reconstruction", "arm": repr(spec),
-             "gauges": sensor_description(gauges, GAUGE_SETTINGS), "config": asdict(config),
-             **(key or {})}
-    result = cached(parts, compute, use_cache=use_cache)
-    return ShapeReconstructor.from_state(result["state"]), result["report"]

@@ -22,16 +22,15 @@ overrides it). Options (the env's ``sensing=``): the fields of
 :class:`~soft_gym.sensing.stereo_shape.ASESConfig`.
 
 ``encoder_dnn`` calibrates when the env is made: the data set of
-:func:`~soft_gym.sensing.shape_dnn.collect_dataset` (random pressure exploration of a private
-copy of the arm, labelled by ASES on a private stereo pair in a clear view) and the network's
-training, both in the calibration cache. At run time it reads only the encoders, so it keeps
+:func:`~soft_gym.procedures.zou2022_dataset.collect_dataset` (random pressure exploration of a
+private copy of the arm, labelled by ASES on a private stereo pair in a clear view) and the
+network's training, both in the calibration cache. At run time it reads only the encoders, so it keeps
 working when the env's stereo pair is blind. Options: the fields of
 :class:`~soft_gym.sensing.shape_dnn.ShapeDNNConfig` (e.g. ``n_samples=300`` for a quick model;
 the default is the paper's 29791) and ``stereo`` (keyword arguments of the labelling
 :class:`~soft_gym.sensors.stereo.StereoCamera`).
 
-Registration: :mod:`soft_gym.sensing.feedback` imports this module, whose classes register
-themselves on :mod:`soft_gym.sensing.feedback_base`'s registry.
+Registration: :mod:`soft_gym.sensing`'s ``__init__`` registers these classes with the others.
 
 Visual faults: the env's ``faults=`` reach the stereo pair as they reach the eye-in-hand camera
 (one description for every camera the env simulates, or a dict keyed by sensor name; see
@@ -49,9 +48,12 @@ from typing import Any
 
 import numpy as np
 
-from soft_gym.sensing.feedback_base import (FeedbackEstimate, FeedbackSource,
-                                            register_feedback_source)
+from soft_gym.robots.spec import ArmSpec
+from soft_gym.sensing.cc_shape import cc_shape
+from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensing.shape_dnn import STEREO_INTRINSICS, ShapeDNNConfig
+from soft_gym.sensing.stereo_shape import ASESConfig, estimate_stereo_shape
 
 
 def tangent_quaternion(points_m: np.ndarray) -> np.ndarray:
@@ -79,10 +81,10 @@ def tangent_quaternion(points_m: np.ndarray) -> np.ndarray:
     return quaternion / np.linalg.norm(quaternion)
 
 
-def rest_shape_points(sim) -> np.ndarray:
+def rest_shape_points(spec: ArmSpec) -> np.ndarray:
     """``P_0 .. P_6`` (m) of the straight arm at rest: sixths of the rest length along ``+z``."""
     points = np.zeros((7, 3))
-    points[:, 2] = np.linspace(0.0, float(sim.spec.length_m), 7)
+    points[:, 2] = np.linspace(0.0, float(spec.length_m), 7)
     return points
 
 
@@ -97,11 +99,10 @@ def _from_points(points: np.ndarray, quaternion: np.ndarray | None = None,
                             details=details or {})
 
 
-def _rest_lengths(sim) -> np.ndarray:
-    return np.array([segment.length_m for segment in sim.spec.segments])
+def _rest_lengths(spec: ArmSpec) -> np.ndarray:
+    return np.array([segment.length_m for segment in spec.segments])
 
 
-@register_feedback_source
 class EncoderCCFeedback(FeedbackSource):
     """RSES: the CC shape of the encoders' chamber lengths (zou2022 Section 3, eqs. 2-10)."""
 
@@ -109,15 +110,12 @@ class EncoderCCFeedback(FeedbackSource):
     sensors = ("encoder",)
     estimates_shape = True
 
-    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
-        from soft_gym.sensing.cc_shape import cc_shape
-
+    def estimate(self, measurement: Measurement) -> FeedbackEstimate:
         lengths = np.asarray(measurement["encoder"], dtype=float)
-        points, _, quaternion = cc_shape(lengths, sim.spec.chamber_offset_m,
-                                         _rest_lengths(sim))
+        points, _, quaternion = cc_shape(lengths, self.spec.chamber_offset_m,
+                                         _rest_lengths(self.spec))
         return _from_points(points, quaternion, {"lengths_m": lengths.copy()})
 
-@register_feedback_source
 class StereoFeedback(FeedbackSource):
     """ASES: the stereo pair's SOM centreline, triangulated (zou2022 Section 4, eqs. 11-16).
 
@@ -130,24 +128,19 @@ class StereoFeedback(FeedbackSource):
     estimates_shape = True
 
     def __init__(self, options: dict | None = None) -> None:
-        from soft_gym.sensing.stereo_shape import ASESConfig
-
+        self.spec: ArmSpec | None = None
         self.config = ASESConfig.from_options(dict(options or {}))
         self._last_good: np.ndarray | None = None
         self._held = 0
         self._last_time_s = -np.inf
 
     def sensor_options(self) -> dict[str, dict]:
-        from soft_gym.sensing.shape_dnn import STEREO_INTRINSICS
-
         return {"stereo": {"intrinsics": dict(STEREO_INTRINSICS)}}
 
     def restore(self) -> None:
         self._last_good, self._held, self._last_time_s = None, 0, -np.inf
 
-    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
-        from soft_gym.sensing.stereo_shape import estimate_stereo_shape
-
+    def estimate(self, measurement: Measurement) -> FeedbackEstimate:
         if measurement.time_s + 1e-9 < self._last_time_s:
             self.restore()  # the clock went back: a new episode
         self._last_time_s = measurement.time_s
@@ -156,7 +149,7 @@ class StereoFeedback(FeedbackSource):
                                       reading["P_right"], self.config)
         if shape.lost:
             self._held += 1
-            points = rest_shape_points(sim) if self._last_good is None else self._last_good
+            points = rest_shape_points(self.spec) if self._last_good is None else self._last_good
         else:
             self._held = 0
             points = self._last_good = shape.points_m.copy()
@@ -164,7 +157,6 @@ class StereoFeedback(FeedbackSource):
                    "som_px": {k: v.copy() for k, v in shape.som_px.items()}}
         return _from_points(points, details=details)
 
-@register_feedback_source
 class EncoderDNNFeedback(FeedbackSource):
     """The DNN of zou2022 Section 5 on the encoders' chamber lengths, trained on ASES labels."""
 
@@ -174,35 +166,27 @@ class EncoderDNNFeedback(FeedbackSource):
     estimates_shape = True
 
     def __init__(self, options: dict | None = None) -> None:
-        from soft_gym.sensing.shape_dnn import ShapeDNNConfig
-
         options = dict(options or {})
         stereo = options.pop("stereo", None)
         if stereo is not None and not isinstance(stereo, dict):
             raise ValueError(f"stereo must be a dict of StereoCamera keyword arguments, got "
                              f"{stereo!r}")
+        self.spec: ArmSpec | None = None
         self.stereo_options = dict(stereo or {})
         self.config = ShapeDNNConfig.from_options(options)
         self.dnn: Any = None
         self.report: dict[str, Any] = {}
 
-    def calibrate(self, context, use_cache: bool = True) -> None:
-        from soft_gym.sensing.shape_dnn import STEREO_INTRINSICS, cached_shape_dnn
-        from soft_gym.sensors.stereo import StereoCamera
+    def labelling_stereo_options(self) -> dict[str, Any]:
+        """Keyword arguments of the stereo pair that labels the data set."""
+        return {"intrinsics": dict(STEREO_INTRINSICS), **self.stereo_options}
 
-        try:
-            stereo = StereoCamera(**{"intrinsics": dict(STEREO_INTRINSICS),
-                                     **self.stereo_options})
-        except TypeError as error:
-            raise ValueError(f"stereo must hold StereoCamera keyword arguments, got "
-                             f"{sorted(self.stereo_options)} ({error})") from None
-        # the paper-sized data set takes ~25 minutes on one core: show the bars (nothing is
-        # shown when the data set and network come from the cache)
-        self.dnn, self.report = cached_shape_dnn(context.sim.spec, context.sensors["encoder"],
-                                                 stereo, self.config, use_cache=use_cache,
-                                                 progress=True)
+    def set_calibration(self, calibration: tuple[Any, dict[str, Any]]) -> None:
+        """Take the trained DNN and its report
+        (:func:`~soft_gym.procedures.zou2022_dataset.cached_shape_dnn`)."""
+        self.dnn, self.report = calibration
 
-    def estimate(self, measurement: Measurement, sim) -> FeedbackEstimate:
+    def estimate(self, measurement: Measurement) -> FeedbackEstimate:
         lengths = np.asarray(measurement["encoder"], dtype=float)
         return _from_points(self.dnn.predict(lengths),
                             details={"lengths_m": lengths.copy()})

@@ -1,4 +1,7 @@
-"""Tasks: where the target is at each control step, and when an episode ends.
+"""Tasks: where the target is at each control step, the reward, and when an episode ends.
+
+Every task has the face of :class:`Task` (dm_control's split: the task owns its reward and its
+end, the env only composes and steps):
 
 * :class:`ReachTask` draws a random target from the preset's reachable set each episode, or
   keeps a fixed goal (point to point, zhao2021 Section V-B), optionally ending the episode when
@@ -9,7 +12,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -17,13 +20,66 @@ from soft_gym._validation import as_finite_array, require_integer, require_posit
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.tasks.paths import (PATH_SHAPES, PathSpec, make_reference_trajectory, path_length,
                                   path_polyline)
-from soft_gym.tasks.workspace import reachable_tips
 
 MAX_TRACK_STEPS = 72_000
 """Longest track episode (control steps): an hour of simulated time at 20 Hz."""
 
 
-class ReachTask:
+@runtime_checkable
+class Task(Protocol):
+    """What the env asks of a task.
+
+    Attributes:
+        name: ``"reach"`` or ``"track"``.
+        episode_steps: control steps of a full episode.
+        path_m: the path's polyline (m, (n, 3)) for drawing, or ``None`` (no path).
+    """
+
+    name: str
+    episode_steps: int
+    path_m: np.ndarray | None
+
+    def reset(self, rng: np.random.Generator) -> None:
+        """Start an episode (a reach task draws its target from ``rng``)."""
+
+    def target(self, step: int) -> tuple[np.ndarray, np.ndarray]:
+        """Current and next target (m) at control step ``step``."""
+
+    def reward(self, tip_m: np.ndarray, target_m: np.ndarray, action: np.ndarray,
+               last_action: np.ndarray) -> tuple[float, float]:
+        """``(reward, error_m)`` of a step that took the tip to ``tip_m``."""
+
+    def is_reached(self, error_m: float) -> bool:
+        """Whether the episode ends with success (termination)."""
+
+    def is_over(self, step: int) -> bool:
+        """Whether the episode runs out after ``step`` control steps (truncation)."""
+
+
+class _TrackingReward:
+    """``-||tip - target|| (m) - action_rate_weight * ||a_t - a_{t-1}||^2``."""
+
+    action_rate_weight: float = 0.0
+
+    def reward(self, tip_m: np.ndarray, target_m: np.ndarray, action: np.ndarray,
+               last_action: np.ndarray) -> tuple[float, float]:
+        """``(reward, error_m)``: the tip's distance from the target (m) less the weighted
+        squared change of the action."""
+        error_m = float(np.linalg.norm(tip_m - target_m))
+        rate = float(np.sum((action - last_action) ** 2))
+        return -error_m - self.action_rate_weight * rate, error_m
+
+
+def _checked_tips(reachable_tips_m: Any) -> np.ndarray:
+    """The arm's reachable tip positions (m, (n >= 1, 3)), checked."""
+    tips = as_finite_array("reachable_tips_m", reachable_tips_m)
+    if tips.ndim != 2 or tips.shape[1] != 3 or len(tips) < 1:
+        raise ValueError(f"reachable_tips_m must be tip positions (m), shape (n >= 1, 3), got "
+                         f"shape {tips.shape}")
+    return tips
+
+
+class ReachTask(_TrackingReward):
     """Reach a target within ``episode_steps`` control steps: a random reachable one each
     episode, or the fixed ``target_m``; with ``tolerance_mm`` the episode ends (terminates) as
     soon as the tip is that close to it.
@@ -35,20 +91,29 @@ class ReachTask:
             reachable targets.
         tolerance_mm: distance (mm) at which the goal counts as reached, or ``None`` (the
             episode runs ``episode_steps``).
+        reachable_tips_m: tip positions the arm reaches (m, (n, 3)), the random targets'
+            pool (:func:`soft_gym.procedures.workspace.reachable_tips`); needed without
+            ``target_m``.
+        action_rate_weight: weight of the action-rate penalty in the reward.
     """
 
     name = "reach"
+    path_m = None
 
     def __init__(self, spec: ArmSpec, episode_steps: int = 100, target_m: Any = None,
-                 tolerance_mm: float | None = None) -> None:
+                 tolerance_mm: float | None = None, reachable_tips_m: Any = None,
+                 action_rate_weight: float = 0.0) -> None:
         self.spec = spec
         self.episode_steps = require_integer("episode_steps", episode_steps, 1)
         self.fixed_target = None if target_m is None else within_reach(spec, "target_m", target_m)
         self.tolerance_mm = None if tolerance_mm is None else require_positive("tolerance_mm",
                                                                                  tolerance_mm)
-        self.targets = reachable_tips(spec) if self.fixed_target is None else \
+        if self.fixed_target is None and reachable_tips_m is None:
+            raise ValueError("reachable_tips_m must be given for random targets (target_m=None)")
+        self.targets = _checked_tips(reachable_tips_m) if self.fixed_target is None else \
             self.fixed_target[None].copy()
         self.target_m = self.targets[0]
+        self.action_rate_weight = float(action_rate_weight)
 
     def reset(self, rng: np.random.Generator) -> None:
         if self.fixed_target is None:
@@ -77,27 +142,32 @@ def within_reach(spec: ArmSpec, name: str, point_m: Any) -> np.ndarray:
     return point
 
 
-class TrackTask:
+class TrackTask(_TrackingReward):
     """Follow a path whose target advances one point per control step.
 
     Args:
         spec: the arm.
+        reachable_tips_m: tip positions the arm reaches (m, (n, 3)), which place and size the
+            path (:func:`soft_gym.procedures.workspace.reachable_tips`).
         path: one of ``PATH_SHAPES`` or ``"waypoints"``.
         cycles: how many times the path is traversed.
         speed_m_s: target speed (m/s); default: one cycle of a circle in 20 s.
         scale: path radius as a fraction of the workspace's lateral radius.
         waypoints_m: user points (m, base frame) for ``path="waypoints"``.
+        action_rate_weight: weight of the action-rate penalty in the reward.
     """
 
     name = "track"
 
-    def __init__(self, spec: ArmSpec, path: str = "circle", cycles: int = 1,
-                 speed_m_s: float | None = None, scale: float = 0.5,
-                 waypoints_m: np.ndarray | None = None) -> None:
+    def __init__(self, spec: ArmSpec, reachable_tips_m: Any, path: str = "circle",
+                 cycles: int = 1, speed_m_s: float | None = None, scale: float = 0.5,
+                 waypoints_m: np.ndarray | None = None,
+                 action_rate_weight: float = 0.0) -> None:
         if path not in PATH_SHAPES + ("waypoints",):
             raise ValueError(f"path must be one of {list(PATH_SHAPES) + ['waypoints']}, got {path!r}")
         require_positive("scale", scale)
-        tips = reachable_tips(spec)
+        self.action_rate_weight = float(action_rate_weight)
+        tips = _checked_tips(reachable_tips_m)
         lateral = np.linalg.norm(tips[:, :2], axis=1)
         radius = float(scale * np.percentile(lateral, 75))
         # a plane across the workspace, normal to the arm axis, at the reachable set's mid height
@@ -119,7 +189,7 @@ class TrackTask:
         self.path_spec = PathSpec(
             shape=path, center_m=center, radius_m=radius, speed_m_s=speed_m_s, cycles=cycles,
             waypoints_m=None if waypoints_m is None else tuple(map(tuple, waypoints_m)))
-        self.polyline_m = path_polyline(self.path_spec)
+        self.path_m = path_polyline(self.path_spec)
         length_m = path_length(self.path_spec)  # closed: the last point back to the first
         steps = self.path_spec.cycles * length_m / (self.path_spec.speed_m_s
                                                     * spec.control_period_s)

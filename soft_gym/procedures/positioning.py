@@ -22,15 +22,16 @@ from __future__ import annotations
 import numpy as np
 
 from soft_gym._validation import as_finite_array, require_integer, require_positive
+from soft_gym.simulator import Simulator
 
 
-def drive_tip_to(sim, start_m: np.ndarray, hold_s: float = 1.0, tolerance_m: float = 1e-3,
+def drive_tip_to(sim: Simulator, start_m: np.ndarray, hold_s: float = 1.0, tolerance_m: float = 1e-3,
                  max_trials: int = 40, damping: float = 1e-3,
                  n_candidates: int = 16) -> tuple[np.ndarray, float]:
     """Find and hold chamber pressures that put the tip at ``start_m`` (m, base frame).
 
     Args:
-        sim: the :class:`~soft_gym.engines.pybullet.simulator.ArmSimulator` (its loads stay as they are).
+        sim: the simulator (its loads stay as they are).
         start_m: wanted tip position (m).
         hold_s: time each trial pressure is held before the tip is read (s).
         tolerance_m: distance at which the search stops (m).

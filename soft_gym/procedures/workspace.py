@@ -1,12 +1,14 @@
 """Per-preset sets of reachable tip positions, found by forward-simulating random pressures.
 
-Built once per process and arm (keyed by the ArmSpec) and reused by every environment.
+Built once per process and arm (keyed by the ArmSpec) on a private simulator and reused by every
+environment: the reach task draws its targets from them and the track task places its paths.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from soft_gym.engines import make_simulator
 from soft_gym.robots.spec import ArmSpec
 
 _CACHE: dict[ArmSpec, np.ndarray] = {}
@@ -22,9 +24,7 @@ def reachable_tips(spec: ArmSpec, n_samples: int = 96, hold_s: float = 0.4,
     """
     key = spec
     if key not in _CACHE:
-        from soft_gym.engines.pybullet.simulator import ArmSimulator  # local: avoid a cycle at import time
-
-        sim = ArmSimulator(spec)
+        sim = make_simulator(spec)
         rng = np.random.default_rng(seed)
         sim.reset(settle_s=0.3)
         low, high = spec.p_pre_pa, spec.p_max_pa
@@ -36,14 +36,3 @@ def reachable_tips(spec: ArmSpec, n_samples: int = 96, hold_s: float = 0.4,
         sim.close()
         _CACHE[key] = tips
     return _CACHE[key].copy()
-
-
-def rest_tip(spec: ArmSpec) -> np.ndarray:
-    """Tip position at rest under the pre-pressure and gravity (m)."""
-    from soft_gym.engines.pybullet.simulator import ArmSimulator
-
-    sim = ArmSimulator(spec)
-    sim.reset(settle_s=1.0)
-    tip = sim.tip_pose()[0]
-    sim.close()
-    return tip

@@ -1,0 +1,184 @@
+"""``EnvConfig``: every argument of :class:`~soft_gym.envs.soft_arm_env.SoftArmEnv`, checked once.
+
+The env is made of its config: ``SoftArmEnv(**kwargs)`` builds ``EnvConfig(**kwargs)``, which
+refuses a wrong type or value with a ``ValueError`` naming the argument, the value and what is
+allowed (the checks that need built parts, such as a sensor configuration for a sensor the env
+does not simulate, follow when the env composes them). A pickled or copied env is rebuilt from a
+deep copy of its config.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, fields
+from typing import Any
+
+from soft_gym._validation import (require_choice, require_integer, require_names,
+                                  require_non_negative)
+from soft_gym.envs.observations import OBSERVATION_PARTS, STATE_PARTS
+from soft_gym.envs.rendering import check_render_size
+from soft_gym.robots.presets import get_preset
+from soft_gym.robots.spec import ArmSpec
+from soft_gym.sensing import FEEDBACK_SOURCES
+from soft_gym.sensors import PUBLIC_SENSORS
+
+MAX_SETTLE_S = 60.0
+"""Longest rest before an episode (s): every preset settles within a few seconds, and each reset
+simulates ``settle_s`` (an hour of rest would take minutes per reset)."""
+
+MAX_ACTION_RATE_WEIGHT = 1000.0
+"""Largest ``action_rate_weight``: its penalty for a full swing of every chamber (4 per chamber)
+is then 10^4-10^5 times a 10 mm tracking error; larger weights only swamp the reward."""
+
+OBS_FORMATS = ("flat", "dict")
+TASKS = ("reach", "track")
+_TRACK_ONLY = (("path", "circle"), ("cycles", 1), ("speed_m_s", None), ("waypoints_m", None))
+
+
+@dataclass
+class EnvConfig:
+    """The arguments of :class:`~soft_gym.envs.soft_arm_env.SoftArmEnv` (see its docstring for
+    each one's meaning and units), checked on construction and normalised (``obs`` and
+    ``sensors`` as tuples, numbers as floats).
+
+    Raises:
+        ValueError: naming the argument, the value and what is allowed.
+    """
+
+    preset: str | ArmSpec = "wang2023"
+    task: str = "reach"
+    path: str | list[str] = "circle"
+    cycles: int = 1
+    speed_m_s: float | None = None
+    waypoints_m: Any = None
+    scenario: Any = None
+    obs: tuple[str, ...] = STATE_PARTS
+    obs_format: str = "flat"
+    sensors: tuple[str, ...] = ()
+    sensor_config: dict | None = None
+    feedback: str = "fused"
+    faults: Any = None
+    sensing: dict | None = None
+    randomization: Any = None
+    action_mode: str = "absolute"
+    delta_fraction: float = 0.1
+    action_rate_weight: float = 0.001
+    episode_steps: int = 100
+    settle_s: float = 0.5
+    target_m: Any = None
+    start_m: Any = None
+    tolerance_mm: float | None = None
+    render_mode: str | None = None
+    render_size: tuple[int, int] = (320, 240)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.preset, (str, ArmSpec)):
+            raise ValueError(f"preset must be a preset name or an ArmSpec, got {self.preset!r} "
+                             f"({type(self.preset).__name__})")
+        self.arm = self.preset if isinstance(self.preset, ArmSpec) else get_preset(self.preset)
+        require_choice("task", self.task, TASKS)
+        if self.task == "reach":
+            track_only = [f"{name}={getattr(self, name)!r}" for name, default in _TRACK_ONLY
+                          if not _is_default(getattr(self, name), default)]
+            if track_only:
+                raise ValueError(f"path, cycles, speed_m_s and waypoints_m belong to the track "
+                                 f"task (a reach env has no path), got {', '.join(track_only)} "
+                                 f"with task='reach'")
+        self.obs = _check_obs(self.obs)
+        require_choice("obs_format", self.obs_format, OBS_FORMATS)
+        self.sensors = require_names("sensors", self.sensors, PUBLIC_SENSORS)
+        self.sensor_config = _check_sensor_config(self.sensor_config)
+        if not (self.render_mode is None or isinstance(self.render_mode, str)
+                and self.render_mode == "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {self.render_mode!r}")
+        self.action_rate_weight = float(require_non_negative(
+            "action_rate_weight", self.action_rate_weight, maximum=MAX_ACTION_RATE_WEIGHT))
+        self.episode_steps = require_integer("episode_steps", self.episode_steps, 1)
+        self.settle_s = float(require_non_negative("settle_s", self.settle_s,
+                                                   maximum=MAX_SETTLE_S, unit="seconds"))
+        self.render_size = tuple(check_render_size(self.render_size))
+
+    def check_feedback_needs(self, estimates_shape: bool) -> None:
+        """Refuse a ``shape`` part when the feedback source does not estimate the backbone."""
+        if "shape" in self.obs and not estimates_shape:
+            shaped = [name for name in FEEDBACK_SOURCES
+                      if FEEDBACK_SOURCES[name].estimates_shape]
+            raise ValueError(f"obs part 'shape' needs a feedback source that estimates the "
+                             f"backbone (one of {shaped}), got feedback {self.feedback!r}")
+
+    def paths(self) -> list[str]:
+        """The track task's path names (one drawn per episode), checked."""
+        paths = [self.path] if isinstance(self.path, str) or self.task == "reach" else self.path
+        if (not isinstance(paths, (list, tuple)) or not paths
+                or not all(isinstance(name, str) for name in paths)):
+            raise ValueError(f"path must be a path name or a non-empty list of them, got "
+                             f"{self.path!r}")
+        if self.task != "reach" and any(value is not None for value in (
+                self.target_m, self.start_m, self.tolerance_mm)):
+            raise ValueError("target_m, start_m and tolerance_mm belong to the reach task, got "
+                             f"task={self.task!r}")
+        return list(paths)
+
+    def arguments(self) -> dict[str, Any]:
+        """The constructor's keyword arguments, as given (normalised)."""
+        return {field.name: getattr(self, field.name) for field in fields(self)}
+
+    def copied(self) -> "EnvConfig | None":
+        """A deep copy to rebuild an env from, or ``None`` if an argument cannot be copied
+        (e.g. an object without copy support in ``scenario=``)."""
+        try:
+            return copy.deepcopy(self)
+        except Exception:  # noqa: BLE001 - any object without copy support
+            return None
+
+
+CONFIG_FIELDS = tuple(field.name for field in fields(EnvConfig))
+"""The env's arguments, in order."""
+
+
+def check_arguments(kwargs: dict[str, Any]) -> None:
+    """Refuse keyword arguments the env does not take, naming them and listing the ones it
+    takes (rather than Python's ``TypeError``)."""
+    unknown = sorted(name for name in kwargs if name not in CONFIG_FIELDS)
+    if unknown:
+        raise ValueError(f"unknown env keyword argument(s) {unknown}: the env takes "
+                         f"{list(CONFIG_FIELDS)}")
+
+
+def _is_default(value: Any, default: Any) -> bool:
+    """Whether ``value`` is ``default`` itself (same type and value; ``True`` is not ``1``)."""
+    return value is default or (type(value) is type(default) and value == default)
+
+
+def _check_obs(obs: Any) -> tuple[str, ...]:
+    """``obs`` as a non-empty tuple of distinct part names from :data:`OBSERVATION_PARTS`."""
+    names = list(OBSERVATION_PARTS)
+    if not isinstance(obs, (str, list, tuple)) or not all(isinstance(p, str) for p in obs):
+        raise ValueError(f"obs must be a part name or a sequence of them from {names}, got "
+                         f"{obs!r}")
+    obs = (obs,) if isinstance(obs, str) else tuple(obs)
+    unknown = [part for part in obs if part not in OBSERVATION_PARTS]
+    if unknown or not obs or len(set(obs)) != len(obs):
+        raise ValueError(f"obs must be a non-empty tuple of distinct parts from {names}, got "
+                         f"{obs!r}")
+    return obs
+
+
+def _check_sensor_config(sensor_config: Any) -> dict[str, dict]:
+    """``sensor_config`` as a dict from sensor names to dicts of keyword arguments."""
+    if sensor_config is None:
+        return {}
+    if not isinstance(sensor_config, dict):
+        raise ValueError(f"sensor_config must be None or a dict from sensor names to dicts of "
+                         f"keyword arguments, got {sensor_config!r} "
+                         f"({type(sensor_config).__name__})")
+    unknown = [name for name in sensor_config
+               if not isinstance(name, str) or name not in PUBLIC_SENSORS]
+    if unknown:
+        raise ValueError(f"sensor_config keys must be sensor names from "
+                         f"{sorted(PUBLIC_SENSORS)}, got {sorted(map(str, sensor_config))!r}")
+    for name, options in sensor_config.items():
+        if not isinstance(options, dict) or not all(isinstance(key, str) for key in options):
+            raise ValueError(f"sensor_config[{name!r}] must be a dict of keyword arguments of the "
+                             f"{name} sensor, got {options!r}")
+    return {name: dict(options) for name, options in sensor_config.items()}

@@ -1,0 +1,53 @@
+"""wang2023's sensing calibration: the vision map at rest, then F-emp from the spiral exploration.
+
+The robot's sensing (:class:`~soft_gym.sensing.pipeline.SensingPipeline`) learns from the arm it
+watches: :func:`calibrate_pipeline` drives a simulator through the predefined spiral actuation
+(wang2023 Section IV-B; :func:`~soft_gym.sensing.exploration.spiral_fractions`), reads the
+pipeline's camera and fiber every control step and hands each step to the pipeline, which keeps
+the camera-labelled FBG samples and initialises F-emp from them (eqs. 9-17).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from soft_gym.robots.actuation import pressure_at_fraction
+from soft_gym.sensing.exploration import spiral_fractions
+from soft_gym.sensing.pipeline import SensingPipeline
+from soft_gym.sensors.reading import measure
+from soft_gym.simulator import Simulator
+
+
+def calibrate_pipeline(pipeline: SensingPipeline, sim: Simulator,
+                       rng: np.random.Generator) -> int:
+    """Vision map at the current (rest) pose, then F-emp from the spiral exploration
+    (``map_steps`` steps for the map alone, then ``n_init`` labelled steps).
+
+    Args:
+        pipeline: the pipeline to calibrate (its camera and fiber are read on ``sim``).
+        sim: the arm at rest; the exploration leaves it wherever it ends.
+        rng: the sensors' noise generator.
+
+    Returns:
+        The number of camera-labelled samples F-emp was initialised with.
+    """
+    camera, fiber = pipeline.camera, pipeline.fbg
+    camera.reset(sim, rng)
+    fiber.reset(sim, rng)
+    image, depth = camera.render_clean(sim)
+    pipeline.begin_calibration(image, depth, camera.pose_matrix(sim))
+    spec = sim.spec
+    sensors = {"image": camera, "fbg": fiber}
+    samples = []
+    for step in range(pipeline.calibration_steps):
+        fraction = spiral_fractions(step * spec.control_period_s, spec.n_segments,
+                                    **pipeline.exploration)
+        sim.set_pressures(pressure_at_fraction(spec, fraction))
+        sim.step_physics(spec.control_period_s)
+        sample = pipeline.calibration_sample(step, measure(sensors, sim))
+        if sample is not None:
+            samples.append(sample)
+    return pipeline.finish_calibration(samples)
+
+
+__all__ = ["calibrate_pipeline"]
