@@ -99,7 +99,7 @@ def _stepping_soak(env: gym.Env, steps: int, act: Callable[[Any], Any], label: s
     """Step ``env`` ``steps`` times with ``act(observation)``, a new seeded episode after each
     end or exception, tallying what a soak must never see (see the module doc); ``on_step``
     reads each step's ``info``, ``on_reset`` follows every reset. Closes ``env``."""
-    reach_m = env.unwrapped.spec_arm.max_reach_m
+    reach_m = env.unwrapped.arm.max_reach_m
     tally, farthest = _Tally(), 0.0
     warmup = max(1, steps // 20)
     rss_start = rss_mb()

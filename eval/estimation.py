@@ -118,7 +118,7 @@ def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: 
     env = gym.make("SoftArmReach-v0", preset="wang2023", feedback="fused", faults=faults,
                    scenario=scenario, episode_steps=steps, sensing=_sensing(experiment, n_init))
     unwrapped = env.unwrapped
-    spec = unwrapped.spec_arm
+    spec = unwrapped.arm
     actuation = Actuation.of_env(env)
     video = None
     if video_path is not None:

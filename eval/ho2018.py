@@ -219,7 +219,7 @@ def _track(env, policy, path_m: np.ndarray, cycles: int, cycle_s: float, lead_in
     """Lead-in on the first corner, then ``cycles`` rectangles; the policy sees the env's
     observation with its ``target`` part set to this experiment's targets."""
     unwrapped = env.unwrapped
-    period = unwrapped.spec_arm.control_period_s
+    period = unwrapped.arm.control_period_s
     length = float(np.linalg.norm(np.diff(np.vstack([path_m, path_m[:1]]), axis=0), axis=1).sum())
     spec = PathSpec(shape="waypoints", center_m=(0.0, 0.0, 0.0), radius_m=1.0,
                     speed_m_s=length / cycle_s, cycles=cycles, waypoints_m=path_m)

@@ -133,7 +133,7 @@ def run_episode(env: gym.Env, policy: BaselinePolicy, seed: int = 0, learn: bool
     cycles = getattr(getattr(task, "path_spec", None), "cycles", 1)
     if hasattr(task, "trajectory_m") and len(task.trajectory_m) == steps:
         record["cycle"] = cycle_index(steps, cycles)
-        record["polyline_m"] = np.asarray(task.polyline_m)
+        record["polyline_m"] = np.asarray(task.path_m)
     else:
         record["cycle"] = np.zeros(steps, dtype=int)
     for key, values in estimates.items():

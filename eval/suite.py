@@ -164,11 +164,9 @@ _NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 
 
 def _env_keys() -> tuple[str, ...]:
-    from soft_gym.envs.soft_arm_env import SoftArmEnv
+    from soft_gym.envs.config import CONFIG_FIELDS
 
-    names = [name for name in inspect.signature(SoftArmEnv.__init__).parameters
-             if name != "self"]
-    return tuple(name for name in names
+    return tuple(name for name in CONFIG_FIELDS
                  if name not in SUITE_ENV_KEYS and name not in _NOT_FOR_TRACKING)
 
 

@@ -250,7 +250,7 @@ def _drive(env, policy, targets_m, max_steps: int, seed: int, label: str, progre
     the run ends there. Records per controller step the true tip, the feedback tip, ``d`` and
     the distances."""
     unwrapped = env.unwrapped
-    hold = int(round(SETTLE_S / unwrapped.spec_arm.control_period_s))
+    hold = int(round(SETTLE_S / unwrapped.arm.control_period_s))
     observation, info = env.reset(seed=seed)
     policy.reset()
     targets = np.atleast_2d(np.asarray(targets_m, dtype=float))

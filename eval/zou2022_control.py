@@ -108,11 +108,13 @@ DEFAULT_DNN_OPTIONS: dict[str, Any] = {"n_samples": 3000}
 def cycle_duration_s(speed_m_s: float | None = None) -> float:
     """Duration of one cycle of :data:`CONTROL_PATH` on the zou2022 arm at ``speed_m_s`` (m/s;
     ``None``: the env's default speed, :data:`CYCLE_S`), in s."""
+    from soft_gym.procedures.workspace import reachable_tips
     from soft_gym.robots.presets import get_preset
     from soft_gym.tasks import TrackTask
 
     spec = get_preset(PRESET)
-    task = TrackTask(spec, path=CONTROL_PATH, cycles=1, speed_m_s=speed_m_s)
+    task = TrackTask(spec, reachable_tips(spec), path=CONTROL_PATH, cycles=1,
+                     speed_m_s=speed_m_s)
     return task.episode_steps * spec.control_period_s
 
 

@@ -71,6 +71,13 @@ class Registry(Mapping[str, T], Generic[T]):
         if lazy:
             self._lazy.add(name)
 
+    def unregister(self, name: str) -> None:
+        """Remove ``name`` (a plug-in that is done, e.g. in a test)."""
+        if name not in self._entries:
+            raise ValueError(f"{self.kind} must be one of {list(self._entries)}, got {name!r}")
+        del self._entries[name]
+        self._lazy.discard(name)
+
     def __getitem__(self, name: str) -> T:
         if not isinstance(name, str) or name not in self._entries:
             raise ValueError(f"{self.kind} must be one of {list(self._entries)}, got {name!r}")

@@ -49,9 +49,9 @@ def test_alias_ids_refuse_another_preset_and_accept_their_own(task):
     for preset in (None, "wang2023", PRESETS["wang2023"]):
         kwargs = {} if preset is None else {"preset": preset}
         env = gym.make(alias, feedback="ground_truth", **kwargs)
-        assert env.unwrapped.spec_arm == PRESETS["wang2023"]
+        assert env.unwrapped.arm == PRESETS["wang2023"]
         remade = gym.make(env.spec)  # a spec remakes the same env (SubprocVecEnv, copies)
-        assert remade.unwrapped.spec_arm == PRESETS["wang2023"]
+        assert remade.unwrapped.arm == PRESETS["wang2023"]
         env.close()
         remade.close()
 
@@ -202,7 +202,10 @@ def test_sensor_parts_in_flat_and_dict_observations_and_info():
 
 
 def test_sensors_cost_nothing_unless_asked_and_readings_repeat_under_a_seed():
-    assert gym.make("SoftArmReach-v0", feedback="ground_truth").unwrapped.sensors == {}
+    # ground truth reads the privileged truth sensor alone, which no observation or info shows
+    base = gym.make("SoftArmReach-v0", feedback="ground_truth").unwrapped
+    assert list(base.sensors) == ["truth"] and base.sensors["truth"].privileged
+    assert base.reset(seed=0)[1]["sensors"] == {}
     runs = []
     for _ in range(2):
         env = gym.make("SoftArmReach-v0", obs=("fbg", "em"), feedback="ground_truth")

@@ -113,7 +113,7 @@ def test_valid_configurations_run_physically(kwargs, seed, amplitude):
                    **kwargs)
     try:
         base = env.unwrapped
-        reach = base.spec_arm.max_reach_m
+        reach = base.arm.max_reach_m
         observation, _ = env.reset(seed=seed)
         rng = np.random.default_rng(seed)
         for step in range(STEPS):

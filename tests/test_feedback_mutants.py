@@ -3,12 +3,13 @@
 
 Each test pins a documented behaviour of a feedback source that a surviving mutant changed
 unnoticed, with scripted stand-ins for the slow collaborators (the simulator, the sensing
-pipeline, the shape reconstructor): ``ground_truth`` passes the simulator's pose and backbone
+pipeline, the shape reconstructor): ``ground_truth`` passes the truth sensor's pose and backbone
 and its key points at sixths of the rest length; ``em`` splits the tracker's reading; the
-pipeline sources calibrate in a clear view from the arm at rest, through the calibration cache,
-return to that calibration on ``restore`` and report their own output with the details;
-``strain_sr`` hands the networks the state of every ``history_step_s`` of simulated time (the
-last five plus the present one) and starts afresh when the clock goes back.
+pipeline sources are calibrated by their procedure (:mod:`soft_gym.procedures.calibration`) on a
+private simulator at rest with fresh, fault-free sensors, through the calibration cache, return
+to that calibration on ``restore`` and report their own output with the details; ``strain_sr``
+hands the networks the commands sent and the readings of every ``history_step_s`` of simulated
+time (the last five plus the present one) and starts afresh when the clock goes back.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import types
 import numpy as np
 import pytest
 
+from soft_gym.procedures import calibration as procedures
 from soft_gym.robots import get_preset
 from soft_gym.sensing import calibration_cache, pipeline, shape_reconstruction
 from soft_gym.sensing.feedback import (CameraFeedback, EMFeedback, FEmpFeedback, FusedFeedback,
@@ -29,53 +31,34 @@ ZHAO = get_preset("zhao2021")   # two segments of 107 mm, four links each, six c
 
 
 # ---------------------------------------------------------------------------------- ground truth
-class TruthSim:
-    spec = ZHAO
-
-    def __init__(self) -> None:
-        arcs = np.r_[0.0, np.cumsum([0.02675] * 8)]
-        self.arcs = arcs
-        self.backbone_m = np.c_[0.3 * arcs ** 2, -arcs ** 3, arcs + 0.01]
-
-    def tip_pose(self):
-        return np.array([0.1, 0.2, 0.3]), np.array([0.0, 0.6, 0.0, 0.8])
-
-    def backbone(self):
-        return self.backbone_m.copy()
-
-
-def test_ground_truth_is_the_simulators_pose_and_backbone_and_key_points() -> None:
-    sim = TruthSim()
+def test_ground_truth_is_the_truth_sensors_pose_and_backbone_and_key_points() -> None:
+    arcs = np.r_[0.0, np.cumsum([0.02675] * 8)]
+    backbone = np.c_[0.3 * arcs ** 2, -arcs ** 3, arcs + 0.01]
     source = GroundTruthFeedback()
-    estimate = source.estimate(Measurement(0.0, {}), sim)
+    assert source.sensors == ("truth",)
+    source.prepare(CalibrationContext(spec=ZHAO))
+    truth = {"position_m": np.array([0.1, 0.2, 0.3]),
+             "quaternion": np.array([0.0, 0.6, 0.0, 0.8]), "backbone_m": backbone}
+    estimate = source.estimate(Measurement(0.0, {"truth": truth}))
     np.testing.assert_array_equal(estimate.position_m, [0.1, 0.2, 0.3])
     np.testing.assert_array_equal(estimate.quaternion, [0.0, 0.6, 0.0, 0.8])
-    np.testing.assert_array_equal(estimate.shape_m, sim.backbone_m)
-    points = source.shape_points(estimate, sim)
+    np.testing.assert_array_equal(estimate.shape_m, backbone)
+    points = source.shape_points(estimate)
     targets = 0.214 * np.arange(1, 7) / 6.0                       # sixths of the rest length
-    expected = np.stack([np.interp(targets, sim.arcs, sim.backbone_m[:, i]) for i in range(3)],
-                        axis=1)
+    expected = np.stack([np.interp(targets, arcs, backbone[:, i]) for i in range(3)], axis=1)
     assert points.shape == (7, 3)
-    np.testing.assert_array_equal(points[0], sim.backbone_m[0])    # the base
+    np.testing.assert_array_equal(points[0], backbone[0])    # the base
     np.testing.assert_allclose(points[1:], expected, rtol=0, atol=1e-15)
 
 
 def test_em_splits_the_trackers_reading() -> None:
     reading = np.array([0.01, -0.02, 0.15, 0.0, 0.0, 0.6, 0.8], dtype=np.float32)
-    estimate = EMFeedback().estimate(Measurement(0.0, {"em": reading}), None)
+    estimate = EMFeedback().estimate(Measurement(0.0, {"em": reading}))
     np.testing.assert_array_equal(estimate.position_m, reading[:3])
     np.testing.assert_array_equal(estimate.quaternion, reading[3:])
 
 
 # ---------------------------------------------------------------------------------- pipeline
-class Camera:
-    def __init__(self, faults) -> None:
-        self.faults = faults
-
-    def set_faults(self, faults) -> None:
-        self.faults = faults
-
-
 class Fusion:
     @staticmethod
     def weight(error_px, lost) -> float:
@@ -96,8 +79,7 @@ class Pipeline:
         Pipeline.built.append(self)
 
     def calibrate(self, sim, rng) -> None:
-        self.calls.append(("calibrate", sim.settled, self.camera.faults,
-                           rng.standard_normal()))
+        self.calls.append(("calibrate", sim.settled, sim.loads, rng.standard_normal()))
         self.vision = {"map": [1, 2, 3]}
         self.femp = {"weights": [0.5]}
         self.calibration_samples = 40
@@ -112,26 +94,42 @@ class Pipeline:
 
 
 class RestSim:
-    def __init__(self) -> None:
-        self.settled = None
+    """Stands in for the procedure's private simulator: records its loads, settle and close."""
+
+    made: list = []
+
+    def __init__(self, spec) -> None:
+        self.spec, self.loads, self.settled, self.closed = spec, [], None, False
+        RestSim.made.append(self)
+
+    def add_load(self, load) -> None:
+        self.loads.append(load)
 
     def reset(self, settle_s=None) -> None:
         self.settled = settle_s
 
+    def close(self) -> None:
+        self.closed = True
+
 
 @pytest.fixture
 def stand_in_pipeline(monkeypatch):
-    monkeypatch.setattr(pipeline, "SensingPipeline", Pipeline)
+    monkeypatch.setattr(procedures, "SensingPipeline", Pipeline)
+    monkeypatch.setattr(procedures, "make_simulator", RestSim)
+    monkeypatch.setattr(procedures, "calibrate_pipeline",
+                        lambda built, sim, rng: built.calibrate(sim, rng))
     monkeypatch.setenv("SOFT_GYM_CACHE", "off")
     calibration_cache.clear_memory()
-    Pipeline.built = []
+    Pipeline.built, RestSim.made = [], []
     yield Pipeline
     calibration_cache.clear_memory()
 
 
-def _context(faults="low_light", key=None) -> CalibrationContext:
-    return CalibrationContext(sim=RestSim(), sensors={"image": Camera(faults), "fbg": "fiber"},
-                              settle_s=0.7, key=key or {"arm": "wang2023-test-feedback"})
+def _context(key=None) -> CalibrationContext:
+    return CalibrationContext(spec=get_preset("wang2023"), settle_s=0.7,
+                              key=key or {"arm": "wang2023-test-feedback"},
+                              make_sensor=lambda name: f"fresh {name}",
+                              make_loads=lambda: ["load copy"])
 
 
 def test_pipeline_sources_read_the_fiber_every_step_and_refuse_unknown_options() -> None:
@@ -141,18 +139,17 @@ def test_pipeline_sources_read_the_fiber_every_step_and_refuse_unknown_options()
         FusedFeedback({"n_innit": 50, "bogus": 1})
 
 
-def test_calibration_in_a_clear_view_from_the_arm_at_rest(stand_in_pipeline) -> None:
+def test_calibration_on_a_private_arm_at_rest_with_fresh_sensors(stand_in_pipeline) -> None:
     options = {"n_init": 50}
     source = FEmpFeedback(options)
     options["n_init"] = 7                  # the source keeps its own copy of the options
-    context = _context()
-    source.calibrate(context)
+    procedures.calibrate(source, _context())
     built = stand_in_pipeline.built[-1]
-    assert built.camera is context.sensors["image"] and built.fiber == "fiber"
+    assert built.camera == "fresh image" and built.fiber == "fresh fbg"
     assert built.options == {"n_init": 50}
     noise = np.random.default_rng(0).standard_normal()
-    assert built.calls == [("calibrate", 0.7, None, noise)]
-    assert context.sensors["image"].faults == "low_light"       # the faults come back after
+    assert built.calls == [("calibrate", 0.7, ["load copy"], noise)]
+    assert RestSim.made[-1].closed                               # the private arm is closed
     assert source.pipeline is built
     assert (built.vision, built.femp, built.calibration_samples) == (
         {"map": [1, 2, 3]}, {"weights": [0.5]}, 40)
@@ -160,20 +157,20 @@ def test_calibration_in_a_clear_view_from_the_arm_at_rest(stand_in_pipeline) -> 
 
 def test_calibration_comes_from_the_cache_for_the_same_key(stand_in_pipeline) -> None:
     first, second = CameraFeedback({"n_init": 50}), CameraFeedback({"n_init": 50})
-    first.calibrate(_context())
-    second.calibrate(_context())
+    procedures.calibrate(first, _context())
+    procedures.calibrate(second, _context())
     assert sum(len(p.calls) for p in stand_in_pipeline.built) == 1
     other = CameraFeedback({"n_init": 60})         # other options: another key
-    other.calibrate(_context())
+    procedures.calibrate(other, _context())
     assert sum(len(p.calls) for p in stand_in_pipeline.built) == 2
     fresh = CameraFeedback({"n_init": 50})         # no cache: calibrated again
-    fresh.calibrate(_context(), use_cache=False)
+    procedures.calibrate(fresh, _context(), use_cache=False)
     assert sum(len(p.calls) for p in stand_in_pipeline.built) == 3
 
 
 def test_restore_returns_to_the_calibrated_state_every_time(stand_in_pipeline) -> None:
     source = FusedFeedback()
-    source.calibrate(_context(), use_cache=False)
+    procedures.calibrate(source, _context(), use_cache=False)
     source.pipeline.femp["weights"].append(9.0)    # online learning changes the model
     source.pipeline.vision["map"].clear()
     source.pipeline.calibration_samples = 41
@@ -191,8 +188,8 @@ def test_restore_returns_to_the_calibrated_state_every_time(stand_in_pipeline) -
 def test_each_pipeline_source_reports_its_own_output_with_the_details(
         stand_in_pipeline, source_class, expected_x) -> None:
     source = source_class()
-    source.calibrate(_context(), use_cache=False)
-    estimate = source.estimate(Measurement(3.0, {}), None)
+    procedures.calibrate(source, _context(), use_cache=False)
+    estimate = source.estimate(Measurement(3.0, {}))
     np.testing.assert_array_equal(estimate.position_m, [expected_x, 0.0, 0.0])
     expected_q = {1.0: [0, 0, 0, 1], 2.0: [0, 0, 1, 0], 3.0: [0, 1, 0, 0]}[expected_x]
     np.testing.assert_array_equal(estimate.quaternion, expected_q)
@@ -204,7 +201,7 @@ def test_each_pipeline_source_reports_its_own_output_with_the_details(
     np.testing.assert_array_equal(details["fused"], [3.0, 0.0, 0.0])
     assert details["reprojection_error_px"] == 3.0 and details["lost"] is False
     assert details["femp_weight"] == pytest.approx(0.25) and details["femp_updated"] is True
-    lost = source.estimate(Measurement(6.0, {}), None).details
+    lost = source.estimate(Measurement(6.0, {})).details
     assert lost["lost"] is True and lost["femp_weight"] == -1.0
 
 
@@ -223,17 +220,17 @@ class Reconstructor:
             tip_position_m=key[-1], tip_quaternion=np.array([0.0, 0.0, 0.0, 1.0]))
 
 
-class StrainSim:
-    spec = ZHAO
+def _strain_source(options: dict | None = None) -> StrainShapeFeedback:
+    source = StrainShapeFeedback(options)
+    source.prepare(CalibrationContext(spec=ZHAO))
+    source.reconstructor = Reconstructor()
+    return source
 
-    def __init__(self) -> None:
-        self.supply = types.SimpleNamespace(command_pa=np.zeros(6))
 
-
-def _step(source, sim, time_s: float, value: float):
+def _step(source, time_s: float, value: float):
     """One step whose commanded pressures are ``value`` kPa and gauge readings ``value``."""
-    sim.supply.command_pa = np.full(6, 1e3 * value)
-    return source.estimate(Measurement(time_s, {"strain": np.full(6, value)}), sim)
+    return source.estimate(Measurement(time_s, {"strain": np.full(6, value)},
+                                       command_pa=np.full(6, 1e3 * value)))
 
 
 def _windows(source) -> list[list[float]]:
@@ -242,15 +239,13 @@ def _windows(source) -> list[list[float]]:
 
 
 def test_strain_sr_history_keeps_one_state_per_history_step() -> None:
-    source = StrainShapeFeedback({"history_step_s": 1.0})
-    source.reconstructor = Reconstructor()
-    sim = StrainSim()
-    _step(source, sim, 0.0, 1.0)
-    _step(source, sim, 0.5, 2.0)
-    _step(source, sim, 1.0, 3.0)                   # due: joins the history
-    _step(source, sim, 1.5, 4.0)
-    _step(source, sim, 2.0 - 5e-10, 5.0)           # due within the 1e-9 s tolerance
-    _step(source, sim, 2.5, 6.0)
+    source = _strain_source({"history_step_s": 1.0})
+    _step(source, 0.0, 1.0)
+    _step(source, 0.5, 2.0)
+    _step(source, 1.0, 3.0)                   # due: joins the history
+    _step(source, 1.5, 4.0)
+    _step(source, 2.0 - 5e-10, 5.0)           # due within the 1e-9 s tolerance
+    _step(source, 2.5, 6.0)
     assert _windows(source) == [
         [1.0] * 6,
         [1.0] * 5 + [2.0],
@@ -265,15 +260,13 @@ def test_strain_sr_history_keeps_one_state_per_history_step() -> None:
 
 
 def test_strain_sr_starts_afresh_when_the_clock_goes_back() -> None:
-    source = StrainShapeFeedback()                  # history_step_s = 1 s by default
-    source.reconstructor = Reconstructor()
-    sim = StrainSim()
-    _step(source, sim, 0.0, 1.0)
-    _step(source, sim, 1.0, 2.0)
-    _step(source, sim, 1.0 - 5e-10, 3.0)            # the same time to 1e-9 s: no new episode
-    _step(source, sim, 0.1, 4.0)                    # back in time: a new episode
-    _step(source, sim, 0.6, 5.0)
-    _step(source, sim, 1.1, 6.0)                    # one step after the new start
+    source = _strain_source()                       # history_step_s = 1 s by default
+    _step(source, 0.0, 1.0)
+    _step(source, 1.0, 2.0)
+    _step(source, 1.0 - 5e-10, 3.0)            # the same time to 1e-9 s: no new episode
+    _step(source, 0.1, 4.0)                    # back in time: a new episode
+    _step(source, 0.6, 5.0)
+    _step(source, 1.1, 6.0)                    # one step after the new start
     assert _windows(source) == [
         [1.0] * 6,
         [1.0] * 4 + [2.0, 2.0],
@@ -283,14 +276,12 @@ def test_strain_sr_starts_afresh_when_the_clock_goes_back() -> None:
         [4.0] * 4 + [6.0, 6.0],
     ]
     source.restore()
-    _step(source, sim, 2.0, 7.0)
+    _step(source, 2.0, 7.0)
     assert _windows(source)[-1] == [7.0] * 6
 
 
 def test_strain_sr_estimate_is_the_reconstructed_shape() -> None:
-    source = StrainShapeFeedback()
-    source.reconstructor = Reconstructor()
-    estimate = _step(source, StrainSim(), 0.0, 2.0)
+    estimate = _step(_strain_source(), 0.0, 2.0)
     key = np.arange(1.0, 19.0).reshape(6, 3) * 2.0
     np.testing.assert_array_equal(estimate.position_m, key[-1])
     np.testing.assert_array_equal(estimate.quaternion, [0.0, 0.0, 0.0, 1.0])
@@ -308,20 +299,20 @@ def test_strain_sr_calibrates_through_the_cached_reconstruction(monkeypatch) -> 
         calls.append((spec, gauges, config, use_cache, progress))
         return reconstructor, {"report": 1}
 
-    monkeypatch.setattr(shape_reconstruction, "cached_reconstruction", cached_reconstruction)
+    monkeypatch.setattr(procedures, "cached_reconstruction", cached_reconstruction)
     source = StrainShapeFeedback({"n_free": 30, "history_step_s": 0.5})
     assert source.history_step_s == 0.5 and source.config.n_free == 30
-    sim = StrainSim()
-    context = CalibrationContext(sim=sim, sensors={"strain": "gauges"}, settle_s=1.0, key={})
-    source.calibrate(context, use_cache=False)
+    context = CalibrationContext(spec=ZHAO, settle_s=1.0, make_sensor=lambda name: "gauges")
+    source.prepare(context)
+    procedures.calibrate(source, context, use_cache=False)
     assert calls == [(ZHAO, "gauges", source.config, False, True)]
     assert source.reconstructor is reconstructor and source.report == {"report": 1}
-    _step(source, sim, 0.0, 1.0)
-    _step(source, sim, 0.5, 2.0)             # 0.5 s history steps
+    _step(source, 0.0, 1.0)
+    _step(source, 0.5, 2.0)             # 0.5 s history steps
     assert _windows(source)[-1] == [1.0] * 4 + [2.0, 2.0]
-    source.calibrate(context)
+    procedures.calibrate(source, context)
     assert calls[-1][3] is True
-    _step(source, sim, 3.0, 3.0)                   # calibration restored the history
+    _step(source, 3.0, 3.0)                   # calibration restored the history
     assert _windows(source)[-1] == [3.0] * 6
 
 

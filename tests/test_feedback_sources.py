@@ -13,8 +13,7 @@ import pytest
 
 import soft_gym  # noqa: F401
 from soft_gym.sensing import calibration_cache
-from soft_gym.sensing.feedback import (FEEDBACK_SOURCES, FeedbackEstimate, FeedbackSource,
-                                       register_feedback_source)
+from soft_gym.sensing import FEEDBACK_SOURCES, FeedbackEstimate, FeedbackSource
 
 QUICK = {"n_init": 40}
 """A short calibration (40 labelled exploration steps) for tests that only compare runs."""
@@ -58,7 +57,7 @@ from soft_gym.sensing.pipeline import SensingPipeline
 def refuse(*args, **kwargs):
     raise AssertionError("the second process calibrated instead of reading the disk cache")
 
-SensingPipeline.calibrate = refuse
+SensingPipeline.begin_calibration = refuse
 env = gym.make("SoftArmTrackWang2023-v0", sensing={"n_init": 40})
 observation, _ = env.reset(seed=3)
 rng = np.random.default_rng(3)
@@ -108,24 +107,24 @@ def test_faults_need_a_simulated_camera():
 
 
 def test_sensing_options_only_for_the_pipeline():
-    with pytest.raises(ValueError, match="feedback 'em' takes none"):
+    with pytest.raises(ValueError, match="feedback 'em' takes no sensing options"):
         gym.make("SoftArmReachWang2023-v0", feedback="em", sensing={"n_init": 50})
     with pytest.raises(ValueError, match="sensing options must be among"):
         gym.make("SoftArmReachWang2023-v0", sensing={"n_innit": 50})
 
 
 def test_a_new_estimator_is_one_registered_class():
-    @register_feedback_source
     class BaseTwinFeedback(FeedbackSource):
         """A toy estimator: the EM position mirrored through the base plane."""
 
         name = "test_mirrored_em"
         sensors = ("em",)
 
-        def estimate(self, measurement, sim):
+        def estimate(self, measurement):
             reading = np.asarray(measurement["em"], dtype=float)
             return FeedbackEstimate(reading[:3] * np.array([1.0, 1.0, -1.0]), reading[3:])
 
+    FEEDBACK_SOURCES.register(BaseTwinFeedback.name, BaseTwinFeedback)
     try:
         env = gym.make("SoftArmReachWang2023-v0", feedback="test_mirrored_em")
         observation, info = env.reset(seed=0)
@@ -133,7 +132,7 @@ def test_a_new_estimator_is_one_registered_class():
         assert "em" in env.unwrapped.sensors
         env.close()
     finally:
-        del FEEDBACK_SOURCES["test_mirrored_em"]
+        FEEDBACK_SOURCES.unregister("test_mirrored_em")
 
 
 def test_every_sensor_is_sampled_once_per_step():

@@ -24,6 +24,7 @@ from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.sensing.exploration import spiral_fractions
 from soft_gym.sensing.femp import FEmpEstimator
 from soft_gym.sensing.fusion import PoseFusion
+from soft_gym.procedures.wang2023_calibration import calibrate_pipeline
 from soft_gym.sensing.measurement import Measurement
 from soft_gym.sensing.pipeline import SensingPipeline
 from soft_gym.sensing.vision_pose import VisionEstimate
@@ -204,12 +205,6 @@ def test_smallest_options_are_accepted() -> None:
     assert pipeline.n_init == 10 and pipeline.map_steps == 0
 
 
-def test_reset_hands_the_episode_generator_to_both_sensors() -> None:
-    camera, fiber, sim, rng = FakeCamera(), FakeFiber(), FakeSim(), np.random.default_rng(0)
-    SensingPipeline(camera, fiber).reset(sim, rng)
-    assert camera.resets == [(sim, rng)] and fiber.resets == [(sim, rng)]
-
-
 # ------------------------------------------------------------------ calibration
 @pytest.mark.parametrize("preset", ["wang2023", "zhao2021"])  # one and two segments
 def test_calibration_sequence(fake_vision, preset: str) -> None:
@@ -221,7 +216,7 @@ def test_calibration_sequence(fake_vision, preset: str) -> None:
     camera, fiber, sim, rng = FakeCamera(), FakeFiber(), FakeSim(spec), np.random.default_rng(0)
     pipeline = SensingPipeline(camera, fiber, n_init=40, map_steps=5, femp={"n_hidden": 15},
                                vision={"n_features": 300}, exploration={"high": 0.5})
-    count = pipeline.calibrate(sim, rng)
+    count = calibrate_pipeline(pipeline, sim, rng)
     assert camera.resets == [(sim, rng)] and fiber.resets == [(sim, rng)]
     vision = fake_vision.instances[-1]
     assert pipeline.vision is vision
@@ -262,7 +257,7 @@ def test_calibration_threshold_follows_an_explicit_femp_threshold(fake_vision) -
     """With F-emp's threshold set to 1.0 px the 0.95 px frames label F-emp too."""
     pipeline = SensingPipeline(FakeCamera(), FakeFiber(), n_init=30,
                                femp={"n_hidden": 10, "update_threshold_px": 1.0})
-    count = pipeline.calibrate(FakeSim(), np.random.default_rng(0))
+    count = calibrate_pipeline(pipeline, FakeSim(), np.random.default_rng(0))
     assert count == len(_accepted(range(30), 1.0)) > len(_accepted(range(30), 0.94))
 
 
@@ -272,17 +267,17 @@ def test_calibration_needs_ten_labelled_samples(fake_vision) -> None:
     assert len(_accepted(range(n_init - 1), 0.94)) == 9
     with pytest.raises(ValueError, match=rf"^calibration gave 9 camera-labelled samples out of "
                                          rf"n_init={n_init - 1}: the camera could not track"):
-        SensingPipeline(FakeCamera(), FakeFiber(), n_init=n_init - 1).calibrate(
-            FakeSim(), np.random.default_rng(0))
+        calibrate_pipeline(SensingPipeline(FakeCamera(), FakeFiber(), n_init=n_init - 1),
+                           FakeSim(), np.random.default_rng(0))
     pipeline = SensingPipeline(FakeCamera(), FakeFiber(), n_init=n_init, femp={"n_hidden": 5})
-    assert pipeline.calibrate(FakeSim(), np.random.default_rng(0)) == 10
+    assert calibrate_pipeline(pipeline, FakeSim(), np.random.default_rng(0)) == 10
 
 
 # ------------------------------------------------------------------ one step
 def _calibrated(fake_vision, **options) -> SensingPipeline:
     pipeline = SensingPipeline(FakeCamera(), FakeFiber(), n_init=40, femp={"n_hidden": 15},
                                **options)
-    pipeline.calibrate(FakeSim(), np.random.default_rng(0))
+    calibrate_pipeline(pipeline, FakeSim(), np.random.default_rng(0))
     return pipeline
 
 

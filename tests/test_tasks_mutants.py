@@ -16,9 +16,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-import soft_gym.tasks.tasks as tasks_module
 from soft_gym.robots import get_preset
-from soft_gym.robots.spec import ArmSpec
 from soft_gym.tasks.paths import PathSpec, make_reference_trajectory, path_polyline
 from soft_gym.tasks.tasks import MAX_TRACK_STEPS, ReachTask, TrackTask, within_reach
 
@@ -34,19 +32,8 @@ LATERAL_75 = float(np.percentile(np.hypot(TIPS[:, 0], TIPS[:, 1]), 75))  # 52.5 
 MEDIAN_Z = float(np.median(TIPS[:, 2]))  # 110.5 mm
 
 
-def _known_tips(spec: ArmSpec) -> np.ndarray:
-    if not isinstance(spec, ArmSpec):
-        raise TypeError(f"reachable_tips needs the arm's ArmSpec, got {spec!r}")
-    return TIPS.copy()
-
-
-@pytest.fixture(autouse=True)
-def known_reachable_set(monkeypatch):
-    monkeypatch.setattr(tasks_module, "reachable_tips", _known_tips)
-
-
 def test_reach_defaults_one_hundred_steps_and_no_tolerance() -> None:
-    task = ReachTask(SPEC)
+    task = ReachTask(SPEC, reachable_tips_m=TIPS)
     assert task.spec is SPEC
     assert task.name == "reach" and task.episode_steps == 100 and task.tolerance_mm is None
     assert not task.is_over(99) and task.is_over(100) and task.is_over(150)
@@ -55,18 +42,18 @@ def test_reach_defaults_one_hundred_steps_and_no_tolerance() -> None:
 
 def test_reach_episode_steps_bounds() -> None:
     """One step is the shortest episode; zero is refused with the parameter named first."""
-    task = ReachTask(SPEC, episode_steps=1)
+    task = ReachTask(SPEC, reachable_tips_m=TIPS, episode_steps=1)
     assert not task.is_over(0) and task.is_over(1)
-    assert ReachTask(SPEC, episode_steps=7).episode_steps == 7
+    assert ReachTask(SPEC, reachable_tips_m=TIPS, episode_steps=7).episode_steps == 7
     with pytest.raises(ValueError, match=r"^episode_steps must be .*>= 1, got 0"):
-        ReachTask(SPEC, episode_steps=0)
+        ReachTask(SPEC, reachable_tips_m=TIPS, episode_steps=0)
 
 
 def test_random_targets_come_from_the_whole_reachable_set() -> None:
     """Before the first reset the target is the set's first point; each reset draws one of
     its points, every one of them over enough episodes, reproducibly for a seed; the current
     and next targets presented are both that point."""
-    task = ReachTask(SPEC)
+    task = ReachTask(SPEC, reachable_tips_m=TIPS)
     np.testing.assert_array_equal(task.targets, TIPS)
     np.testing.assert_array_equal(task.target_m, TIPS[0])
     rng = np.random.default_rng(0)
@@ -79,7 +66,7 @@ def test_random_targets_come_from_the_whole_reachable_set() -> None:
         np.testing.assert_array_equal(current, TIPS[index])
         np.testing.assert_array_equal(upcoming, TIPS[index])
     assert sorted(set(drawn)) == list(range(len(TIPS))), sorted(set(drawn))
-    again = ReachTask(SPEC)
+    again = ReachTask(SPEC, reachable_tips_m=TIPS)
     rng = np.random.default_rng(0)
     for index in drawn[:20]:
         again.reset(rng)
@@ -88,7 +75,7 @@ def test_random_targets_come_from_the_whole_reachable_set() -> None:
 
 def test_a_fixed_goal_stays_put_and_is_a_copy() -> None:
     goal = [0.02, -0.01, 0.11]
-    task = ReachTask(SPEC, target_m=goal)
+    task = ReachTask(SPEC, reachable_tips_m=TIPS, target_m=goal)
     goal[0] = 0.5
     for _ in range(3):
         task.reset(np.random.default_rng(1))
@@ -101,12 +88,12 @@ def test_a_fixed_goal_stays_put_and_is_a_copy() -> None:
 
 
 def test_tolerance_is_in_millimetres_and_inclusive() -> None:
-    task = ReachTask(SPEC, tolerance_mm=2.5)
+    task = ReachTask(SPEC, reachable_tips_m=TIPS, tolerance_mm=2.5)
     assert task.tolerance_mm == 2.5
     assert task.is_reached(0.0025) and task.is_reached(0.001)
     assert not task.is_reached(0.00251) and not task.is_reached(2.0)
     with pytest.raises(ValueError, match=r"^tolerance_mm must be"):
-        ReachTask(SPEC, tolerance_mm=0.0)
+        ReachTask(SPEC, reachable_tips_m=TIPS, tolerance_mm=0.0)
 
 
 def test_within_reach_is_inclusive_and_names_the_point() -> None:
@@ -121,7 +108,7 @@ def test_within_reach_is_inclusive_and_names_the_point() -> None:
     with pytest.raises(ValueError, match=message):
         within_reach(SPEC, "goal_m", far)
     with pytest.raises(ValueError, match=r"^target_m must lie within the wang2023 arm's reach"):
-        ReachTask(SPEC, target_m=far)
+        ReachTask(SPEC, reachable_tips_m=TIPS, target_m=far)
     assert SHORT.max_reach_m == pytest.approx(0.1434)
     with pytest.raises(ValueError, match=r"^goal_m must lie within the short arm's reach of "
                                          r"143 mm from its base, got a point 145 mm away$"):
@@ -140,7 +127,7 @@ def test_track_path_geometry_comes_from_the_reachable_set() -> None:
     """Radius ``scale`` x the 75th percentile of the set's lateral radii, centre on the arm axis
     at the set's median height, default speed one circle in 20 s: the circle is 400 targets at
     20 Hz, the reference trajectory of that ``PathSpec``."""
-    task = TrackTask(SPEC)
+    task = TrackTask(SPEC, TIPS)
     assert task.name == "track" and task.spec is SPEC
     radius = 0.5 * LATERAL_75
     spec = task.path_spec
@@ -156,18 +143,18 @@ def test_track_path_geometry_comes_from_the_reachable_set() -> None:
 
 
 def test_track_options_reach_the_path() -> None:
-    task = TrackTask(SPEC, path="pentagram", cycles=3, speed_m_s=0.01, scale=0.8)
+    task = TrackTask(SPEC, TIPS, path="pentagram", cycles=3, speed_m_s=0.01, scale=0.8)
     radius = 0.8 * LATERAL_75
     path_spec = PathSpec(shape="pentagram", center_m=(0.0, 0.0, MEDIAN_Z), radius_m=radius,
                          speed_m_s=0.01, cycles=3)
-    np.testing.assert_allclose(task.polyline_m, path_polyline(path_spec), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(task.path_m, path_polyline(path_spec), rtol=0, atol=1e-12)
     reference = make_reference_trajectory(path_spec, SPEC.control_period_s)
     assert task.episode_steps == len(reference)
     np.testing.assert_allclose(task.trajectory_m, reference, rtol=0, atol=1e-12)
 
 
 def test_track_presents_current_and_next_target_and_holds_the_last() -> None:
-    task = TrackTask(SPEC, speed_m_s=0.02)
+    task = TrackTask(SPEC, TIPS, speed_m_s=0.02)
     trajectory, last = task.trajectory_m, task.episode_steps - 1
     for step in (0, 1, last // 2, last - 1):
         current, upcoming = task.target(step)
@@ -187,10 +174,10 @@ def test_track_waypoints_within_reach() -> None:
     """User waypoints are kept as given; a point exactly at the reach is allowed."""
     reach = SPEC.max_reach_m
     points = np.array([[0.03, 0.0, 0.10], [0.0, 0.03, 0.11], [0.0, 0.0, reach]])
-    task = TrackTask(SPEC, path="waypoints", waypoints_m=points, speed_m_s=0.01)
+    task = TrackTask(SPEC, TIPS, path="waypoints", waypoints_m=points, speed_m_s=0.01)
     assert task.path_spec.shape == "waypoints"
     assert task.path_spec.waypoints_m == tuple(map(tuple, points))
-    two = TrackTask(SPEC, path="waypoints", waypoints_m=points[:2], speed_m_s=0.01)
+    two = TrackTask(SPEC, TIPS, path="waypoints", waypoints_m=points[:2], speed_m_s=0.01)
     assert two.path_spec.waypoints_m == tuple(map(tuple, points[:2]))
 
 
@@ -198,7 +185,7 @@ def test_track_waypoints_within_reach() -> None:
                                     np.zeros(3)])
 def test_track_waypoints_need_two_points_in_3d(points: np.ndarray) -> None:
     with pytest.raises(ValueError, match=r"^waypoints_m must be at least 2 points \(x, y, z\)"):
-        TrackTask(SPEC, path="waypoints", waypoints_m=points)
+        TrackTask(SPEC, TIPS, path="waypoints", waypoints_m=points)
 
 
 def test_track_waypoints_beyond_reach_are_refused() -> None:
@@ -206,20 +193,20 @@ def test_track_waypoints_beyond_reach_are_refused() -> None:
     message = (r"^waypoints_m must lie within the wang2023 arm's reach of 144 mm from its base, "
                r"got a point 150 mm away$")
     with pytest.raises(ValueError, match=message):
-        TrackTask(SPEC, path="waypoints", waypoints_m=points)
+        TrackTask(SPEC, TIPS, path="waypoints", waypoints_m=points)
     with pytest.raises(ValueError, match=r"^waypoints_m must lie within the short arm's reach of "
                                          r"143 mm from its base, got a point 145 mm away$"):
-        TrackTask(SHORT, path="waypoints", waypoints_m=[[0.03, 0.0, 0.1], [0.0, 0.08, 0.1215]])
+        TrackTask(SHORT, TIPS, path="waypoints", waypoints_m=[[0.03, 0.0, 0.1], [0.0, 0.08, 0.1215]])
     with pytest.raises(ValueError, match=r"^waypoints_m must be finite"):
-        TrackTask(SPEC, path="waypoints", waypoints_m=[[0.03, 0.0, np.nan], [0.0, 0.0, 0.1]])
+        TrackTask(SPEC, TIPS, path="waypoints", waypoints_m=[[0.03, 0.0, np.nan], [0.0, 0.0, 0.1]])
 
 
 def test_track_bad_path_and_scale_are_named_first() -> None:
     with pytest.raises(ValueError, match=r"^path must be one of \['circle', .*'waypoints'\], "
                                          r"got 'square'"):
-        TrackTask(SPEC, path="square")
+        TrackTask(SPEC, TIPS, path="square")
     with pytest.raises(ValueError, match=r"^scale must be"):
-        TrackTask(SPEC, scale=0.0)
+        TrackTask(SPEC, TIPS, scale=0.0)
 
 
 def test_track_episode_length_limit() -> None:
@@ -233,17 +220,17 @@ def test_track_episode_length_limit() -> None:
     closed = np.vstack([polyline, polyline[:1]])  # the last point back to the first
     length = float(np.linalg.norm(np.diff(closed, axis=0), axis=1).sum())
     slowest = 3 * length / (MAX_TRACK_STEPS * SPEC.control_period_s)
-    task = TrackTask(SPEC, cycles=3, speed_m_s=slowest * 1.01, scale=0.45)
+    task = TrackTask(SPEC, TIPS, cycles=3, speed_m_s=slowest * 1.01, scale=0.45)
     assert MAX_TRACK_STEPS * 0.98 < task.episode_steps <= MAX_TRACK_STEPS
     # at the limit itself the episode never runs over it (counted on the closed path)
     for factor in (1.0, 1.0001):
-        task = TrackTask(SPEC, cycles=3, speed_m_s=slowest * factor, scale=0.45)
+        task = TrackTask(SPEC, TIPS, cycles=3, speed_m_s=slowest * factor, scale=0.45)
         assert MAX_TRACK_STEPS * 0.999 < task.episode_steps <= MAX_TRACK_STEPS, factor
     with pytest.raises(ValueError, match="at most 72000 steps"):
-        TrackTask(SPEC, cycles=3, speed_m_s=slowest * 0.999, scale=0.45)
+        TrackTask(SPEC, TIPS, cycles=3, speed_m_s=slowest * 0.999, scale=0.45)
     speed = slowest * 0.7  # 72000 / 0.7 = 102857 steps; 2.1 cycles would fit
     with pytest.raises(ValueError) as error:
-        TrackTask(SPEC, cycles=3, speed_m_s=speed, scale=0.45)
+        TrackTask(SPEC, TIPS, cycles=3, speed_m_s=speed, scale=0.45)
     message = str(error.value)
     assert message.startswith("cycles=3 at speed_m_s="), message
     for part in (f" {MAX_TRACK_STEPS / 0.7:.3g}-step episode", f"at most {MAX_TRACK_STEPS} steps",
@@ -254,5 +241,5 @@ def test_track_episode_length_limit() -> None:
     # fewer cycles are suggested only when at least one fits at that speed
     for factor, suggestion in ((0.5, ", or cycles <= 1 at this speed"), (0.2, "")):
         with pytest.raises(ValueError) as error:  # 1.5 and 0.6 cycles would fit
-            TrackTask(SPEC, cycles=3, speed_m_s=slowest * factor, scale=0.45)
+            TrackTask(SPEC, TIPS, cycles=3, speed_m_s=slowest * factor, scale=0.45)
         assert str(error.value).endswith(f"x 3 cycles){suggestion}"), (factor, str(error.value))

@@ -119,7 +119,7 @@ class CCModelController(BaselinePolicy):
         self.damping = require_positive("damping", damping)
         self.controlled_axes = _axes(controlled_axes)
         self.env = unwrapped
-        spec = self.env.spec_arm
+        spec = self.env.arm
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:
                 raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "

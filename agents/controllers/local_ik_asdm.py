@@ -113,7 +113,7 @@ class LocalIKASDMController(BaselinePolicy):
         if missing:
             raise ValueError(f"the env's obs must include {list(_REQUIRED_PARTS)} for "
                              f"{self.name}; missing {missing} in {self.env.obs_parts!r}")
-        spec = self.env.spec_arm
+        spec = self.env.arm
         self.actuation = Actuation.of_env(self.env)
         self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa
         self.hold_steps = max(1, int(round(self.settle_s / spec.control_period_s)))
@@ -193,7 +193,7 @@ class LocalIKASDMController(BaselinePolicy):
         from soft_gym.sensing.shape_exploration import GAUGE_SETTINGS
         from soft_gym.procedures.zhao2021_exploration import exploration_of
 
-        spec = self.env.spec_arm
+        spec = self.env.arm
         gauges = self._gauges()
 
         def compute() -> dict[str, Any]:
@@ -250,10 +250,10 @@ class LocalIKASDMController(BaselinePolicy):
         except (TypeError, ValueError) as error:
             raise ValueError(f"{cls.name} controller file {str(path)!r} holds invalid settings "
                              f"({type(error).__name__}: {error})") from None
-        if network.n_chambers != controller.env.spec_arm.n_chambers:
+        if network.n_chambers != controller.env.arm.n_chambers:
             raise ValueError(f"path {str(path)!r} holds a {cls.name} controller for another arm "
                              f"({network.n_chambers} chambers, this env has "
-                             f"{controller.env.spec_arm.n_chambers})")
+                             f"{controller.env.arm.n_chambers})")
         controller.network, controller.training = network, training
         return controller
 

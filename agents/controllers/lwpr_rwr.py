@@ -146,7 +146,7 @@ class LWPRRWRController(BaselinePolicy):
             if part not in self.env.obs_parts:
                 raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
                                  f"{self.env.obs_parts!r}")
-        spec = self.env.spec_arm
+        spec = self.env.arm
         if spec.n_chambers != 3 * spec.n_segments:
             raise ValueError(f"{self.name} drives three chambers per segment; the env's arm has "
                              f"{spec.n_chambers} chambers on {spec.n_segments} segments")
@@ -349,7 +349,7 @@ class LWPRRWRController(BaselinePolicy):
         env_kwargs = {} if self.env.spec is None else {
             key: value for key, value in self.env.spec.kwargs.items() if key not in ignored}
         return {"kind": f"{self.name} pre-training", "format": _FORMAT,
-                "arm": self.env.spec_arm, "env": env_kwargs,
+                "arm": self.env.arm, "env": env_kwargs,
                 "settings": {key: getattr(self, key) for key in _PRETRAINING_SETTINGS},
                 "learners": _learner_source_digest()}
 

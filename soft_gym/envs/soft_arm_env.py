@@ -100,6 +100,8 @@ positions (m), ``em`` when an EM tracker runs, ``reprojection_error_px`` (``e_S`
 from __future__ import annotations
 
 import copy
+import inspect
+from dataclasses import fields
 from typing import Any
 
 import gymnasium as gym
@@ -207,7 +209,7 @@ class SoftArmEnv(gym.Env):
         self.feedback_source = _make_feedback_source(config.feedback, config.sensing)
         config.check_feedback_needs(self.feedback_source.estimates_shape)
         self.loads = make_scenario(config.scenario)
-        self._fixed_loads = copy.deepcopy(self.loads)  # unattached copies for private simulators
+        self._fixed_loads = _copied(self.loads)  # unattached copies for private simulators
         paths = config.paths()
         self.start_m = None if config.start_m is None else within_reach(self.arm, "start_m",
                                                                         config.start_m)
@@ -366,7 +368,15 @@ class SoftArmEnv(gym.Env):
         return CalibrationContext(
             spec=self.arm, settle_s=self.settle_s, key=key,
             make_sensor=lambda name: make_sensor(name, **self._sensor_options(name)),
-            make_loads=lambda: copy.deepcopy(self._fixed_loads))
+            make_loads=self._copy_fixed_loads)
+
+    def _copy_fixed_loads(self) -> list:
+        """Fresh copies of the fixed loads, for a calibration's private simulator."""
+        if self._fixed_loads is None:
+            raise ValueError(f"scenario={self.config.scenario!r} cannot be copied, and feedback "
+                             f"{self.feedback!r} calibrates on a private simulator with copies "
+                             f"of the env's loads: give loads that support copy.deepcopy")
+        return copy.deepcopy(self._fixed_loads)
 
     def _calibrate(self, use_cache: bool) -> None:
         """Calibrate the feedback source (on a private simulator), or take its cached
@@ -441,7 +451,7 @@ class SoftArmEnv(gym.Env):
         distance_mm = float(np.linalg.norm(self.sim.tip_pose()[0] - self.start_m)) * 1e3
         if distance_mm > START_TOLERANCE_MM:
             raise ValueError(
-                f"start_m={np.round(self.start_m, 4).tolist()} is out of the {self.spec_arm.name} "
+                f"start_m={np.round(self.start_m, 4).tolist()} is out of the {self.arm.name} "
                 f"arm's reach with this episode's loads: the closest tip position found is "
                 f"{distance_mm:.1f} mm away (at most {START_TOLERANCE_MM:g} mm allowed)")
         return pressures
@@ -566,12 +576,36 @@ class SoftArmEnv(gym.Env):
         return np.array(reading)
 
 
+def _signature() -> inspect.Signature:
+    """``SoftArmEnv(preset, *, task=..., ...)``: the arguments of :class:`EnvConfig` with their
+    defaults (what ``help()``, IDEs and ``inspect`` show), and ``config=`` in their place."""
+    positional, keyword = inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY
+    parameters = [inspect.Parameter("self", positional)]
+    parameters += [inspect.Parameter(field.name, positional if field.name == "preset" else keyword,
+                                     default=field.default, annotation=field.type)
+                   for field in fields(EnvConfig)]
+    parameters.append(inspect.Parameter("config", keyword, default=None,
+                                        annotation="EnvConfig | None"))
+    return inspect.Signature(parameters)
+
+
+SoftArmEnv.__init__.__signature__ = _signature()
+
+
 def _is_boolean(value: Any) -> bool:
     """Whether ``value`` is a bool or an array of bools (which NumPy would take as 0 and 1)."""
     try:
         return np.asarray(value).dtype == np.bool_
     except (TypeError, ValueError):  # ragged: as_finite_array says what is wrong
         return False
+
+
+def _copied(loads: list) -> list | None:
+    """A deep copy of ``loads``, or ``None`` if one of them cannot be copied."""
+    try:
+        return copy.deepcopy(loads)
+    except Exception:  # noqa: BLE001 - any object without copy support
+        return None
 
 
 def _rebuild_env(cls: type, config: EnvConfig) -> "SoftArmEnv":

@@ -136,7 +136,7 @@ class Actuation:
         """The maps of a :class:`~soft_gym.envs.SoftArmEnv` (wrapped or not): its arm,
         ``action_mode`` and ``delta_fraction``."""
         base = env.unwrapped
-        return cls(base.spec_arm, base.action_mode, base.delta_fraction)
+        return cls(base.arm, base.action_mode, base.delta_fraction)
 
     @property
     def initial_command_pa(self) -> np.ndarray:
