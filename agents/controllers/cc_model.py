@@ -65,7 +65,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from agents.controllers.modal_map import ModalLengthMap
-from agents.policies import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._validation import (require_integer, require_non_negative, require_number,
                                   require_positive)
 from soft_gym.kinematics import cc_jacobian, cc_tip_pose

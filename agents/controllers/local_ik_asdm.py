@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from agents.learners.local_ik import LocalIKNetwork
-from agents.policies import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_in_range, require_integer, require_positive
 from soft_gym.robots.actuation import Actuation

@@ -56,7 +56,7 @@ import numpy as np
 
 from agents.learners.lwpr import LWPR
 from agents.learners.rwr_inverse import RewardWeightedInverse
-from agents.policies import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import (as_finite_array, require_in_range, require_integer,
                                   require_non_negative, require_positive)
