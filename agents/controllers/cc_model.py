@@ -61,6 +61,7 @@ import json
 from pathlib import Path
 from typing import Any, Callable, TypeVar
 
+import gymnasium as gym
 import numpy as np
 from scipy.optimize import least_squares
 
@@ -285,8 +286,6 @@ class CCModelController(BaselinePolicy):
             ValueError: the controlled env was not made by ``gymnasium.make`` (it has no
                 ``spec`` to copy); call :meth:`calibrate` on it before :meth:`predict`.
         """
-        import gymnasium as gym
-
         if self.env.spec is None:
             raise ValueError(
                 "env has no spec (it was not made by gymnasium.make), so the controller cannot "
