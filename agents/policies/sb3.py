@@ -187,8 +187,7 @@ def _load_normalization(path: Path, model) -> Any:
     """The VecNormalize statistics in ``path`` for ``model``, ready to normalise (not training);
     ``ValueError`` naming the file where it is unreadable, not VecNormalize statistics, or
     statistics of other observations."""
-    # lazy: stable-baselines3 (with PyTorch) adds about 1.2 s to importing agents.policies
-    # (python -X importtime), which the baselines never need
+    # lazy: stable-baselines3 costs 1.2 s (-X importtime) that the baselines never need
     from stable_baselines3.common.vec_env import VecNormalize
 
     what = f"VecNormalize statistics {str(path)!r}"
@@ -300,7 +299,8 @@ class SB3Policy(BaselinePolicy):
                 f"its VecNormalize statistics {str(normalization_path)!r} are missing")
         data = _check_model_archive(model_path)
         algorithm = _algorithm(model_path, config, data)
-        import stable_baselines3  # lazy: about 1.2 s of start-up, see _load_normalization
+        # lazy: stable-baselines3 costs 1.2 s (-X importtime) that the baselines never need
+        import stable_baselines3
 
         try:
             model = getattr(stable_baselines3, algorithm).load(model_path, device="cpu")
