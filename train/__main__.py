@@ -26,6 +26,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
+
+import yaml
 
 from soft_gym._cli import (HelpFormatter, check_file, check_output_dir, fail, non_negative_int,
                            positive_int)
@@ -33,6 +36,7 @@ from train.cli_options import (add_env_options, check_conf_file, check_env_kwarg
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
 from train.config import ALGORITHMS
+from train.sweep import main as sweep_main
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -77,10 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
 def check_resume(parser: argparse.ArgumentParser, run_dir: str) -> None:
     """``--resume``: a run directory of ``python -m train`` (config.yaml with its request, and
     model.zip)."""
-    from pathlib import Path
-
-    import yaml
-
+    # lazy: train.trainer (stable-baselines3, PyTorch) costs 1.3 s (-X importtime); --help skips it
     from train.trainer import MODEL_FILE
 
     path = Path(run_dir)
@@ -104,8 +105,7 @@ def check_resume(parser: argparse.ArgumentParser, run_dir: str) -> None:
 def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
                    env_kwargs: dict, hyperparameters: dict):
     """Every check of a new training run before it starts; returns its :class:`TrainRequest`."""
-    from pathlib import Path
-
+    # lazy: train.trainer (stable-baselines3, PyTorch) costs 1.3 s (-X importtime); --help skips it
     from train.trainer import TrainRequest, resolve
 
     env_id = resolve_env_id(parser, args)
@@ -142,12 +142,11 @@ def main(argv: list[str] | None = None) -> None:
     """``python -m train`` (and ``python -m train sweep ...``): check every option, then train."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["sweep"]:  # the one subcommand; every other form trains as before
-        from train.sweep import main as sweep_main
-
         sweep_main(argv[1:])
         return
     parser = build_parser()
     args = parser.parse_args(argv)
+    # lazy: train.trainer (stable-baselines3, PyTorch) costs 1.3 s (-X importtime); --help skips it
     from train.trainer import TrainRequest, train
 
     env_kwargs, hyperparameters = parse_env_and_hyperparameters(parser, args)

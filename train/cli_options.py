@@ -9,7 +9,15 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+import gymnasium
+import yaml
+
+import soft_gym  # noqa: F401  (registers the env ids)
+from eval.runner import make_uncalibrated_env
 from soft_gym._cli import check_file, fail
+from soft_gym.envs.registration import preset_env_id
+from soft_gym.robots.presets import PRESETS
+from train.config import check_hyperparameters, parse_key_values
 
 
 def add_env_options(parser: argparse.ArgumentParser) -> None:
@@ -28,8 +36,6 @@ def add_env_options(parser: argparse.ArgumentParser) -> None:
 def parse_env_and_hyperparameters(parser: argparse.ArgumentParser,
                                   args: argparse.Namespace) -> tuple[dict, dict]:
     """``--env-kwargs`` and ``-hp`` as dicts; a malformed entry is a one-line CLI error."""
-    from train.config import parse_key_values
-
     try:
         env_kwargs = parse_key_values(args.env_kwargs, "--env-kwargs")
     except ValueError as error:
@@ -44,12 +50,6 @@ def parse_env_and_hyperparameters(parser: argparse.ArgumentParser,
 def resolve_env_id(parser: argparse.ArgumentParser, args: argparse.Namespace) -> str:
     """``--env`` when given (a registered id), else the track id of ``--preset`` (a known
     preset); a refusal names the option, the value and the ids or presets allowed."""
-    import gymnasium
-
-    import soft_gym  # noqa: F401  (registers the env ids)
-    from soft_gym.envs.registration import preset_env_id
-    from soft_gym.robots.presets import PRESETS
-
     if args.env is None:
         if args.preset not in PRESETS:
             parser.error(f"--preset must be one of {sorted(PRESETS)}, got {args.preset!r}")
@@ -63,8 +63,6 @@ def resolve_env_id(parser: argparse.ArgumentParser, args: argparse.Namespace) ->
 def check_hyperparameter_overrides(parser: argparse.ArgumentParser, algo: str,
                                    hyperparameters: dict[str, Any]) -> None:
     """``-hp``: keys ``algo`` takes (the refusal lists them) and values in range."""
-    from train.config import check_hyperparameters
-
     try:
         check_hyperparameters(algo, hyperparameters)
     except ValueError as error:
@@ -75,8 +73,6 @@ def check_conf_file(parser: argparse.ArgumentParser, path: str | None) -> None:
     """``--conf-file``: an existing YAML file whose top level maps env ids to entries."""
     if path is None:
         return
-    import yaml
-
     check_file(parser, "--conf-file", path, "a hyperparameter YAML file (train/configs/*.yml)")
     try:
         with open(path) as handle:
@@ -93,8 +89,6 @@ def check_env_kwargs(parser: argparse.ArgumentParser, env_id: str, env_kwargs: d
     """Build the env ``env_id`` with ``env_kwargs`` (without calibrating its feedback) and close
     it; a refusal names the option that gave the refused keyword argument (``overrides``: key
     -> option, e.g. ``{"feedback": "--env-kwargs"}``; other keys came from ``--conf-file``)."""
-    from eval.runner import make_uncalibrated_env
-
     try:
         make_uncalibrated_env(env_id, env_kwargs).close()
         return

@@ -28,6 +28,7 @@ take (naming the keys it does) and a value out of range (``gamma`` in (0, 1], ``
 from __future__ import annotations
 
 import ast
+import inspect
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -163,8 +164,6 @@ algorithm itself."""
 def allowed_hyperparameters(algo: str) -> list[str]:
     """The keys a config entry or ``-hp`` may set for ``algo``: the zoo's special keys and the
     keyword arguments of the algorithm's constructor (but ``policy``'s ``env``)."""
-    import inspect
-
     names = inspect.signature(algorithm_class(algo).__init__).parameters
     own = [name for name in names if name not in ("self", "env", "policy", "seed", "verbose",
                                                   "device", "tensorboard_log", "_init_setup_model",
@@ -197,6 +196,7 @@ def algorithm_class(algo: str):
     """The stable-baselines3 class of ``algo`` (``sac``, ``td3``, ``ppo``, ``a2c``, ``ddpg``)."""
     if algo not in ALGORITHMS:
         raise ValueError(f"algo must be one of {list(ALGORITHMS)}, got {algo!r}")
+    # lazy: stable-baselines3 costs 1.2 s (-X importtime) that python -m train --help skips
     import stable_baselines3
 
     return getattr(stable_baselines3, algo.upper())
@@ -226,6 +226,7 @@ def parse_python_value(text: str) -> Any:
 
 
 def _evaluate(node: ast.AST, text: str) -> Any:
+    # lazy: PyTorch costs 1.0 s (-X importtime) that python -m train --help skips
     import torch.nn as nn
 
     if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "dict":
@@ -306,6 +307,7 @@ def split_hyperparameters(algo: str, hyperparameters: dict) -> TrainSettings:
 
 
 def _linear_schedule(key: str, text: str):
+    # lazy: stable-baselines3 costs 1.2 s (-X importtime) that python -m train --help skips
     from stable_baselines3.common.utils import LinearSchedule
 
     kind, _, value = text.partition("_")
@@ -316,6 +318,7 @@ def _linear_schedule(key: str, text: str):
 
 def build_action_noise(spec: tuple[str, float], n_actions: int):
     """``("normal" | "ornstein-uhlenbeck", std)`` -> an SB3 action-noise object."""
+    # lazy: stable-baselines3 costs 1.2 s (-X importtime) that python -m train --help skips
     from stable_baselines3.common.noise import NormalActionNoise, OrnsteinUhlenbeckActionNoise
 
     kind, std = spec

@@ -58,6 +58,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import inspect
 import json
 import math
 import os
@@ -69,7 +70,18 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+import gymnasium
+import numpy as np
 import yaml
+from tqdm import tqdm
+
+import soft_gym  # noqa: F401  (registers the env ids)
+from soft_gym._cli import HelpFormatter, check_output_dir
+from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
+                               check_hyperparameter_overrides, parse_env_and_hyperparameters,
+                               resolve_env_id)
+from train.config import (algorithm_class, parse_python_value, read_hyperparameters,
+                          split_hyperparameters)
 
 ALGO = "sac"
 INSTALL_HINT = 'pip install "soft-arm-gym[ray]"'
@@ -170,8 +182,6 @@ def base_entry(request: SweepRequest) -> dict[str, Any]:
     Raises:
         ValueError: a bad field of the request (naming it, its value and what is allowed).
     """
-    from train.config import read_hyperparameters, split_hyperparameters
-
     for name in ("trials", "steps", "eval_episodes", "workers"):
         value = getattr(request, name)
         if not _is_int(value) or value < 1:
@@ -194,10 +204,6 @@ def base_entry(request: SweepRequest) -> dict[str, Any]:
         if key in request.hyperparameters:
             raise ValueError(f"hyperparameters may not set {key!r}: steps sets the trial budget "
                              f"and trials run one env each")
-    import gymnasium
-
-    import soft_gym  # noqa: F401  (registers the env ids)
-
     if request.env_id not in gymnasium.registry:
         ids = sorted(name for name in gymnasium.registry if name.startswith("SoftArm"))
         raise ValueError(f"env_id must be a registered id (e.g. {ids[:4]}), got "
@@ -206,8 +212,6 @@ def base_entry(request: SweepRequest) -> dict[str, Any]:
     entry.update(request.hyperparameters)
     env_kwargs = entry.get("env_kwargs") or {}
     if isinstance(env_kwargs, str):
-        from train.config import parse_python_value
-
         env_kwargs = parse_python_value(env_kwargs)
     entry["env_kwargs"] = {**env_kwargs, **request.env_kwargs}
     split_hyperparameters(ALGO, entry)  # refuses a malformed entry now, not in every trial
@@ -230,8 +234,7 @@ def _in_space(name: str, value: Any) -> bool:
 def baseline_point(entry: Mapping[str, Any]) -> dict[str, Any] | None:
     """The entry's own values of the searched hyperparameters, or ``None`` when one is missing
     or outside the space."""
-    import inspect
-
+    # lazy: stable-baselines3 costs 1.2 s (-X importtime) that python -m train --help skips
     from stable_baselines3 import SAC
 
     defaults = {name: parameter.default for name, parameter
@@ -268,10 +271,9 @@ def evaluate_run(run_dir: str | os.PathLike, episodes: int, seed: int) -> dict[s
         ``{"error_mm": mean tip-to-target distance over every step (mm), "reward": mean
         episode return, "episodes", "eval_steps"}``.
     """
-    import numpy as np
+    # lazy: stable-baselines3 and train.trainer cost 1.3 s (-X importtime), see baseline_point
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from train.config import algorithm_class
     from train.trainer import MODEL_FILE, NORMALIZATION_FILE, make_vec_env
 
     run_dir = Path(run_dir)
@@ -310,6 +312,7 @@ def run_trial(values: Mapping[str, Any], context: Mapping[str, Any]) -> dict[str
         ``{"score", "error_mm", "reward", "episodes", "eval_steps", "train_wall_s",
         "wall_s"}`` (times in s); the run directory is deleted.
     """
+    # lazy: train.trainer costs 1.3 s (-X importtime), see baseline_point
     from train.trainer import TrainRequest, train
 
     start = time.perf_counter()
@@ -359,8 +362,6 @@ def ray_session(address: str | None, workers: int) -> Iterator[None]:
 
 
 def _progress_callback(tune, total: int, enabled: bool):
-    from tqdm import tqdm
-
     class Progress(tune.Callback):
         """A progress bar over the trials, advanced as each ends."""
 
@@ -499,9 +500,6 @@ def run_sweep(request: SweepRequest) -> SweepResult:
 
 # ------------------------------------------------------------------------------ command line
 def build_parser() -> argparse.ArgumentParser:
-    from soft_gym._cli import HelpFormatter
-    from train.cli_options import add_env_options
-
     parser = argparse.ArgumentParser(prog="python -m train sweep", description=__doc__,
                                      formatter_class=HelpFormatter)
     add_env_options(parser)
@@ -539,11 +537,6 @@ def main(argv: list[str] | None = None) -> None:
     """``python -m train sweep``: one-line errors exit 2 before any trial (every option, each
     ``-hp`` key and value, the env built once with the env keyword arguments, the output and
     storage directories)."""
-    from soft_gym._cli import check_output_dir
-    from train.cli_options import (check_conf_file, check_env_kwargs,
-                                   check_hyperparameter_overrides,
-                                   parse_env_and_hyperparameters, resolve_env_id)
-
     parser = build_parser()
     args = parser.parse_args(argv)
     env_kwargs, hyperparameters = parse_env_and_hyperparameters(parser, args)

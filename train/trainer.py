@@ -20,15 +20,24 @@ import platform
 import subprocess
 import time
 from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
+import gymnasium
 import numpy as np
+import stable_baselines3
+import torch
 import yaml
-from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.callbacks import (BaseCallback, CallbackList, CheckpointCallback,
+                                                EvalCallback)
+from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
+from stable_baselines3.common.logger import configure
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
 import soft_gym  # noqa: F401  (registers the env ids)
 from train.config import (OFF_POLICY, TrainSettings, algorithm_class, build_action_noise,
                           read_hyperparameters, split_hyperparameters)
+from train.curves import plot_learning_curve
 
 MODEL_FILE = "model.zip"
 BEST_MODEL_FILE = "best_model.zip"
@@ -93,11 +102,6 @@ def resolve(request: TrainRequest) -> tuple[TrainSettings, dict]:
 
 def versions() -> dict[str, str]:
     """Python, package versions and the git revision of this checkout."""
-    import gymnasium
-    import stable_baselines3
-    import torch
-    from importlib.metadata import PackageNotFoundError, version
-
     info = {"python": platform.python_version(), "platform": platform.platform(),
             "gymnasium": gymnasium.__version__, "stable_baselines3": stable_baselines3.__version__,
             "torch": str(torch.__version__), "numpy": np.__version__}
@@ -121,9 +125,6 @@ def versions() -> dict[str, str]:
 def make_vec_env(env_id: str, env_kwargs: dict, n_envs: int, seed: int,
                  monitor_dir: str | None = None):
     """``n_envs`` monitored envs, in subprocesses when there are several."""
-    from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
-
     vec_cls = SubprocVecEnv if n_envs > 1 else DummyVecEnv
     kwargs = {"start_method": "spawn"} if n_envs > 1 else {}
     if ":" not in env_id:
@@ -145,12 +146,6 @@ def new_model(algo: str, settings: TrainSettings, env, seed: int):
 
 def train(request: TrainRequest) -> Path:
     """Train (or resume) as ``request`` says; returns the run directory."""
-    import torch
-    from stable_baselines3.common.callbacks import (CallbackList, CheckpointCallback,
-                                                    EvalCallback)
-    from stable_baselines3.common.logger import configure
-    from stable_baselines3.common.vec_env import VecNormalize
-
     torch.set_num_threads(max(1, int(request.threads)))
     if request.resume is not None:
         run_dir = Path(request.resume)
@@ -229,8 +224,6 @@ def train(request: TrainRequest) -> Path:
         yaml.safe_dump([summary], handle, sort_keys=False)
     env.close()
     eval_env.close()
-    from train.curves import plot_learning_curve
-
     plot_learning_curve(run_dir, title=f"{request.algo.upper()} on {request.env_id}")
     return run_dir
 

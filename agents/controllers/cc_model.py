@@ -61,11 +61,12 @@ import json
 from pathlib import Path
 from typing import Any, Callable, TypeVar
 
+import gymnasium as gym
 import numpy as np
 from scipy.optimize import least_squares
 
 from agents.controllers.modal_map import ModalLengthMap
-from agents.policies import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._validation import (require_integer, require_non_negative, require_number,
                                   require_positive)
 from soft_gym.kinematics import cc_jacobian, cc_tip_pose
@@ -285,8 +286,6 @@ class CCModelController(BaselinePolicy):
             ValueError: the controlled env was not made by ``gymnasium.make`` (it has no
                 ``spec`` to copy); call :meth:`calibrate` on it before :meth:`predict`.
         """
-        import gymnasium as gym
-
         if self.env.spec is None:
             raise ValueError(
                 "env has no spec (it was not made by gymnasium.make), so the controller cannot "

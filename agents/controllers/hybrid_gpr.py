@@ -27,7 +27,7 @@ import numpy as np
 from agents.controllers.cc_model import (CCModelController, _build_from_file,
                                          read_json_object, read_settings)
 from agents.learners.sliding_gp import SlidingWindowGP
-from agents.policies import require_soft_arm_env
+from agents.policies.base import require_soft_arm_env
 from soft_gym._validation import require_integer, require_number, require_positive
 
 _MM = 1000.0

@@ -39,11 +39,17 @@ from typing import Any
 
 import numpy as np
 
+import agents.learners.local_ik
 from agents.learners.local_ik import LocalIKNetwork
-from agents.policies import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_in_range, require_integer, require_positive
 from soft_gym.robots.actuation import Actuation
+from soft_gym.sensing.calibration_cache import cached, sensor_description
+from soft_gym.sensing.shape_exploration import GAUGE_SETTINGS
+from soft_gym.procedures.zhao2021_exploration import exploration_of
+from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+from soft_gym.sensors.strain_gauge import StrainGauges
 
 _MM = 1000.0
 _FORMAT = "soft-arm-gym local-ik-asdm 1"
@@ -57,8 +63,6 @@ _SETTINGS = ("step_mm", "adaptive", "gain", "tolerance_mm", "settle_s", "max_ite
 
 @functools.lru_cache(maxsize=1)
 def _learner_source_digest() -> str:
-    import agents.learners.local_ik
-
     return hashlib.sha256(Path(agents.learners.local_ik.__file__).read_bytes()).hexdigest()
 
 
@@ -88,8 +92,6 @@ class LocalIKASDMController(BaselinePolicy):
                  tolerance_mm: float = 4.0, settle_s: float = 1.0, max_iterations: int = 1000,
                  batch_size: int = 64, learning_rate: float = 1e-2, skip: bool = True,
                  exploration: dict | None = None, seed: int = 0, cache: bool = True) -> None:
-        from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
-
         unwrapped = require_soft_arm_env(env, self.name)
         self.step_mm = require_in_range("step_mm", step_mm, MIN_STEP_MM, MAX_STEP_MM)
         for name, value in (("adaptive", adaptive), ("skip", skip), ("cache", cache)):
@@ -189,10 +191,6 @@ class LocalIKASDMController(BaselinePolicy):
     def pretrain(self) -> dict[str, Any]:
         """Train the network on the exploration data (or take it from the cache); returns the
         training report."""
-        from soft_gym.sensing.calibration_cache import cached, sensor_description
-        from soft_gym.sensing.shape_exploration import GAUGE_SETTINGS
-        from soft_gym.procedures.zhao2021_exploration import exploration_of
-
         spec = self.env.arm
         gauges = self._gauges()
 
@@ -219,8 +217,6 @@ class LocalIKASDMController(BaselinePolicy):
         return self.training
 
     def _gauges(self):
-        from soft_gym.sensors.strain_gauge import StrainGauges
-
         sensors = getattr(self.env, "sensors", {})
         return sensors.get("strain", StrainGauges())
 

@@ -52,15 +52,19 @@ import json
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
+import agents.learners.lwpr
+import agents.learners.rwr_inverse
 from agents.learners.lwpr import LWPR
 from agents.learners.rwr_inverse import RewardWeightedInverse
-from agents.policies import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import (as_finite_array, require_in_range, require_integer,
                                   require_non_negative, require_positive)
 from soft_gym.robots.actuation import Actuation
+from soft_gym.sensing.calibration_cache import cached
 
 _MM = 1000.0
 _FORMAT = "lwpr-rwr/1"
@@ -73,9 +77,6 @@ _PRETRAINING_SETTINGS = ("pretrain_waypoints", "leg_decisions", "max_epochs", "i
 @functools.lru_cache(maxsize=1)
 def _learner_source_digest() -> str:
     """SHA-256 of this module and the learners it uses (edited code gets a new cache key)."""
-    import agents.learners.lwpr
-    import agents.learners.rwr_inverse
-
     digest = hashlib.sha256()
     for module in (agents.learners.lwpr, agents.learners.rwr_inverse):
         digest.update(Path(module.__file__).read_bytes())
@@ -225,8 +226,6 @@ class LWPRRWRController(BaselinePolicy):
     def pretrain(self) -> dict[str, Any]:
         """Pre-train (or take the cached pre-training) as the module docstring describes;
         returns its report (samples, test RMSE per epoch, best epoch, receptive fields)."""
-        from soft_gym.sensing.calibration_cache import cached
-
         def compute() -> dict[str, Any]:
             data = self._collect_pretraining_data()
             forward, report = self._train_forward(data)
@@ -253,8 +252,6 @@ class LWPRRWRController(BaselinePolicy):
     def _collect_pretraining_data(self) -> tuple[np.ndarray, ...]:
         """Transitions ``(p, u, du, dp)`` along straight lines between random actuator-space
         waypoints, on an unloaded, fault-free copy of the env."""
-        import gymnasium as gym
-
         if self.env.spec is None:
             raise ValueError("env has no spec (it was not made by gymnasium.make), so "
                              f"{self.name} cannot pre-train on a copy of it")

@@ -1,158 +1,29 @@
-"""The baseline-policy protocol and a registry of baselines by name.
+"""Trained stable-baselines3 agents behind the baseline face: ``sb3:PATH`` and the shipped agents.
 
-Every baseline has stable-baselines3's face, so the benchmark runner drives baselines and SB3
-models alike (docs/architecture.md, "Baselines"):
-
-* ``reset()`` at the start of an episode;
-* ``predict(obs, state=None, episode_start=None, deterministic=True) -> (action, state)``;
-* ``update(obs, action, reward, next_obs, info)`` after each step (online learners learn here);
-* ``save(path)`` / ``load(path)``.
-
-A baseline made by :func:`make_policy` with an env is ready to predict in a plain
-``obs -> predict -> step`` loop: one that needs a calibration runs it on its first ``predict``,
-on a private copy of the env (see :mod:`agents.controllers.cc_model`).
-
-Baselines read only what the real robot gives them: the observation (whose ``pose`` part is the
-env's feedback source) and sensor signals; never privileged simulator state. Baselines that
-decide chamber pressures turn them into actions with the env's own map,
-:class:`soft_gym.robots.actuation.Actuation` (``Actuation.of_env(env)``), in either action mode.
+:class:`SB3Policy` loads a model ``.zip`` with the VecNormalize statistics that belong to it
+(:func:`normalization_file`) and the env interface of its run's ``config.yaml``
+(:data:`SB3_INTERFACE_KEYS`), and refuses a damaged or mismatched file with one ``ValueError``
+naming the file. :data:`SHIPPED_DIR` holds the agents kept in the repository
+(:func:`shipped_agents`; ``sb3:<name>`` loads one, :func:`resolve_sb3_path`).
 """
 
 from __future__ import annotations
 
-import importlib
-import inspect
+import json
+import pickle
 import re
-from collections.abc import Mapping
+import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
+from gymnasium import spaces
 
-from soft_gym._registry import build, parse_spec
+from agents.policies.base import BaselinePolicy, check_observation, describe_value
 
-BASELINES: dict[str, str] = {
-    "cc_model": "agents.controllers.cc_model:CCModelController",
-    "hybrid_gpr": "agents.controllers.hybrid_gpr:HybridGPRController",
-    "lwpr_rwr": "agents.controllers.lwpr_rwr:LWPRRWRController",
-    "local_ik_asdm": "agents.controllers.local_ik_asdm:LocalIKASDMController",
-}
-"""Baseline names and the classes implementing them."""
-
-
-def _describe(value: Any) -> str:
-    """A short description of ``value`` for error messages (no full dump of large arrays)."""
-    if isinstance(value, Mapping):
-        return f"a dict with keys {list(value)}"
-    if isinstance(value, np.ndarray) and value.size > 8:
-        return f"an array of dtype {value.dtype} and shape {value.shape}"
-    text = repr(value)
-    return text if len(text) <= 80 else text[:77] + "..."
-
-
-def check_observation(space: Any, observation: Any, name: str = "observation",
-                      batch: bool = False) -> Any:
-    """``observation`` checked against the observation ``space`` it should come from.
-
-    A ``Box`` space wants a real array (integer or float dtype; no strings, objects, booleans or
-    complex numbers) of the space's shape, with no NaN or inf; a ``Dict`` space a dict with
-    exactly its parts, each checked the same way (``observation['pose']``, ...). With ``batch``
-    a stack of observations, shape ``(n, *space.shape)``, is accepted too (what an SB3 model
-    predicts on). Other spaces are not checked.
-
-    Returns:
-        The observation as an array (a dict of arrays for a ``Dict`` space), its dtype kept.
-
-    Raises:
-        ValueError: naming ``name``, the shape wanted and what was given, e.g. ``observation
-            must be a finite float array of shape (19,), got shape (7,)``.
-    """
-    from gymnasium import spaces
-
-    if isinstance(space, spaces.Dict):
-        parts = list(space.spaces)
-        if not isinstance(observation, Mapping):
-            raise ValueError(f"{name} must be a dict of the parts {parts}, got "
-                             f"{_describe(observation)}")
-        if set(observation) != set(parts):
-            raise ValueError(f"{name} must be a dict of the parts {parts}, got the parts "
-                             f"{list(observation)}")
-        return {part: check_observation(space.spaces[part], observation[part],
-                                        f"{name}[{part!r}]", batch) for part in parts}
-    if not isinstance(space, spaces.Box):
-        return observation
-    shape = tuple(space.shape)
-    kind = "float" if np.issubdtype(space.dtype, np.floating) else str(space.dtype)
-    wanted = f"{name} must be a finite {kind} array of shape {shape}"
-    if isinstance(observation, Mapping) or observation is None:
-        raise ValueError(f"{wanted}, got {_describe(observation)}")
-    try:
-        array = np.asarray(observation)
-    except (TypeError, ValueError) as error:  # ragged nesting
-        raise ValueError(f"{wanted}, got {_describe(observation)} ({error})") from None
-    if np.iscomplexobj(array):
-        raise ValueError(f"{wanted}, got complex values ({_describe(observation)})")
-    if array.dtype.kind not in "iuf":
-        raise ValueError(f"{wanted}, got dtype {array.dtype} ({_describe(observation)})")
-    batched = batch and array.ndim == len(shape) + 1 and array.shape[1:] == shape
-    if array.shape != shape and not batched:
-        raise ValueError(f"{wanted}, got shape {array.shape}")
-    if array.dtype.kind == "f":
-        bad = np.argwhere(~np.isfinite(array))
-        if len(bad):
-            index = tuple(int(i) for i in bad[0])
-            raise ValueError(f"{wanted}, got {array[index]} at index "
-                             f"{index[0] if len(index) == 1 else index} ({len(bad)} non-finite "
-                             "entries)")
-    return array
-
-
-def require_soft_arm_env(env: Any, policy: str) -> Any:
-    """The unwrapped :class:`~soft_gym.envs.SoftArmEnv` under ``env``; anything else (``None``,
-    a string, another gymnasium env) raises ``ValueError`` naming ``env`` and ``policy``."""
-    from soft_gym.envs import SoftArmEnv
-
-    unwrapped = getattr(env, "unwrapped", None)
-    if not isinstance(unwrapped, SoftArmEnv):
-        raise ValueError(f"env must be the soft-arm environment {policy} controls (made by "
-                         f"gymnasium.make('SoftArmTrack-v0', ...) or a SoftArmEnv), got "
-                         f"{_describe(env)}")
-    return unwrapped
-
-
-class BaselinePolicy:
-    """Base class of the baselines (see the module docstring).
-
-    Baselines that control an env keep its unwrapped :class:`~soft_gym.envs.SoftArmEnv` as
-    ``self.env``; their :meth:`predict` calls :meth:`check_observation` before anything else,
-    so a malformed observation is refused and leaves the policy's state as it was.
-    """
-
-    name = "baseline"
-
-    def check_observation(self, observation: Any, name: str = "observation") -> Any:
-        """``observation`` checked against the controlled env's observation space (see
-        :func:`check_observation`); ``ValueError`` naming ``name`` where it does not fit."""
-        return check_observation(self.env.observation_space, observation, name)
-
-    def reset(self) -> None:
-        """Start of an episode; learned state persists, episode state is cleared."""
-
-    def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
-        raise NotImplementedError
-
-    def update(self, observation, action, reward, next_observation, info) -> None:
-        """Learn from one transition (no-op for non-learning baselines)."""
-
-    def save(self, path: str | Path) -> None:
-        raise NotImplementedError
-
-    @classmethod
-    def load(cls, path: str | Path, env=None) -> "BaselinePolicy":
-        raise NotImplementedError
-
-
-SHIPPED_DIR = Path(__file__).resolve().parent / "trained"
+SHIPPED_DIR = Path(__file__).resolve().parents[1] / "trained"
 """Trained agents kept in the repository, one directory each (``sb3:<name>`` loads one)."""
 
 
@@ -232,8 +103,6 @@ SB3_ALGORITHMS = ("A2C", "DDPG", "PPO", "SAC", "TD3")
 def _space_shapes(space: Any) -> Any:
     """What an agent's interface depends on in a space: its kind and shape (for a ``Dict``, those
     of every part), so that spaces differing only in bounds still match."""
-    from gymnasium import spaces
-
     if isinstance(space, spaces.Dict):
         return {key: _space_shapes(part) for key, part in space.spaces.items()}
     return type(space).__name__, tuple(getattr(space, "shape", None) or ())
@@ -253,8 +122,6 @@ def _describe_space(space: Any) -> str:
 def _read_run_config(config_path: Path | None) -> dict:
     """The run's ``config.yaml`` as a dict (``{}`` without one); ``ValueError`` naming the file
     where it is not YAML or not a mapping."""
-    import yaml
-
     if config_path is None:
         return {}
     try:
@@ -266,20 +133,16 @@ def _read_run_config(config_path: Path | None) -> dict:
     config = {} if config is None else config
     if not isinstance(config, dict):
         raise ValueError(f"sb3 run config {str(config_path)!r} must hold a mapping (algo, "
-                         f"env_kwargs, ...), got {_describe(config)}")
+                         f"env_kwargs, ...), got {describe_value(config)}")
     if not isinstance(config.get("env_kwargs", {}), dict):
         raise ValueError(f"sb3 run config {str(config_path)!r}: env_kwargs must be a mapping, "
-                         f"got {_describe(config['env_kwargs'])}")
+                         f"got {describe_value(config['env_kwargs'])}")
     return config
 
 
 def _check_model_archive(model_path: Path) -> dict:
     """The attributes (``data`` entry) of a stable-baselines3 model ``.zip``; ``ValueError``
     naming the file where it is no zip, a damaged one, or a zip SB3 did not write."""
-    import json
-    import zipfile
-    import zlib
-
     what = f"sb3 model file {str(model_path)!r}"
     try:
         with zipfile.ZipFile(model_path) as archive:
@@ -324,8 +187,7 @@ def _load_normalization(path: Path, model) -> Any:
     """The VecNormalize statistics in ``path`` for ``model``, ready to normalise (not training);
     ``ValueError`` naming the file where it is unreadable, not VecNormalize statistics, or
     statistics of other observations."""
-    import pickle
-
+    # lazy: stable-baselines3 costs 1.2 s (-X importtime) that the baselines never need
     from stable_baselines3.common.vec_env import VecNormalize
 
     what = f"VecNormalize statistics {str(path)!r}"
@@ -405,10 +267,6 @@ class SB3Policy(BaselinePolicy):
 
     def save(self, path: str | Path) -> None:
         """Save as a directory: ``model.zip``, ``vecnormalize.pkl`` and ``config.yaml``."""
-        import pickle
-
-        import yaml
-
         directory = Path(path)
         directory.mkdir(parents=True, exist_ok=True)
         self.model.save(directory / "model.zip")
@@ -441,9 +299,11 @@ class SB3Policy(BaselinePolicy):
                 f"its VecNormalize statistics {str(normalization_path)!r} are missing")
         data = _check_model_archive(model_path)
         algorithm = _algorithm(model_path, config, data)
-        module = importlib.import_module("stable_baselines3")
+        # lazy: stable-baselines3 costs 1.2 s (-X importtime) that the baselines never need
+        import stable_baselines3
+
         try:
-            model = getattr(module, algorithm).load(model_path, device="cpu")
+            model = getattr(stable_baselines3, algorithm).load(model_path, device="cpu")
         except Exception as error:  # SB3 and torch raise many kinds on a damaged model
             raise ValueError(f"sb3 model file {str(model_path)!r} does not load as a "
                              f"stable-baselines3 {algorithm} model "
@@ -460,7 +320,7 @@ class SB3Policy(BaselinePolicy):
         """Raise ``ValueError`` unless ``env`` gives observations of the shape the agent reads
         and takes actions of the shape it writes, naming the model file and both spaces."""
         if not (hasattr(env, "observation_space") and hasattr(env, "action_space")):
-            raise ValueError(f"env must be a gymnasium environment, got {_describe(env)}")
+            raise ValueError(f"env must be a gymnasium environment, got {describe_value(env)}")
         model_spaces = (self.model.observation_space, self.model.action_space)
         env_spaces = (env.observation_space, env.action_space)
         wrong = [what for what, ours, theirs in zip(("observations", "actions"), model_spaces,
@@ -495,38 +355,3 @@ def _guess_algorithm(model_path: Path, data: dict | None = None) -> str:
     raise ValueError(f"sb3 model file {str(model_path)!r} holds no stable-baselines3 model this "
                      f"loader knows (one of {list(SB3_ALGORITHMS)}) and no run config names "
                      "its algo")
-
-
-def _constructor_parameters(cls: type) -> list[str]:
-    """The keyword parameters a baseline class takes besides ``env``."""
-    return [name for name, parameter in inspect.signature(cls.__init__).parameters.items()
-            if name not in ("self", "env") and parameter.kind in (
-                inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)]
-
-
-def make_policy(name: str, env=None, **params: Any) -> BaselinePolicy:
-    """Build a baseline by name (see :data:`BASELINES`), or load ``"sb3:PATH"``.
-
-    ``name`` is parsed by :func:`soft_gym._registry.parse_spec` (a name string only). A baseline
-    needs ``env``, the soft-arm env it controls; ``params`` are its constructor's keyword
-    arguments (unknown ones are refused, listing the known ones). An ``sb3:`` agent takes no
-    ``params`` (it acts as trained); with ``env`` its interface is checked against the env's.
-
-    Raises:
-        ValueError: naming the parameter, the value and what is allowed.
-    """
-    if isinstance(name, str) and name.startswith("sb3:"):
-        if params:
-            raise ValueError(f"policy {name!r} takes no parameters (an sb3 agent acts as it was "
-                             f"trained), got {sorted(params)}")
-        return SB3Policy.load(name[4:], env=env)
-    (spec,) = parse_spec(name, "policy", BASELINES, forms=("name",), also=("sb3:PATH",))
-    module_name, class_name = BASELINES[spec.name].split(":")
-    cls = getattr(importlib.import_module(module_name), class_name)
-    require_soft_arm_env(env, f"policy {spec.name!r}")
-    known = _constructor_parameters(cls)
-    unknown = sorted(key for key in params if key not in known)
-    if unknown:
-        raise ValueError(f"policy {spec.name!r} parameters must be among {known}, got unknown "
-                         f"{unknown}")
-    return build("policy", spec.name, lambda **kwargs: cls(env, **kwargs), params)
