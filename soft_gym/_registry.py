@@ -87,6 +87,10 @@ class Registry(Mapping[str, T], Generic[T]):
             self._lazy.discard(name)
         return self._entries[name]
 
+    def get(self, name: str, default: Any = None) -> Any:
+        """The part ``name``, or ``default`` when nothing is registered under it."""
+        return self[name] if name in self._entries else default
+
     def __contains__(self, name: object) -> bool:
         return name in self._entries
 

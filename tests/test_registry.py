@@ -103,3 +103,55 @@ def test_parse_spec_checks_its_own_forms_and_build_wraps_bad_keywords():
         parse_spec("x", "thing", ["x"], forms=("name", "yaml"))
     with pytest.raises(ValueError, match="thing 'x' got invalid parameters"):
         build("thing", "x", lambda a: a, {"b": 1})
+
+
+# ------------------------------------------------------------------ Registry
+def test_registry_is_a_mapping_in_registration_order_that_refuses_unknown_names_by_kind():
+    from soft_gym._registry import Registry
+
+    registry = Registry("widget")
+    registry.register("b", 2)
+    registry.register("a", 1)
+    assert list(registry) == ["b", "a"] and len(registry) == 2 and "a" in registry
+    assert registry["a"] == 1 and registry.get("c") is None and registry.get("c", 5) == 5
+    with pytest.raises(ValueError, match=r"^widget must be one of \['b', 'a'\], got 'c'$"):
+        registry["c"]
+    with pytest.raises(ValueError, match=r"^widget name must be a new non-empty string"):
+        registry.register("a", 3)
+    with pytest.raises(ValueError, match=r"^widget name must be a new non-empty string"):
+        registry.register("", 3)
+    registry.unregister("b")
+    assert list(registry) == ["a"]
+    with pytest.raises(ValueError, match=r"^widget must be one of \['a'\], got 'b'$"):
+        registry.unregister("b")
+
+
+def test_a_lazy_registry_entry_is_imported_on_first_access():
+    from soft_gym._registry import Registry
+
+    registry = Registry("thing")
+    registry.register("dumps", "json:dumps", lazy=True)
+    import json
+
+    assert registry["dumps"] is json.dumps and registry.get("dumps") is json.dumps
+    with pytest.raises(ValueError, match=r"^a lazy thing must be given as 'module:attribute'"):
+        registry.register("bad", "json.dumps", lazy=True)
+
+
+def test_every_family_of_named_parts_is_a_registry():
+    """One registry style: every family is a Registry (name lists in messages come from it)."""
+    from agents.policies import BASELINES
+    from soft_gym._registry import Registry
+    from soft_gym.engines import ENGINES
+    from soft_gym.envs.observations import OBSERVATION_PARTS
+    from soft_gym.procedures.calibration import CALIBRATIONS
+    from soft_gym.scenarios import SCENARIO_ELEMENTS
+    from soft_gym.sensing import FEEDBACK_SOURCES
+    from soft_gym.sensors import SENSORS
+    from soft_gym.sensors.faults import FAULT_PRESETS, FAULTS
+
+    for registry in (BASELINES, ENGINES, OBSERVATION_PARTS, CALIBRATIONS, SCENARIO_ELEMENTS,
+                     FEEDBACK_SOURCES, SENSORS, FAULTS, FAULT_PRESETS):
+        assert isinstance(registry, Registry) and len(registry) > 0
+    calibrating = [name for name in FEEDBACK_SOURCES if FEEDBACK_SOURCES[name].calibrates]
+    assert sorted(calibrating) == sorted(CALIBRATIONS)

@@ -9,19 +9,18 @@ from __future__ import annotations
 
 from typing import Any
 
-from soft_gym._registry import FORMS, Spec, build, parse_spec
+from soft_gym._registry import FORMS, Registry, Spec, build, parse_spec
 from soft_gym.scenarios.loads import (FillingLoad, Flick, ObstacleRod, Push, SwayingMass,
                                       TipMass)
 
-SCENARIO_ELEMENTS: dict[str, type] = {
-    "tip_mass": TipMass,
-    "filling_load": FillingLoad,
-    "swaying_mass": SwayingMass,
-    "push": Push,
-    "flick": Flick,
-    "obstacle_rod": ObstacleRod,
-}
+SCENARIO_ELEMENTS: Registry[type] = Registry("scenario element")
 """Element names and classes."""
+SCENARIO_ELEMENTS.register("tip_mass", TipMass)
+SCENARIO_ELEMENTS.register("filling_load", FillingLoad)
+SCENARIO_ELEMENTS.register("swaying_mass", SwayingMass)
+SCENARIO_ELEMENTS.register("push", Push)
+SCENARIO_ELEMENTS.register("flick", Flick)
+SCENARIO_ELEMENTS.register("obstacle_rod", ObstacleRod)
 
 
 def make_scenario(scenario: Any) -> list:

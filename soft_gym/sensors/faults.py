@@ -53,7 +53,7 @@ import cv2
 import numpy as np
 
 from soft_gym._quaternion import matrix_to_quaternion
-from soft_gym._registry import FORMS, Spec, build, parse_spec
+from soft_gym._registry import FORMS, Registry, Spec, build, parse_spec
 from soft_gym._timing import TimeWindow
 from soft_gym._validation import require_in_range, require_non_negative, require_positive
 from soft_gym.sensors.intrinsics import CameraIntrinsics
@@ -584,14 +584,13 @@ class SensorNoise(VisualFault):
                                  strength * self.read_noise_dn, context.rng)
 
 
-FAULTS: dict[str, type[VisualFault]] = {
-    "moving_occluder": MovingOccluder,
-    "low_light": LowLight,
-    "led_glare": LEDGlare,
-    "motion_blur": MotionBlur,
-    "sensor_noise": SensorNoise,
-}
+FAULTS: Registry[type[VisualFault]] = Registry("fault")
 """Fault names and classes."""
+FAULTS.register("moving_occluder", MovingOccluder)
+FAULTS.register("low_light", LowLight)
+FAULTS.register("led_glare", LEDGlare)
+FAULTS.register("motion_blur", MotionBlur)
+FAULTS.register("sensor_noise", SensorNoise)
 
 
 def wang2023_occlusion(time_scale: float = 1.0, coverage: float = 0.6, sweep_s: float = 3.0,
@@ -625,11 +624,10 @@ def wang2023_lighting(time_scale: float = 1.0, weak: float = 0.7) -> list[Visual
             LEDGlare(start_s=150.0 * scale, end_s=200.0 * scale, strength=1.0)]
 
 
-FAULT_PRESETS: dict[str, Callable[..., list[VisualFault]]] = {
-    "wang2023_occlusion": wang2023_occlusion,
-    "wang2023_lighting": wang2023_lighting,
-}
+FAULT_PRESETS: Registry[Callable[..., list[VisualFault]]] = Registry("fault preset")
 """Preset names and the functions building their fault lists (parameters as keywords)."""
+FAULT_PRESETS.register("wang2023_occlusion", wang2023_occlusion)
+FAULT_PRESETS.register("wang2023_lighting", wang2023_lighting)
 
 
 def make_faults(faults: Any) -> list[VisualFault]:
