@@ -444,7 +444,7 @@ def main(argv: list[str] | None = None) -> None:
             zhao2021.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
                            f"{args.samples}")
         _check_baselines(zhao2021, args.baselines, zhao2021_module.check_baselines)
-        from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+        from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
         config = ReconstructionConfig(n_free=free, n_loaded=loaded,
                                       max_iterations=args.iterations)
@@ -453,7 +453,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"output directory: {args.out}")
         return
     if args.command == "zou2022":
-        from soft_gym.sensing.shape_dnn import ShapeDNNConfig
+        from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 
         config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
         zou2022_module.run_and_report(args.experiments, args.seeds, args.out, config=config,

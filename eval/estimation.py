@@ -39,7 +39,7 @@ import soft_gym  # noqa: F401
 from eval.metrics import estimation_errors
 from eval.report import markdown_table, plot_estimation, write_records_csv, write_results_json
 from soft_gym.robots.actuation import Actuation, pressure_at_fraction
-from soft_gym.sensing.exploration import spiral_fractions
+from soft_gym.sensing.wang2023.exploration import spiral_fractions
 
 EXPERIMENTS = ("clean", "occlusion", "lighting", "push", "flick", "init")
 INIT_SAMPLES = (450, 900, 1800)

@@ -2,7 +2,7 @@
 fixed and adaptive step distance (Zhao et al. 2021, Sections VI-B to VI-D, Tables III-IV,
 Figs. 10-12).
 
-``shape`` (Section VI-B): the SR model (:mod:`soft_gym.sensing.shape_reconstruction`: the paper's
+``shape`` (Section VI-B): the SR model (:mod:`soft_gym.sensing.zhao2021.shape_reconstruction`: the paper's
 exploration, six SFE-PD networks, the backbone fit) is built once, then each test configuration
 is reached the way the exploration moves (two chambers by 0.05 bar per 1 s step, so the networks
 see the kind of history they learnt from) and held 2 s:
@@ -53,9 +53,9 @@ import soft_gym  # noqa: F401
 from agents.policies import make_policy
 from soft_gym.robots.presets import (base_point_from_paper, get_preset,
                                      paper_point_from_base, paper_pressures_to_chambers)
-from soft_gym.sensing.shape_exploration import key_points_from_backbone
+from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
 from soft_gym.procedures.zhao2021_exploration import cached_reconstruction
-from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensors.strain_gauge import StrainGauges
 
 EXPERIMENTS = ("shape", "p2p", "sway", "circle")
@@ -113,7 +113,7 @@ def _walk_to(sim, sensor, command: np.ndarray, target: np.ndarray, step_pa: floa
 def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True) -> dict:
     """Table III, the mean backbone error and Table IV on the SR model of ``config``."""
     from soft_gym.scenarios.loads import TipMass
-    from soft_gym.sensing.backbone_fit import mean_backbone_error_m, resample_by_arc_length
+    from soft_gym.sensing.zhao2021.backbone_fit import mean_backbone_error_m, resample_by_arc_length
     from soft_gym.engines import make_simulator
 
     spec = get_preset(PRESET)

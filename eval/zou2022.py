@@ -2,7 +2,7 @@
 faults, and control with each shape source (Zou et al. 2022, Sections 4.4 and 5, Tables 3-4,
 Figs. 13, 16, 18 and 19).
 
-``table3`` (Section 5.1 (3)): the DNN (:mod:`soft_gym.sensing.shape_dnn`: random pressure
+``table3`` (Section 5.1 (3)): the DNN (:mod:`soft_gym.sensing.zou2022.shape_dnn`: random pressure
 exploration of the 0.1 bar grid labelled by ASES, Table 2's network) on its test set: MAE and
 RMSE per axis (mm) of the seven points against the ASES labels (the paper's Table 3: RMSE
 2.56 / 2.59 / 2.61 mm) and against the simulator's true points (which the paper could not
@@ -14,7 +14,7 @@ PMA2 (chamber 1 here) rises from 1 to 2.5 bar in 0.05 bar steps, one per second 
 others held at 1 bar (the paper names only PMA2's pressure; 1 bar for the others is our
 reading: the bend starts from its 1 bar pose). Every ``BEND_SAMPLE_S`` (the paper's 105 points
 in 30 s, synchronised to the camera) the encoders, the stereo pair and the simulator are read;
-RSES (:func:`soft_gym.sensing.cc_shape.cc_shape_points`) and the DNN estimate the shape from the
+RSES (:func:`soft_gym.sensing.zou2022.cc_shape.cc_shape_points`) and the DNN estimate the shape from the
 same chamber lengths. Table 4 is the RMSE per axis of the end point ``Q_7`` ("we only exhibited
 the trajectory of the end-actuator") against ASES (paper: RSES 10.9 / 6.5 / 6.6 mm, DNN 2.2 /
 2.1 / 2.3 mm) and against the true tip; the same over all seven points is reported beside it.
@@ -50,11 +50,11 @@ import numpy as np
 from tqdm import tqdm
 
 from soft_gym.robots.presets import get_preset
-from soft_gym.sensing.cc_shape import cc_shape_points
+from soft_gym.sensing.zou2022.cc_shape import cc_shape_points
 from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
-from soft_gym.sensing.shape_dnn import (STEREO_INTRINSICS, ShapeDNNConfig, axis_errors_mm,
+from soft_gym.sensing.zou2022.shape_dnn import (STEREO_INTRINSICS, ShapeDNNConfig, axis_errors_mm,
                                         default_stereo, true_shape_points)
-from soft_gym.sensing.stereo_shape import estimate_stereo_shape
+from soft_gym.sensing.zou2022.stereo_shape import estimate_stereo_shape
 from soft_gym.sensors.encoder import ChamberEncoders
 from soft_gym.sensors.stereo import StereoCamera
 from soft_gym.engines import make_simulator

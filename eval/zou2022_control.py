@@ -11,7 +11,7 @@ feedback source of :data:`CONTROL_FEEDBACK`:
   its last good shape;
 * ``encoder_dnn``: the DNN on the encoders, trained on ASES labels of a clear-view exploration
   (Section 5); built when its env is made, from ``dnn_options`` (the fields of
-  :class:`~soft_gym.sensing.shape_dnn.ShapeDNNConfig`), and kept in the calibration cache;
+  :class:`~soft_gym.sensing.zou2022.shape_dnn.ShapeDNNConfig`), and kept in the calibration cache;
 
 under each condition of :data:`CONTROL_CONDITIONS`:
 
@@ -163,7 +163,7 @@ def run_control(seed: int, dnn_options: Mapping[str, Any] | None = None,
     Args:
         seed: episode seed, and the seed of the baselines' set-up (probes, pre-training).
         dnn_options: the ``encoder_dnn`` source's options (fields of
-            :class:`~soft_gym.sensing.shape_dnn.ShapeDNNConfig`, e.g. ``{"n_samples": 3000}``);
+            :class:`~soft_gym.sensing.zou2022.shape_dnn.ShapeDNNConfig`, e.g. ``{"n_samples": 3000}``);
             ``None``: :data:`DEFAULT_DNN_OPTIONS`.
         cycles: path cycles per run (>= 1); the table reports the last.
         policies: baseline names (default :data:`CONTROL_POLICIES`).

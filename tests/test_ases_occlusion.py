@@ -1,5 +1,5 @@
 """ASES's occlusion check: an occluder hiding the arm's tip end makes the pair lost (zou2022
-Section 4.4; ``soft_gym.sensing.stereo_shape.tip_occlusion``).
+Section 4.4; ``soft_gym.sensing.zou2022.stereo_shape.tip_occlusion``).
 
 References: the simulator's true backbone points under rendered stereo frames of the zou2022 arm,
 clean, dimmed and with a grey plate over the bottom 60 % of the pair's view; ASES with the check
@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from soft_gym.robots.presets import get_preset
-from soft_gym.sensing.shape_dnn import STEREO_INTRINSICS, true_shape_points
-from soft_gym.sensing.stereo_shape import (ASESConfig, arm_mask, estimate_stereo_shape,
+from soft_gym.sensing.zou2022.shape_dnn import STEREO_INTRINSICS, true_shape_points
+from soft_gym.sensing.zou2022.stereo_shape import (ASESConfig, arm_mask, estimate_stereo_shape,
                                            tip_occlusion)
 from soft_gym.sensors.faults import LowLight, MovingOccluder
 from soft_gym.sensors.stereo import StereoCamera

@@ -15,7 +15,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from soft_gym.kinematics import cc_backbone, lengths_from_curvature
-from soft_gym.sensing.backbone_fit import (fit_backbone, mean_backbone_error_m,
+from soft_gym.sensing.zhao2021.backbone_fit import (fit_backbone, mean_backbone_error_m,
                                            resample_by_arc_length)
 
 SEGMENT_M = 0.15

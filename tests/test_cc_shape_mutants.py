@@ -1,4 +1,4 @@
-"""Checks of ``soft_gym.sensing.cc_shape`` (RSES, zou2022 eqs. 2-10) that mutation testing found
+"""Checks of ``soft_gym.sensing.zou2022.cc_shape`` (RSES, zou2022 eqs. 2-10) that mutation testing found
 missing (docs/mutation_testing.md).
 
 Each test pins a documented behaviour that a surviving mutant changed unnoticed: the points of a
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from soft_gym.sensing.cc_shape import cc_shape, cc_shape_points
+from soft_gym.sensing.zou2022.cc_shape import cc_shape, cc_shape_points
 
 SIGMA = 2.0 * np.pi * np.arange(3) / 3.0
 D = (0.010, 0.014)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from soft_gym.sensing.elm import OSELM
+from soft_gym.sensing.wang2023.elm import OSELM
 
 
 def _data(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:

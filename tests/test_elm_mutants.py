@@ -1,4 +1,4 @@
-"""Checks of ``soft_gym.sensing.elm`` that mutation testing found missing
+"""Checks of ``soft_gym.sensing.wang2023.elm`` that mutation testing found missing
 (docs/mutation_testing.md).
 
 Each test pins a documented behaviour of the OS-ELM that a surviving mutant changed unnoticed:
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from soft_gym.sensing.elm import OSELM
+from soft_gym.sensing.wang2023.elm import OSELM
 
 
 def _data(n: int, n_inputs: int = 5, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:

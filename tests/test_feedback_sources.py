@@ -52,7 +52,7 @@ def test_calibration_does_not_depend_on_what_was_built_before(cache_dir, monkeyp
 
 _SECOND_PROCESS = """
 import numpy as np, gymnasium as gym, soft_gym
-from soft_gym.sensing.pipeline import SensingPipeline
+from soft_gym.sensing.wang2023.pipeline import SensingPipeline
 
 def refuse(*args, **kwargs):
     raise AssertionError("the second process calibrated instead of reading the disk cache")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from soft_gym.robots import get_preset
-from soft_gym.sensing.femp import FEmpEstimator
+from soft_gym.sensing.wang2023.femp import FEmpEstimator
 from soft_gym.sensors.fbg import FBGFiber
 from soft_gym.engines.pybullet.simulator import ArmSimulator
 
@@ -84,7 +84,7 @@ def test_bad_use_raises():
 def test_exploration_common_mode_decouples_extension_from_bending():
     """Without ``common`` the chambers' mean pressure (extension) is locked to the bend
     amplitude; with it the calibration sequence also visits extended straight-ish shapes."""
-    from soft_gym.sensing.exploration import spiral_fractions
+    from soft_gym.sensing.wang2023.exploration import spiral_fractions
 
     t = np.arange(0.0, 22.5, 0.05)
     for common, locked in ((0.0, True), (0.3, False)):

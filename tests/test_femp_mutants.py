@@ -1,4 +1,4 @@
-"""Checks of ``soft_gym.sensing.femp`` that mutation testing found missing
+"""Checks of ``soft_gym.sensing.wang2023.femp`` that mutation testing found missing
 (docs/mutation_testing.md).
 
 Each test pins a documented behaviour of the F-emp estimator (wang2023 Section II-C) that a
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from soft_gym.sensing.femp import FEmpEstimator
+from soft_gym.sensing.wang2023.femp import FEmpEstimator
 
 
 def _poses(n: int, seed: int = 0, flip: bool = True):

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
-from soft_gym.sensing.fusion import PoseFusion, slerp
-from soft_gym.sensing.pipeline import SensingPipeline
+from soft_gym.sensing.wang2023.fusion import PoseFusion, slerp
+from soft_gym.sensing.wang2023.pipeline import SensingPipeline
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber
 

@@ -1,4 +1,4 @@
-"""Checks of ``soft_gym.sensing.fusion`` that mutation testing found missing
+"""Checks of ``soft_gym.sensing.wang2023.fusion`` that mutation testing found missing
 (docs/mutation_testing.md).
 
 Each test pins a documented behaviour of eq. (18) of wang2023 (corrected form) or of ``slerp``
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
-from soft_gym.sensing.fusion import PoseFusion, slerp
+from soft_gym.sensing.wang2023.fusion import PoseFusion, slerp
 
 Q0 = Rotation.from_euler("xyz", [10, -5, 30], degrees=True).as_quat()
 Q1 = Rotation.from_euler("xyz", [-20, 15, 80], degrees=True).as_quat()

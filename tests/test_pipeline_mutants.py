@@ -1,4 +1,4 @@
-"""Checks of ``soft_gym.sensing.pipeline`` that mutation testing found missing
+"""Checks of ``soft_gym.sensing.wang2023.pipeline`` that mutation testing found missing
 (docs/mutation_testing.md).
 
 Each test pins a documented behaviour of the sensing pipeline (wang2023 Fig. 1): the option
@@ -18,16 +18,16 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-import soft_gym.sensing.pipeline as pipeline_module
+import soft_gym.sensing.wang2023.pipeline as pipeline_module
 from soft_gym.robots import get_preset
 from soft_gym.robots.actuation import pressure_at_fraction
-from soft_gym.sensing.exploration import spiral_fractions
-from soft_gym.sensing.femp import FEmpEstimator
-from soft_gym.sensing.fusion import PoseFusion
+from soft_gym.sensing.wang2023.exploration import spiral_fractions
+from soft_gym.sensing.wang2023.femp import FEmpEstimator
+from soft_gym.sensing.wang2023.fusion import PoseFusion
 from soft_gym.procedures.wang2023_calibration import calibrate_pipeline
 from soft_gym.sensing.measurement import Measurement
-from soft_gym.sensing.pipeline import SensingPipeline
-from soft_gym.sensing.vision_pose import VisionEstimate
+from soft_gym.sensing.wang2023.pipeline import SensingPipeline
+from soft_gym.sensing.wang2023.vision_pose import VisionEstimate
 
 SPEC = get_preset("wang2023")
 K = np.array([[300.0, 0.0, 160.0], [0.0, 300.0, 120.0], [0.0, 0.0, 1.0]])

@@ -16,11 +16,11 @@ import torch
 
 import soft_gym  # noqa: F401
 from soft_gym.robots.presets import get_preset
-from soft_gym.sensing.sfe_pd import KeyPointNetworks, sequences
+from soft_gym.sensing.zhao2021.sfe_pd import KeyPointNetworks, sequences
 from soft_gym.procedures.zhao2021_exploration import (cached_reconstruction, collect_exploration,
                                                       exploration_of)
-from soft_gym.sensing.shape_exploration import key_point_arcs, key_points_from_backbone
-from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+from soft_gym.sensing.zhao2021.shape_exploration import key_point_arcs, key_points_from_backbone
+from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensors.strain_gauge import StrainGauges
 
 ZHAO = get_preset("zhao2021")

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from soft_gym.robots import get_preset
-from soft_gym.sensing.exploration import spiral_fractions
-from soft_gym.sensing.vision_pose import VisionPoseEstimator
+from soft_gym.sensing.wang2023.exploration import spiral_fractions
+from soft_gym.sensing.wang2023.vision_pose import VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.engines.pybullet.simulator import ArmSimulator
 

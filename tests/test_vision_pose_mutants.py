@@ -1,4 +1,4 @@
-"""Checks of ``soft_gym.sensing.vision_pose`` that mutation testing found missing
+"""Checks of ``soft_gym.sensing.wang2023.vision_pose`` that mutation testing found missing
 (docs/mutation_testing.md).
 
 Each test pins a documented behaviour of the tracker's geometric core on synthetic data (no
@@ -18,7 +18,7 @@ import pytest
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from soft_gym.sensing.vision_pose import VisionPoseEstimator, _cross
+from soft_gym.sensing.wang2023.vision_pose import VisionPoseEstimator, _cross
 from test_vision_pose import _reference_match_by_projection as _reference_projection_matches
 
 K = np.array([[300.0, 0.0, 160.0], [0.0, 280.0, 120.0], [0.0, 0.0, 1.0]])

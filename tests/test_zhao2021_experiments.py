@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from eval import zhao2021
-from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
 SMALL = ReconstructionConfig(n_free=240, n_loaded=120, max_iterations=80)
 """The small model of tests/test_shape_reconstruction.py (one training per test process)."""

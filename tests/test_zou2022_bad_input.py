@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from soft_gym.sensing.cc_shape import cc_shape, cc_shape_points
-from soft_gym.sensing.shape_dnn import ShapeDNN
-from soft_gym.sensing.stereo_shape import estimate_stereo_shape, tip_occlusion
+from soft_gym.sensing.zou2022.cc_shape import cc_shape, cc_shape_points
+from soft_gym.sensing.zou2022.shape_dnn import ShapeDNN
+from soft_gym.sensing.zou2022.stereo_shape import estimate_stereo_shape, tip_occlusion
 
 D = 0.010
 """Chamber distance from the axis (m), the zou2022 arm's."""

@@ -14,7 +14,7 @@ import pytest
 
 from eval import zou2022
 from eval.__main__ import main
-from soft_gym.sensing.shape_dnn import ShapeDNNConfig
+from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 
 QUICK = ShapeDNNConfig(n_samples=150, settle_s=0.8, batch_size=16, epochs=200)
 """A quick model (the default tests' size); the paper's has 29791 samples."""

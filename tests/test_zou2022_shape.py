@@ -18,14 +18,14 @@ from gymnasium.utils.env_checker import check_env
 
 import soft_gym  # noqa: F401
 from soft_gym.robots.presets import get_preset
-from soft_gym.sensing.cc_shape import arc_parameters, cc_shape, cc_shape_points
+from soft_gym.sensing.zou2022.cc_shape import arc_parameters, cc_shape, cc_shape_points
 from soft_gym.sensing.measurement import Measurement
 from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
-from soft_gym.sensing.shape_dnn import (ShapeDNN, ShapeDNNConfig, axis_errors_mm,
+from soft_gym.sensing.zou2022.shape_dnn import (ShapeDNN, ShapeDNNConfig, axis_errors_mm,
                                         default_stereo, rotate_about_axis, true_shape_points)
-from soft_gym.sensing.stereo_shape import (ASESConfig, arm_mask, estimate_stereo_shape,
+from soft_gym.sensing.zou2022.stereo_shape import (ASESConfig, arm_mask, estimate_stereo_shape,
                                            resample_polyline, train_som)
-from soft_gym.sensing.zou_feedback import tangent_quaternion
+from soft_gym.sensing.zou2022.feedback import tangent_quaternion
 from soft_gym.sensors.encoder import ChamberEncoders
 from soft_gym.engines.pybullet.simulator import ArmSimulator
 

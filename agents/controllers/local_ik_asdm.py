@@ -46,9 +46,9 @@ from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_in_range, require_integer, require_positive
 from soft_gym.robots.actuation import Actuation
 from soft_gym.sensing.calibration_cache import cached, sensor_description
-from soft_gym.sensing.shape_exploration import GAUGE_SETTINGS
+from soft_gym.sensing.zhao2021.shape_exploration import GAUGE_SETTINGS
 from soft_gym.procedures.zhao2021_exploration import exploration_of
-from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensors.strain_gauge import StrainGauges
 
 _MM = 1000.0
@@ -80,7 +80,7 @@ class LocalIKASDMController(BaselinePolicy):
             most 1000 iterations, Adam at 0.001).
         skip: the network adds ``A_n`` to its output layer (:class:`LocalIKNetwork`).
         exploration: options of the exploration data set
-            (:class:`~soft_gym.sensing.shape_reconstruction.ReconstructionConfig`, e.g.
+            (:class:`~soft_gym.sensing.zhao2021.shape_reconstruction.ReconstructionConfig`, e.g.
             ``{"n_free": 400, "n_loaded": 200}`` for a quick model); default the paper's 6000.
         seed: seeds the network's training.
         cache: keep the trained network on disk and reuse it.

@@ -27,7 +27,7 @@ from soft_gym.procedures.zhao2021_exploration import cached_reconstruction
 from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
 from soft_gym.sensing.calibration_cache import cached
 from soft_gym.sensing.feedback_base import CalibrationContext, FeedbackSource
-from soft_gym.sensing.pipeline import SensingPipeline
+from soft_gym.sensing.wang2023.pipeline import SensingPipeline
 from soft_gym.sensors.stereo import StereoCamera
 from soft_gym.simulator import Simulator
 

@@ -1,8 +1,8 @@
 """wang2023's sensing calibration: the vision map at rest, then F-emp from the spiral exploration.
 
-The robot's sensing (:class:`~soft_gym.sensing.pipeline.SensingPipeline`) learns from the arm it
+The robot's sensing (:class:`~soft_gym.sensing.wang2023.pipeline.SensingPipeline`) learns from the arm it
 watches: :func:`calibrate_pipeline` drives a simulator through the predefined spiral actuation
-(wang2023 Section IV-B; :func:`~soft_gym.sensing.exploration.spiral_fractions`), reads the
+(wang2023 Section IV-B; :func:`~soft_gym.sensing.wang2023.exploration.spiral_fractions`), reads the
 pipeline's camera and fiber every control step and hands each step to the pipeline, which keeps
 the camera-labelled FBG samples and initialises F-emp from them (eqs. 9-17).
 """
@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from soft_gym.robots.actuation import pressure_at_fraction
-from soft_gym.sensing.exploration import spiral_fractions
-from soft_gym.sensing.pipeline import SensingPipeline
+from soft_gym.sensing.wang2023.exploration import spiral_fractions
+from soft_gym.sensing.wang2023.pipeline import SensingPipeline
 from soft_gym.sensors.reading import measure
 from soft_gym.simulator import Simulator
 

@@ -2,9 +2,9 @@
 
 The data collection drives a private simulator of the arm, so it lives here, above the
 estimators: :func:`collect_exploration` records commands, gauge readings and key points
-(:class:`~soft_gym.sensing.shape_exploration.ShapeDataset`), :func:`cached_exploration` keeps the
+(:class:`~soft_gym.sensing.zhao2021.shape_exploration.ShapeDataset`), :func:`cached_exploration` keeps the
 record in the calibration cache, and :func:`cached_reconstruction` trains the SFE-PD networks on
-it (:func:`~soft_gym.sensing.shape_reconstruction.fit_reconstruction`) once per arm, gauge model
+it (:func:`~soft_gym.sensing.zhao2021.shape_reconstruction.fit_reconstruction`) once per arm, gauge model
 and recipe.
 """
 
@@ -22,9 +22,9 @@ from soft_gym.engines import make_simulator
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.scenarios.loads import TipMass
 from soft_gym.sensing.calibration_cache import cached, sensor_description
-from soft_gym.sensing.shape_exploration import (GAUGE_SETTINGS, ShapeDataset,
+from soft_gym.sensing.zhao2021.shape_exploration import (GAUGE_SETTINGS, ShapeDataset,
                                                 key_points_from_backbone)
-from soft_gym.sensing.shape_reconstruction import (ReconstructionConfig, ShapeReconstructor,
+from soft_gym.sensing.zhao2021.shape_reconstruction import (ReconstructionConfig, ShapeReconstructor,
                                                    fit_reconstruction)
 from soft_gym.sensors.fbg import rest_vertex_arcs
 
@@ -133,7 +133,7 @@ def train_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig = R
                          use_cache: bool = True,
                          progress: bool = True) -> tuple[ShapeReconstructor, dict[str, Any]]:
     """Explore ``spec`` with ``gauges`` on (or take the cached exploration) and train the SFE-PD
-    networks (zhao2021 VI-A; :func:`~soft_gym.sensing.shape_reconstruction.fit_reconstruction`).
+    networks (zhao2021 VI-A; :func:`~soft_gym.sensing.zhao2021.shape_reconstruction.fit_reconstruction`).
     """
     return fit_reconstruction(spec, exploration_of(spec, gauges, config, use_cache, progress),
                               config, progress)

@@ -2,9 +2,9 @@
 
 The data set drives a private simulator of the arm, labelled by ASES on a private stereo pair, so
 it lives here, above the estimators: :func:`collect_dataset` records commands, encoder lengths,
-ASES labels and the true key points (:class:`~soft_gym.sensing.shape_dnn.ZouDataset`),
+ASES labels and the true key points (:class:`~soft_gym.sensing.zou2022.shape_dnn.ZouDataset`),
 :func:`cached_dataset` keeps it in the calibration cache, and :func:`cached_shape_dnn` trains
-:class:`~soft_gym.sensing.shape_dnn.ShapeDNN` on it once per arm, sensors and recipe.
+:class:`~soft_gym.sensing.zou2022.shape_dnn.ShapeDNN` on it once per arm, sensors and recipe.
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ from tqdm.auto import tqdm
 from soft_gym.engines import make_simulator
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing.calibration_cache import cached, sensor_description
-from soft_gym.sensing.shape_dnn import (N_POINTS, ShapeDNN, ShapeDNNConfig, ZouDataset,
+from soft_gym.sensing.zou2022.shape_dnn import (N_POINTS, ShapeDNN, ShapeDNNConfig, ZouDataset,
                                         default_stereo, rotate_about_axis, true_shape_points)
-from soft_gym.sensing.stereo_shape import ASESConfig, estimate_stereo_shape
+from soft_gym.sensing.zou2022.stereo_shape import ASESConfig, estimate_stereo_shape
 from soft_gym.sensors.stereo import StereoCamera
 
 
@@ -37,7 +37,7 @@ def collect_dataset(spec: ArmSpec, encoders, stereo=None,
         stereo: the :class:`~soft_gym.sensors.stereo.StereoCamera` labelling the samples (a
             private copy, in a clear view); ``None``: :func:`default_stereo`.
         config: samples, grid, settling, augmentation, split and seed.
-        ases_config: :class:`~soft_gym.sensing.stereo_shape.ASESConfig` (``None``: defaults).
+        ases_config: :class:`~soft_gym.sensing.zou2022.stereo_shape.ASESConfig` (``None``: defaults).
         progress: show a progress bar.
     """
     if not isinstance(spec, ArmSpec):

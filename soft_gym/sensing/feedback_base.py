@@ -5,7 +5,7 @@ sensors' readings and the commands sent), as a real robot's estimator does: it n
 simulator. What it learns before the first step (a calibration) is computed by a procedure
 (:mod:`soft_gym.procedures.calibration`) that drives a private simulator and hands the result
 to :meth:`FeedbackSource.set_calibration`. Kept apart from the sources themselves
-(:mod:`soft_gym.sensing.feedback`, :mod:`soft_gym.sensing.zou_feedback`), so every module
+(:mod:`soft_gym.sensing.feedback`, :mod:`soft_gym.sensing.zou2022.feedback`), so every module
 defining sources imports this one and none imports another; the registry
 (:data:`soft_gym.sensing.FEEDBACK_SOURCES`) is filled in the package's ``__init__``. See
 docs/architecture.md, "Feedback sources".

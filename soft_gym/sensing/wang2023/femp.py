@@ -1,6 +1,6 @@
 """F-emp: the FBG-empowered tip-pose estimator of Wang et al. 2023 (wang2023, Section II-C).
 
-An :class:`~soft_gym.sensing.elm.OSELM` maps the FBG wavelength shifts ``lambda(k)`` to the tip
+An :class:`~soft_gym.sensing.wang2023.elm.OSELM` maps the FBG wavelength shifts ``lambda(k)`` to the tip
 pose ``z = [position, quaternion]`` (eq. (1)). It is initialised from ``N0`` calibration steps of a
 predefined exploration labelled by the *camera* pose (eqs. (5)-(9)), then updated online with every
 step whose camera reprojection error ``e_S`` is below ``update_threshold_px`` (1.4 px in the paper:
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from soft_gym._validation import as_finite_array, require_positive
-from soft_gym.sensing.elm import OSELM
+from soft_gym.sensing.wang2023.elm import OSELM
 
 
 class FEmpEstimator:

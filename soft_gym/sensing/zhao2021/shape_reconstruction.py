@@ -1,8 +1,8 @@
 """zhao2021's shape reconstruction (SR): SFE-PD key points, then the 3-D backbone fit.
 
-Zhao et al. 2021, Section III: the six SFE-PD networks (:mod:`soft_gym.sensing.sfe_pd`, eqs. 1-6)
+Zhao et al. 2021, Section III: the six SFE-PD networks (:mod:`soft_gym.sensing.zhao2021.sfe_pd`, eqs. 1-6)
 predict the key points ``P_1..P_6`` from the last ``w + 1`` actuations and strain readings, and
-the backbone is fitted through ``O, P_1..P_6`` (:mod:`soft_gym.sensing.backbone_fit`,
+the backbone is fitted through ``O, P_1..P_6`` (:mod:`soft_gym.sensing.zhao2021.backbone_fit`,
 eqs. 7-10). The tip is ``P_6`` (Section IV: "robot's tip is the key point P_2N"), its orientation
 the fitted backbone's tangent there.
 
@@ -39,7 +39,7 @@ class ReconstructionConfig:
         batch_size: mini-batch size of an iteration (64).
         learning_rate: Adam's initial learning rate (0.01; after 300 iterations the paper's
             0.001 left the tip's validation error at 2.2 mm against 1.4 mm).
-        dropout: between SFE and PD (0; the paper's 0.3, see :mod:`soft_gym.sensing.sfe_pd`).
+        dropout: between SFE and PD (0; the paper's 0.3, see :mod:`soft_gym.sensing.zhao2021.sfe_pd`).
         n_points: backbone points returned by the fit (60, eq. 21's count).
         seed: seeds the exploration, the readings' noise and the training.
     """
@@ -91,7 +91,7 @@ class ShapeReconstructor:
     """Key-point predictor plus backbone fit (zhao2021 Section III).
 
     Args:
-        predictor: a trained :class:`~soft_gym.sensing.sfe_pd.SFEPDPredictor`.
+        predictor: a trained :class:`~soft_gym.sensing.zhao2021.sfe_pd.SFEPDPredictor`.
         n_points: points of the returned backbone, evenly spaced by arc length.
     """
 
@@ -112,7 +112,7 @@ class ShapeReconstructor:
     def reconstruct(self, pressures_pa: np.ndarray, readings: np.ndarray) -> ShapeEstimate:
         """Key points and backbone from the last ``w + 1`` steps' pressures (Pa, ``(w + 1,
         n_chambers)``) and gauge readings (``(w + 1, n_gauges)``), oldest first."""
-        from soft_gym.sensing.backbone_fit import fit_backbone
+        from soft_gym.sensing.zhao2021.backbone_fit import fit_backbone
 
         points = self.key_points(pressures_pa, readings)
         fit = fit_backbone(np.vstack([np.zeros(3), points]), n_points=self.n_points)
@@ -124,7 +124,7 @@ class ShapeReconstructor:
 
     @classmethod
     def from_state(cls, state: dict[str, Any]) -> "ShapeReconstructor":
-        from soft_gym.sensing.sfe_pd import SFEPDPredictor
+        from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor
 
         return cls(SFEPDPredictor.from_state(state["predictor"]), state["n_points"])
 
@@ -135,7 +135,7 @@ class ShapeReconstructor:
     @classmethod
     def load(cls, path: str | Path, n_points: int = 60) -> "ShapeReconstructor":
         """Read networks written by :meth:`save`; a corrupt file is refused by name."""
-        from soft_gym.sensing.sfe_pd import SFEPDPredictor
+        from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor
 
         return cls(SFEPDPredictor.load(path), n_points)
 
@@ -146,7 +146,7 @@ def fit_reconstruction(spec: ArmSpec, data, config: ReconstructionConfig = Recon
 
     Args:
         spec: the arm.
-        data: the exploration (:class:`~soft_gym.sensing.shape_exploration.ShapeDataset`).
+        data: the exploration (:class:`~soft_gym.sensing.zhao2021.shape_exploration.ShapeDataset`).
         config: the training's settings.
         progress: show a progress bar.
 
@@ -155,8 +155,8 @@ def fit_reconstruction(spec: ArmSpec, data, config: ReconstructionConfig = Recon
     """
     import torch
 
-    from soft_gym.sensing.sfe_pd import SFEPDPredictor
-    from soft_gym.sensing.shape_exploration import N_KEY_POINTS
+    from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor
+    from soft_gym.sensing.zhao2021.shape_exploration import N_KEY_POINTS
 
     predictor = SFEPDPredictor(N_KEY_POINTS, spec.n_chambers,
                                data.readings.shape[1], seed=config.seed, dropout=config.dropout)

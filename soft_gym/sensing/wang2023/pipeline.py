@@ -3,15 +3,15 @@
 Each control step:
 
 1. the eye-in-hand camera renders a frame (with any visual faults) and the vision tracker
-   (:mod:`soft_gym.sensing.vision_pose`) returns the camera-based tip pose, ``e_S`` and a lost flag;
-2. the FBG fiber is read and F-emp (:mod:`soft_gym.sensing.femp`) predicts the tip pose from it;
+   (:mod:`soft_gym.sensing.wang2023.vision_pose`) returns the camera-based tip pose, ``e_S`` and a lost flag;
+2. the FBG fiber is read and F-emp (:mod:`soft_gym.sensing.wang2023.femp`) predicts the tip pose from it;
 3. F-emp is updated with the camera pose when ``e_S`` is small (selective update, never ground
    truth);
-4. eq. (18) fuses the two (:mod:`soft_gym.sensing.fusion`).
+4. eq. (18) fuses the two (:mod:`soft_gym.sensing.wang2023.fusion`).
 
 Calibration builds the vision map at the rest pose (known pose, depth buffer) and initialises
 F-emp from ``n_init`` steps of the predefined spiral exploration
-(:mod:`soft_gym.sensing.exploration`) labelled by the camera. The pipeline never drives the arm:
+(:mod:`soft_gym.sensing.wang2023.exploration`) labelled by the camera. The pipeline never drives the arm:
 :func:`soft_gym.procedures.wang2023_calibration.calibrate_pipeline` runs the exploration on a
 simulator and hands each step to :meth:`SensingPipeline.begin_calibration`,
 :meth:`~SensingPipeline.calibration_sample` and :meth:`~SensingPipeline.finish_calibration`.
@@ -25,10 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from soft_gym._quaternion import quaternion_to_matrix
-from soft_gym.sensing.femp import FEmpEstimator
-from soft_gym.sensing.fusion import PoseFusion
+from soft_gym.sensing.wang2023.femp import FEmpEstimator
+from soft_gym.sensing.wang2023.fusion import PoseFusion
 from soft_gym.sensing.measurement import Measurement
-from soft_gym.sensing.vision_pose import VisionEstimate, VisionPoseEstimator
+from soft_gym.sensing.wang2023.vision_pose import VisionEstimate, VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber
 

@@ -17,16 +17,16 @@ rotation of its own tangent).
 
 ``stereo`` reports ``lost`` (and why) in ``details``; while lost it holds its last good estimate
 (before any, the straight arm at rest). Its camera defaults to a 320 x 180 pair
-(:data:`~soft_gym.sensing.shape_dnn.STEREO_INTRINSICS`; ``sensor_config={"stereo": ...}``
+(:data:`~soft_gym.sensing.zou2022.shape_dnn.STEREO_INTRINSICS`; ``sensor_config={"stereo": ...}``
 overrides it). Options (the env's ``sensing=``): the fields of
-:class:`~soft_gym.sensing.stereo_shape.ASESConfig`.
+:class:`~soft_gym.sensing.zou2022.stereo_shape.ASESConfig`.
 
 ``encoder_dnn`` calibrates when the env is made: the data set of
 :func:`~soft_gym.procedures.zou2022_dataset.collect_dataset` (random pressure exploration of a
 private copy of the arm, labelled by ASES on a private stereo pair in a clear view) and the
 network's training, both in the calibration cache. At run time it reads only the encoders, so it keeps
 working when the env's stereo pair is blind. Options: the fields of
-:class:`~soft_gym.sensing.shape_dnn.ShapeDNNConfig` (e.g. ``n_samples=300`` for a quick model;
+:class:`~soft_gym.sensing.zou2022.shape_dnn.ShapeDNNConfig` (e.g. ``n_samples=300`` for a quick model;
 the default is the paper's 29791) and ``stereo`` (keyword arguments of the labelling
 :class:`~soft_gym.sensors.stereo.StereoCamera`).
 
@@ -36,7 +36,7 @@ Visual faults: the env's ``faults=`` reach the stereo pair as they reach the eye
 (one description for every camera the env simulates, or a dict keyed by sensor name; see
 :mod:`soft_gym.sensors.faults`). Darkness, strong glare or a plate over the pair make ASES report
 lost, and so does a plate hiding only the tip half: ASES checks that the visible arm's tip end
-meets the white backdrop, not an occluder (:func:`~soft_gym.sensing.stereo_shape.tip_occlusion`;
+meets the white backdrop, not an occluder (:func:`~soft_gym.sensing.zou2022.stereo_shape.tip_occlusion`;
 with 60 % of the view covered from the bottom, lost in 20 of 20 poses, where the truncated arm
 was taken for the whole one with 46 mm mean error before). An occluder of the backdrop's colour
 stays unseen.
@@ -49,11 +49,11 @@ from typing import Any
 import numpy as np
 
 from soft_gym.robots.spec import ArmSpec
-from soft_gym.sensing.cc_shape import cc_shape
+from soft_gym.sensing.zou2022.cc_shape import cc_shape
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.measurement import Measurement
-from soft_gym.sensing.shape_dnn import STEREO_INTRINSICS, ShapeDNNConfig
-from soft_gym.sensing.stereo_shape import ASESConfig, estimate_stereo_shape
+from soft_gym.sensing.zou2022.shape_dnn import STEREO_INTRINSICS, ShapeDNNConfig
+from soft_gym.sensing.zou2022.stereo_shape import ASESConfig, estimate_stereo_shape
 
 
 def tangent_quaternion(points_m: np.ndarray) -> np.ndarray:

@@ -62,7 +62,7 @@ class PoseFusion:
     def trust_threshold_px(self) -> float:
         """``e_S`` below which the camera's weight is at least one half, ``(E_L + E_U) / 2`` (px).
 
-        F-emp learns only from frames below it (:mod:`soft_gym.sensing.pipeline`): the frames
+        F-emp learns only from frames below it (:mod:`soft_gym.sensing.wang2023.pipeline`): the frames
         the fusion itself trusts more than F-emp, so both rules sit on one scale."""
         return 0.5 * (self.lower_px + self.upper_px)
 

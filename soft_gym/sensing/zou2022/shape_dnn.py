@@ -6,7 +6,7 @@ network (eq. 18, Table 2) trained on a data set of their arm:
 
 * **Data set** (Section 5.1 (1)): the three pressures swept over 0-3 bar in 0.1 bar steps
   (``31^3 = 29791`` samples, 35 h); per sample the encoders' ``q_1`` is the input and ASES's
-  ``Q^`` (:mod:`soft_gym.sensing.stereo_shape`) the label. Samples where ASES fails (827, self
+  ``Q^`` (:mod:`soft_gym.sensing.zou2022.stereo_shape`) the label. Samples where ASES fails (827, self
   occlusion) are removed and replaced by copies of good ones rotated about the arm's axis ("on
   account of the radial symmetrical distribution of PMAs"); the set is split at random into
   training (70 %), validation (15 %) and test (15 %) sets. Here :func:`collect_dataset` does the
@@ -185,7 +185,7 @@ STEREO_INTRINSICS = {"width": 320, "height": 180, "hfov_deg": 70.0, "near_m": 0.
 def true_shape_points(spec: ArmSpec, backbone_m: np.ndarray) -> np.ndarray:
     """``P_0 .. P_6`` (m, (7, 3)) of a simulated backbone: the base and the material points at
     sixths of the rest length (as the ``ground_truth`` source gives them)."""
-    from soft_gym.sensing.shape_exploration import key_points_from_backbone
+    from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
 
     backbone = np.asarray(backbone_m, dtype=float)
     return np.concatenate([backbone[..., :1, :], key_points_from_backbone(spec, backbone)],
