@@ -100,7 +100,7 @@ def test_depth_is_metric_along_the_optical_axis():
     rotation, position = camera.camera_pose(sim)
     visual = sim.client.createVisualShape(pybullet.GEOM_BOX, halfExtents=[0.5, 0.5, 0.001])
     sim.client.createMultiBody(0.0, -1, visual, (position + [0, 0, 0.051]).tolist())
-    depth = camera.render_depth(sim)
+    depth = camera.render_clean(sim)[1]
     assert depth.shape == (120, 160)
     np.testing.assert_allclose(depth, 0.05, atol=2e-5)
 
@@ -129,7 +129,7 @@ def test_scene_fills_the_view_with_orb_features(resting):
                                                                                  None)
     assert len(keypoints) >= 100, len(keypoints)
     assert len(dense) >= 300, len(dense)
-    depth = camera.render_depth(sim)
+    depth = camera.render_clean(sim)[1]
     assert 0.03 < np.median(depth) < 0.08  # ground 60 mm beyond the tip, bricks in front
 
 

@@ -144,12 +144,6 @@ class EyeInHandCamera(Sensor):
         rotation, position = self.camera_pose(sim)
         return sim.world.render_camera(self.intrinsics, rotation, position, self.light_direction)
 
-    def render_depth(self, sim) -> np.ndarray:
-        """Metric depth along the optical axis (m, (H, W)) without faults, for calibration
-        (wang2023 calibrates the monocular scale with the EM tracker; here the depth buffer
-        gives metric scale directly)."""
-        return self.render_clean(sim)[1]
-
     def _context(self, sim, rotation: np.ndarray, position: np.ndarray) -> FrameContext:
         previous = self._previous
         return FrameContext(
