@@ -53,3 +53,39 @@ def test_the_readme_gymnasium_and_sb3_recipes_run(tmp_path, monkeypatch):
     videos = list((tmp_path / "videos").glob("*.mp4"))
     assert videos and videos[0].stat().st_size > 1000
     assert namespace["info"]["error_mm"] < 3.0
+
+
+def _first_column_names(text: str, first_row: str) -> list[str]:
+    """The backquoted names in the first column of the Markdown table whose first row starts
+    with ``first_row``."""
+    lines = text.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.replace(" ", "").startswith(first_row))
+    names = []
+    for line in lines[start:]:
+        if not line.startswith("|"):
+            break
+        match = re.match(r"^\|\s*`([a-z_0-9]+)`", line)
+        if match:
+            names.append(match.group(1))
+    return names
+
+
+def test_the_tables_of_names_list_every_registered_name():
+    """The tables users read (README, the env's and modules' docstrings, the architecture
+    document) name exactly what the registries hold, in their order."""
+    import soft_gym.envs.observations as observations
+    import soft_gym.envs.soft_arm_env as soft_arm_env
+    import soft_gym.sensing.feedback as feedback
+    import soft_gym.sensors as sensors
+    from soft_gym.envs.observations import OBSERVATION_PARTS
+    from soft_gym.sensing import FEEDBACK_SOURCES
+    from soft_gym.sensors import SENSORS
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    architecture = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    parts = list(OBSERVATION_PARTS)
+    for text in (readme, observations.__doc__, soft_arm_env.__doc__):
+        assert _first_column_names(text, "|`pose`|") == parts
+    for text in (feedback.__doc__, architecture):
+        assert _first_column_names(text, "|`ground_truth`|") == list(FEEDBACK_SOURCES)
+    assert _first_column_names(sensors.__doc__, "|`fbg`|") == list(SENSORS)
