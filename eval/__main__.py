@@ -212,7 +212,6 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     import sys
 
     from eval import suite as suite_module
-    from eval import suite_report
 
     if args.out is not None:
         check_output_dir(parser, "--out", args.out)
@@ -224,20 +223,20 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
         parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
                      "got ''")
     if args.backend == "ray":
-        from eval import suite_ray
+        from eval.suite import ray_backend
 
         try:
-            suite_ray.require_ray()
+            ray_backend.require_ray()
         except ImportError as error:
             parser.error(f"--backend ray: {error}")
-        backend = suite_ray.make_ray_map(args.address)
+        backend = ray_backend.make_ray_map(args.address)
     if args.seeds is not None and (any(seed < 0 for seed in args.seeds)
                                    or len(set(args.seeds)) != len(args.seeds)):
         parser.error(f"--seeds must be distinct integers >= 0, got {args.seeds}")
     if args.report_only and args.resume:
         parser.error("--resume runs the missing runs; --report-only runs none: give one")
     try:
-        suite_report.require_rliable()
+        suite_module.require_rliable()
     except ImportError as error:
         parser.error(str(error))
     try:
@@ -264,7 +263,7 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
                                    progress=True, check=False, backend=backend)
         except suite_module.SuiteRunError as error:
             failure = error
-    print(suite_report.write_report(spec, out, cells=cells))
+    print(suite_module.write_report(spec, out, cells=cells))
     if failure is not None:
         print(f"error: {failure}", file=sys.stderr)
     print(f"output directory: {out}")

@@ -56,7 +56,9 @@ from typing import Any
 
 import numpy as np
 
-from eval.suite import Cell, SuiteSpec, expand, read_record, read_steps
+from eval.suite.grid import Cell, expand
+from eval.suite.spec import SuiteSpec
+from eval.suite.store import read_record, read_steps
 
 SCORE = "last_cycle_error_mm"
 """The metric of a run that the leaderboard ranks and the aggregates summarise (mm)."""
@@ -305,7 +307,7 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
         The leaderboard (Markdown), as written to ``leaderboard.md``.
     """
     from eval.report import package_version, write_json
-    from eval.suite import git_revision, library_versions
+    from eval.suite.store import git_revision, library_versions
 
     require_rliable()
     out = Path(out)
