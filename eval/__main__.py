@@ -40,8 +40,8 @@ import os
 from pathlib import Path
 
 from eval import compare as compare_module
-from eval import estimation as estimation_module
-from eval.estimation import EXPERIMENTS, run_experiments
+from eval.papers import estimation as estimation_module
+from eval.papers.estimation import EXPERIMENTS, run_experiments
 from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
                            json_value, non_negative_int, positive_float, positive_int)
 
@@ -323,7 +323,7 @@ def main(argv: list[str] | None = None) -> None:
                        help="output directory (made; must be writable)")
     _add_workers(track)
     _add_video_flag(track)
-    from eval import ho2018 as ho2018_module
+    from eval.papers import ho2018 as ho2018_module
 
     ho2018 = _paper_parser(sub, "ho2018", ho2018_module,
                            "ho2018 static and varying tip-load experiments",
@@ -339,7 +339,7 @@ def main(argv: list[str] | None = None) -> None:
                              "[0, 3600]")
     ho2018.add_argument("--out", default="results/ho2018",
                         help="output directory (made; must be writable)")
-    from eval import zhao2021 as zhao2021_module
+    from eval.papers import zhao2021 as zhao2021_module
 
     zhao2021 = _paper_parser(sub, "zhao2021", zhao2021_module,
                              "zhao2021 shape reconstruction and local-IK control experiments",
@@ -355,7 +355,7 @@ def main(argv: list[str] | None = None) -> None:
                                "e.g. lwpr_rwr cc_model sb3:PATH")
     zhao2021.add_argument("--out", default="results/zhao2021",
                           help="output directory (made; must be writable)")
-    from eval import zou2022 as zou2022_module
+    from eval.papers import zou2022 as zou2022_module
 
     zou2022 = _paper_parser(sub, "zou2022", zou2022_module,
                             "zou2022 shape estimation (RSES, ASES, DNN) and control with each "

@@ -29,8 +29,9 @@ error against the truth (mm). Self-occlusion (Fig. 13b) is no fault here: it hap
 does, in the clean poses.
 
 ``control``: ``cc_model``, ``hybrid_gpr`` and ``lwpr_rwr`` tracking on zou2022 with each shape
-source as feedback, nominal and with the stereo pair faulted (:mod:`eval.zou2022_control`). The
-paper has no closed-loop experiment; this is the project's own comparison.
+source as feedback, nominal and with the stereo pair faulted
+(:mod:`eval.papers.zou2022_control`). The paper has no closed-loop experiment; this is the
+project's own comparison.
 
 Where the simulation differs from the paper (docs/architecture.md, "zou2022 experiments"): the
 simulated arm bends by pressure moments on a Cosserat-like chain, so the shape departs from
@@ -312,7 +313,7 @@ def report_tables(results: dict) -> str:
             lines.append(f"| {name} | {100 * row['lost_share']:.0f} % | " + " | ".join(cells)
                          + " |")
     if results.get("control"):
-        from eval.zou2022_control import control_table
+        from eval.papers.zou2022_control import control_table
 
         lines += ["", "Control on zou2022 with each shape source", "",
                   control_table(results["control"]["rows"])]
@@ -417,7 +418,7 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
         if "faults" in experiments:
             results["faults"] = run_faults(n_poses, seed, progress)
         if "control" in experiments:
-            from eval.zou2022_control import plot_control, run_control, strip_records
+            from eval.papers.zou2022_control import plot_control, run_control, strip_records
 
             dnn_options = {k: v for k, v in asdict(seeded).items()
                            if v != getattr(ShapeDNNConfig(), k) or k == "seed"}
