@@ -37,10 +37,16 @@ from __future__ import annotations
 import argparse
 import itertools
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, NamedTuple
 
 from eval import compare as compare_module
+from eval import suite as suite_module
 from eval.papers import estimation as estimation_module
+from eval.papers import ho2018 as ho2018_module
+from eval.papers import zhao2021 as zhao2021_module
+from eval.papers import zou2022 as zou2022_module
 from eval.papers.estimation import EXPERIMENTS, run_experiments
 from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
                            json_value, non_negative_int, positive_float, positive_int)
@@ -207,14 +213,301 @@ def _add_workers(parser: argparse.ArgumentParser) -> None:
                         help="runs in parallel processes, >= 1 (up to 2 helps, one per core)")
 
 
-def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+# ------------------------------------------------------------------------------------ benchmark
+def _benchmark_parser(sub) -> argparse.ArgumentParser:
+    """The ``benchmark`` subcommand's parser (its runs are fixed)."""
+    benchmark = sub.add_parser("benchmark", help="the small embedded default comparison",
+                               formatter_class=HelpFormatter)
+    benchmark.add_argument("--out", default="results/benchmark",
+                           help="output directory (made; must be writable)")
+    _add_workers(benchmark)
+    _add_video_flag(benchmark)
+    return benchmark
+
+
+def _run_benchmark(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``benchmark``: ``track`` with the README's main job's fixed settings."""
+    from agents.policies import shipped_agents
+
+    occluder = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
+                "start_s": 40.0}
+    args = argparse.Namespace(
+        policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in
+                                               shipped_agents("SoftArmTrackWang2023-v0")],
+        kp=[0.06], preset="wang2023", path="circle",
+        cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": 0.01},
+        faults=occluder, seeds=[0], out=args.out, workers=args.workers,
+        video=args.video)
+    # benchmark's settings are fixed: a refusal names the part (a shipped agent, ...)
+    _track(args, parser, options={})
+    print(f"output directory: {args.out}")
+
+
+# ----------------------------------------------------------------------------------- estimation
+def _estimation_parser(sub) -> argparse.ArgumentParser:
+    """The ``estimation`` subcommand's parser."""
+    estimation = sub.add_parser("estimation", help="wang2023 estimation experiments",
+                                description=estimation_module.__doc__,
+                                formatter_class=HelpFormatter)
+    estimation.add_argument("--experiments", nargs="+", default=["clean"],
+                            choices=list(EXPERIMENTS) + ["all"],
+                            help="which runs ('all' for every one)")
+    estimation.add_argument("--steps", type=int, default=4000,
+                            help="control steps of 0.05 s per run, >= 600 (paper: ~4000)")
+    estimation.add_argument("--seed", type=non_negative_int, default=0,
+                            help="episode seed (integer >= 0)")
+    estimation.add_argument("--out", default="results/estimation",
+                            help="output directory (made; must be writable)")
+    _add_video_flag(estimation)
+    return estimation
+
+
+def _run_estimation(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``estimation``: the chosen experiments, then their table."""
+    if args.steps < 600:
+        parser.error(f"--steps must be >= 600 (the F-emp calibration alone takes 450), "
+                     f"got {args.steps}")
+    experiments = list(EXPERIMENTS) if "all" in args.experiments else args.experiments
+    rows = run_experiments(experiments, args.out, steps=args.steps, seed=args.seed,
+                           **({"video": True} if args.video else {}))
+    from eval.report import markdown_table
+
+    print(markdown_table(rows, float_format="{:.2f}"))
+    print(f"output directory: {args.out}")
+
+
+# ---------------------------------------------------------------------------------------- track
+def _track_parser(sub) -> argparse.ArgumentParser:
+    """The ``track`` subcommand's parser."""
+    track = sub.add_parser("track", help="baselines tracking a path",
+                           formatter_class=HelpFormatter)
+    track.add_argument("--policies", nargs="+", default=["cc_model", "hybrid_gpr"],
+                       help="baseline names (cc_model, hybrid_gpr, lwpr_rwr, local_ik_asdm) or "
+                            "sb3:PATH (a model .zip, a run directory or a shipped agent's name; "
+                            "its observation and action spaces must match the env's)")
+    track.add_argument("--kp", type=positive_float, nargs="+", default=[0.06],
+                       help="K_p gains of eq. (26), finite numbers > 0 (paper: 0.04 0.06 0.08 "
+                            "0.10)")
+    track.add_argument("--preset", default="wang2023",
+                       help="arm preset: wang2023, ho2018, zhao2021 or zou2022")
+    track.add_argument("--path", default="circle",
+                       help="circle, pentagram, rectangle, spiral, star")
+    track.add_argument("--cycles", type=positive_int, default=3,
+                       help="path cycles per run (>= 1)")
+    track.add_argument("--feedback", default="ground_truth",
+                       help="pose feedback: fused, camera, fbg, em, ground_truth (or another "
+                            "source the preset supports)")
+    track.add_argument("--scenario", type=json_value, default=None,
+                       help='loads as JSON, e.g. \'{"name": "tip_mass", "mass_kg": 0.01}\'')
+    track.add_argument("--faults", type=json_value, default=None,
+                       help='visual faults as JSON, e.g. \'"wang2023_occlusion"\'')
+    track.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
+                       help="episode seeds (integers >= 0)")
+    track.add_argument("--out", default="results/track",
+                       help="output directory (made; must be writable)")
+    _add_workers(track)
+    _add_video_flag(track)
+    return track
+
+
+def _run_track(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``track``: every run checked, then run (:func:`_track`)."""
+    _track(args, parser)
+    print(f"output directory: {args.out}")
+
+
+# --------------------------------------------------------------------------------------- ho2018
+def _ho2018_parser(sub) -> argparse.ArgumentParser:
+    """The ``ho2018`` subcommand's parser."""
+    ho2018 = _paper_parser(sub, "ho2018", ho2018_module,
+                           "ho2018 static and varying tip-load experiments",
+                           "seeds (pre-training waypoints and episode)")
+    ho2018.add_argument("--cycle-s", type=finite_float(5.0, 3600.0), default=None,
+                        help="seconds per rectangle cycle (s), in [5, 3600]; default: the "
+                             "experiment's own (40 s static, 30 s varying)")
+    ho2018.add_argument("--baselines", nargs="*", default=[],
+                        help="further policies on the online run's load, e.g. cc_model "
+                             "hybrid_gpr sb3:PATH")
+    ho2018.add_argument("--lead-in-s", type=finite_float(0.0, 3600.0), default=15.0,
+                        help="seconds tracking the first corner before recording (s), in "
+                             "[0, 3600]")
+    ho2018.add_argument("--out", default="results/ho2018",
+                        help="output directory (made; must be writable)")
+    return ho2018
+
+
+def _run_ho2018(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``ho2018``: the further baselines checked, then the experiments."""
+    _check_baselines(parser, args.baselines, ho2018_module.check_baselines)
+    ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
+                                 cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
+                                 baselines=tuple(args.baselines))
+    print(f"output directory: {args.out}")
+
+
+# ------------------------------------------------------------------------------------- zhao2021
+def _zhao2021_parser(sub) -> argparse.ArgumentParser:
+    """The ``zhao2021`` subcommand's parser."""
+    zhao2021 = _paper_parser(sub, "zhao2021", zhao2021_module,
+                             "zhao2021 shape reconstruction and local-IK control experiments",
+                             "seeds (exploration, training and episodes)")
+    zhao2021.add_argument("--samples", type=non_negative_int, nargs=2, default=[4000, 2000],
+                          metavar=("FREE", "LOADED"),
+                          help="exploration samples free and with the 75 g tip, >= 0 each and "
+                               ">= 24 together (paper: 4000 2000)")
+    zhao2021.add_argument("--iterations", type=positive_int, default=1000,
+                          help="most training iterations of the networks, >= 1 (paper: 1000)")
+    zhao2021.add_argument("--baselines", nargs="*", default=[],
+                          help="further policies on the free point-to-point run and circle, "
+                               "e.g. lwpr_rwr cc_model sb3:PATH")
+    zhao2021.add_argument("--out", default="results/zhao2021",
+                          help="output directory (made; must be writable)")
+    return zhao2021
+
+
+def _run_zhao2021(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``zhao2021``: the sample counts and further baselines checked, then the experiments."""
+    free, loaded = args.samples
+    if free + loaded < 24:
+        parser.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
+                     f"{args.samples}")
+    _check_baselines(parser, args.baselines, zhao2021_module.check_baselines)
+    from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
+
+    config = ReconstructionConfig(n_free=free, n_loaded=loaded,
+                                  max_iterations=args.iterations)
+    zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
+                                   baselines=tuple(args.baselines))
+    print(f"output directory: {args.out}")
+
+
+# -------------------------------------------------------------------------------------- zou2022
+def _zou2022_parser(sub) -> argparse.ArgumentParser:
+    """The ``zou2022`` subcommand's parser."""
+    zou2022 = _paper_parser(sub, "zou2022", zou2022_module,
+                            "zou2022 shape estimation (RSES, ASES, DNN) and control with each "
+                            "shape source", "seeds (exploration, training, sensor noise, poses)")
+    zou2022.add_argument("--samples", type=int_at_least(20), default=29791,
+                         help="exploration samples of the DNN's data set, >= 20 (paper: 31^3 = "
+                              "29791, ~25 min on one core, cached)")
+    zou2022.add_argument("--epochs", type=positive_int, default=500,
+                         help="DNN training epochs, >= 1 (paper: 500)")
+    zou2022.add_argument("--poses", type=positive_int, default=20,
+                         help="random poses of the ASES fault experiment (>= 1)")
+    zou2022.add_argument("--out", default="results/zou2022",
+                         help="output directory (made; must be writable)")
+    return zou2022
+
+
+def _run_zou2022(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``zou2022``: the experiments with the given DNN data set and training."""
+    from soft_gym.sensing.shape_dnn import ShapeDNNConfig
+
+    config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
+    zou2022_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
+                                  n_poses=args.poses)
+    print(f"output directory: {args.out}")
+
+
+# -------------------------------------------------------------------------------------- compare
+def _compare_parser(sub) -> argparse.ArgumentParser:
+    """The ``compare`` subcommand's parser."""
+    compare = sub.add_parser(
+        "compare", help="SB3 agents against the baselines, nominal and out of distribution",
+        description=compare_module.__doc__, formatter_class=HelpFormatter)
+    compare.add_argument("--policies", nargs="+", default=None,
+                         help="baselines, sb3:PATH or shipped agent names as sb3:<name> "
+                              "(default: cc_model, hybrid_gpr and every shipped agent)")
+    compare.add_argument("--paths", nargs="+", default=["circle", "pentagram"],
+                         help="paths to track (circle, pentagram, rectangle, spiral, star)")
+    compare.add_argument("--conditions", nargs="+", default=list(compare_module.CONDITIONS),
+                         choices=list(compare_module.CONDITIONS), help="test conditions")
+    compare.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0, 1],
+                         help="episode seeds (integers >= 0)")
+    compare.add_argument("--cycles", type=positive_int, default=2,
+                         help="path cycles per run (>= 1)")
+    compare.add_argument("--feedback", default="fused",
+                         help="pose feedback of every policy: fused, camera, fbg, em, ground_truth")
+    compare.add_argument("--kp", type=positive_float, default=0.06,
+                         help="K_p of the CC baselines, a finite number > 0")
+    compare.add_argument("--out", default="results/compare",
+                         help="output directory (made; must be writable)")
+    _add_workers(compare)
+    _add_video_flag(compare)
+    return compare
+
+
+COMPARE_OPTIONS = {"env_kwargs.path": "--paths", "env_kwargs.cycles": "--cycles",
+                   "env_kwargs.feedback": "--feedback", "env_kwargs.scenario": "--conditions",
+                   "env_kwargs.faults": "--conditions", "policy": "--policies",
+                   "policy_params": "--kp", "seed": "--seeds"}
+"""The part of a run configuration -> the ``compare`` option that sets it."""
+
+
+def _run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``compare``: check the options and every run, run (each run's CSV written as it
+    finishes), print the table."""
+    from agents.policies import shipped_agents
+    from eval.runner import ConfigError
+
+    policies = args.policies or (["cc_model", "hybrid_gpr"]
+                                 + [f"sb3:{name}" for name in
+                                    shipped_agents("SoftArmTrackWang2023-v0")])
+    if args.feedback not in ("fused", "camera") and "occlusion" in args.conditions:
+        parser.error("the occlusion condition needs camera feedback: --feedback fused or "
+                     f"camera, got {args.feedback!r}")
+    try:
+        rows = compare_module.run_comparison(
+            policies, args.paths, args.conditions, args.seeds, args.out, cycles=args.cycles,
+            feedback=args.feedback, kp=args.kp, workers=args.workers,
+            **({"video": True} if args.video else {}), check=True)
+    except ConfigError as error:
+        option = COMPARE_OPTIONS.get(error.part, "--policies")
+        shown = {"--paths": error.config.env_kwargs.get("path"), "--kp": args.kp,
+                 "--feedback": args.feedback, "--cycles": args.cycles,
+                 "--conditions": error.config.labels.get("condition"),
+                 "--policies": error.config.policy, "--seeds": error.config.seed}[option]
+        fail(parser, option, f"{shown!r} refused: {error.message}")
+    from eval.report import markdown_table
+
+    print(markdown_table(rows, float_format="{:.2f}"))
+    print(f"output directory: {args.out}")
+
+
+# ---------------------------------------------------------------------------------------- suite
+def _suite_parser(sub) -> argparse.ArgumentParser:
+    """The ``suite`` subcommand's parser."""
+    suite = sub.add_parser(
+        "suite", help="the four-arm benchmark suite of a YAML spec: leaderboard, IQM with "
+        "bootstrap CIs, performance profiles", description=suite_module.__doc__,
+        formatter_class=HelpFormatter)
+    suite.add_argument("spec", help="suite YAML file, or a bundled suite: "
+                       f"{', '.join(suite_module.bundled_suites())}")
+    suite.add_argument("--out", default=None,
+                       help="output directory (made; must be writable); default: "
+                            "results/suite_<suite name>")
+    _add_workers(suite)
+    suite.add_argument("--resume", action="store_true",
+                       help="skip the runs whose record is already in the output directory")
+    suite.add_argument("--seeds", type=non_negative_int, nargs="+", default=None,
+                       help="episode seeds replacing the suite's own (distinct integers >= 0)")
+    suite.add_argument("--report-only", action="store_true",
+                       help="run nothing: write the report from the records there")
+    suite.add_argument("--backend", default="process", choices=["process", "serial", "ray"],
+                       help="where the runs go: --workers spawned processes, this process, or "
+                            "Ray tasks (a local Ray of --workers CPUs, or the cluster at "
+                            "--address; optional extra: pip install \"soft-arm-gym[ray]\")")
+    suite.add_argument("--address", default=None, metavar="ADDR",
+                       help="with --backend ray: an existing Ray cluster (auto, "
+                            "ray://host:10001, host:6379); the package must be importable on "
+                            "every node. Default: a local Ray")
+    return suite
+
+
+def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``suite``: check every option and the spec before any run, run, report."""
     import sys
 
-    from eval import suite as suite_module
-
-    if args.out is not None:
-        check_output_dir(parser, "--out", args.out)
     backend = args.backend
     if args.address is not None and args.backend != "ray":
         parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
@@ -271,261 +564,51 @@ def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
         raise SystemExit(1)
 
 
+# ------------------------------------------------------------------------------------- dispatch
+class Command(NamedTuple):
+    """One subcommand: ``add_parser(subparsers)`` adds and returns its parser; ``run(parser,
+    args)`` checks what the parser cannot and does the work (``parser.error`` for one-line
+    errors)."""
+
+    add_parser: Callable[[Any], argparse.ArgumentParser]
+    run: Callable[[argparse.ArgumentParser, argparse.Namespace], None]
+
+
+COMMANDS: dict[str, Command] = {
+    "benchmark": Command(_benchmark_parser, _run_benchmark),
+    "estimation": Command(_estimation_parser, _run_estimation),
+    "track": Command(_track_parser, _run_track),
+    "ho2018": Command(_ho2018_parser, _run_ho2018),
+    "zhao2021": Command(_zhao2021_parser, _run_zhao2021),
+    "zou2022": Command(_zou2022_parser, _run_zou2022),
+    "compare": Command(_compare_parser, _run_compare),
+    "suite": Command(_suite_parser, _run_suite),
+}
+"""Subcommand name -> its parser and its work, in the order ``--help`` lists them."""
+
+DISTINCT_OPTIONS = ("policies", "kp", "seeds", "paths", "conditions", "experiments", "baselines")
+"""List options whose values must not repeat (each run once)."""
+
+
+def _check_distinct(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    for option in DISTINCT_OPTIONS:
+        values = getattr(args, option, None)
+        if isinstance(values, list) and len(set(values)) != len(values):
+            parser.error(f"--{option} must be distinct (each run once), got {values}")
+
+
 def main(argv: list[str] | None = None) -> None:
     """``python -m eval``: parse and check every option (one-line errors, exit 2), then run."""
     parser = argparse.ArgumentParser(prog="python -m eval", description=__doc__,
                                      formatter_class=HelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
-    benchmark = sub.add_parser("benchmark", help="the small embedded default comparison",
-                               formatter_class=HelpFormatter)
-    benchmark.add_argument("--out", default="results/benchmark",
-                           help="output directory (made; must be writable)")
-    _add_workers(benchmark)
-    _add_video_flag(benchmark)
-    estimation = sub.add_parser("estimation", help="wang2023 estimation experiments",
-                                description=estimation_module.__doc__,
-                                formatter_class=HelpFormatter)
-    estimation.add_argument("--experiments", nargs="+", default=["clean"],
-                            choices=list(EXPERIMENTS) + ["all"],
-                            help="which runs ('all' for every one)")
-    estimation.add_argument("--steps", type=int, default=4000,
-                            help="control steps of 0.05 s per run, >= 600 (paper: ~4000)")
-    estimation.add_argument("--seed", type=non_negative_int, default=0,
-                            help="episode seed (integer >= 0)")
-    estimation.add_argument("--out", default="results/estimation",
-                            help="output directory (made; must be writable)")
-    _add_video_flag(estimation)
-    track = sub.add_parser("track", help="baselines tracking a path",
-                           formatter_class=HelpFormatter)
-    track.add_argument("--policies", nargs="+", default=["cc_model", "hybrid_gpr"],
-                       help="baseline names (cc_model, hybrid_gpr, lwpr_rwr, local_ik_asdm) or "
-                            "sb3:PATH (a model .zip, a run directory or a shipped agent's name; "
-                            "its observation and action spaces must match the env's)")
-    track.add_argument("--kp", type=positive_float, nargs="+", default=[0.06],
-                       help="K_p gains of eq. (26), finite numbers > 0 (paper: 0.04 0.06 0.08 "
-                            "0.10)")
-    track.add_argument("--preset", default="wang2023",
-                       help="arm preset: wang2023, ho2018, zhao2021 or zou2022")
-    track.add_argument("--path", default="circle",
-                       help="circle, pentagram, rectangle, spiral, star")
-    track.add_argument("--cycles", type=positive_int, default=3,
-                       help="path cycles per run (>= 1)")
-    track.add_argument("--feedback", default="ground_truth",
-                       help="pose feedback: fused, camera, fbg, em, ground_truth (or another "
-                            "source the preset supports)")
-    track.add_argument("--scenario", type=json_value, default=None,
-                       help='loads as JSON, e.g. \'{"name": "tip_mass", "mass_kg": 0.01}\'')
-    track.add_argument("--faults", type=json_value, default=None,
-                       help='visual faults as JSON, e.g. \'"wang2023_occlusion"\'')
-    track.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
-                       help="episode seeds (integers >= 0)")
-    track.add_argument("--out", default="results/track",
-                       help="output directory (made; must be writable)")
-    _add_workers(track)
-    _add_video_flag(track)
-    from eval.papers import ho2018 as ho2018_module
-
-    ho2018 = _paper_parser(sub, "ho2018", ho2018_module,
-                           "ho2018 static and varying tip-load experiments",
-                           "seeds (pre-training waypoints and episode)")
-    ho2018.add_argument("--cycle-s", type=finite_float(5.0, 3600.0), default=None,
-                        help="seconds per rectangle cycle (s), in [5, 3600]; default: the "
-                             "experiment's own (40 s static, 30 s varying)")
-    ho2018.add_argument("--baselines", nargs="*", default=[],
-                        help="further policies on the online run's load, e.g. cc_model "
-                             "hybrid_gpr sb3:PATH")
-    ho2018.add_argument("--lead-in-s", type=finite_float(0.0, 3600.0), default=15.0,
-                        help="seconds tracking the first corner before recording (s), in "
-                             "[0, 3600]")
-    ho2018.add_argument("--out", default="results/ho2018",
-                        help="output directory (made; must be writable)")
-    from eval.papers import zhao2021 as zhao2021_module
-
-    zhao2021 = _paper_parser(sub, "zhao2021", zhao2021_module,
-                             "zhao2021 shape reconstruction and local-IK control experiments",
-                             "seeds (exploration, training and episodes)")
-    zhao2021.add_argument("--samples", type=non_negative_int, nargs=2, default=[4000, 2000],
-                          metavar=("FREE", "LOADED"),
-                          help="exploration samples free and with the 75 g tip, >= 0 each and "
-                               ">= 24 together (paper: 4000 2000)")
-    zhao2021.add_argument("--iterations", type=positive_int, default=1000,
-                          help="most training iterations of the networks, >= 1 (paper: 1000)")
-    zhao2021.add_argument("--baselines", nargs="*", default=[],
-                          help="further policies on the free point-to-point run and circle, "
-                               "e.g. lwpr_rwr cc_model sb3:PATH")
-    zhao2021.add_argument("--out", default="results/zhao2021",
-                          help="output directory (made; must be writable)")
-    from eval.papers import zou2022 as zou2022_module
-
-    zou2022 = _paper_parser(sub, "zou2022", zou2022_module,
-                            "zou2022 shape estimation (RSES, ASES, DNN) and control with each "
-                            "shape source", "seeds (exploration, training, sensor noise, poses)")
-    zou2022.add_argument("--samples", type=int_at_least(20), default=29791,
-                         help="exploration samples of the DNN's data set, >= 20 (paper: 31^3 = "
-                              "29791, ~25 min on one core, cached)")
-    zou2022.add_argument("--epochs", type=positive_int, default=500,
-                         help="DNN training epochs, >= 1 (paper: 500)")
-    zou2022.add_argument("--poses", type=positive_int, default=20,
-                         help="random poses of the ASES fault experiment (>= 1)")
-    zou2022.add_argument("--out", default="results/zou2022",
-                         help="output directory (made; must be writable)")
-    compare = sub.add_parser(
-        "compare", help="SB3 agents against the baselines, nominal and out of distribution",
-        description=compare_module.__doc__, formatter_class=HelpFormatter)
-    compare.add_argument("--policies", nargs="+", default=None,
-                         help="baselines, sb3:PATH or shipped agent names as sb3:<name> "
-                              "(default: cc_model, hybrid_gpr and every shipped agent)")
-    compare.add_argument("--paths", nargs="+", default=["circle", "pentagram"],
-                         help="paths to track (circle, pentagram, rectangle, spiral, star)")
-    compare.add_argument("--conditions", nargs="+", default=list(compare_module.CONDITIONS),
-                         choices=list(compare_module.CONDITIONS), help="test conditions")
-    compare.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0, 1],
-                         help="episode seeds (integers >= 0)")
-    compare.add_argument("--cycles", type=positive_int, default=2,
-                         help="path cycles per run (>= 1)")
-    compare.add_argument("--feedback", default="fused",
-                         help="pose feedback of every policy: fused, camera, fbg, em, ground_truth")
-    compare.add_argument("--kp", type=positive_float, default=0.06,
-                         help="K_p of the CC baselines, a finite number > 0")
-    compare.add_argument("--out", default="results/compare",
-                         help="output directory (made; must be writable)")
-    _add_workers(compare)
-    _add_video_flag(compare)
-    from eval import suite as suite_module
-
-    suite = sub.add_parser(
-        "suite", help="the four-arm benchmark suite of a YAML spec: leaderboard, IQM with "
-        "bootstrap CIs, performance profiles", description=suite_module.__doc__,
-        formatter_class=HelpFormatter)
-    suite.add_argument("spec", help="suite YAML file, or a bundled suite: "
-                       f"{', '.join(suite_module.bundled_suites())}")
-    suite.add_argument("--out", default=None,
-                       help="output directory (made; must be writable); default: "
-                            "results/suite_<suite name>")
-    _add_workers(suite)
-    suite.add_argument("--resume", action="store_true",
-                       help="skip the runs whose record is already in the output directory")
-    suite.add_argument("--seeds", type=non_negative_int, nargs="+", default=None,
-                       help="episode seeds replacing the suite's own (distinct integers >= 0)")
-    suite.add_argument("--report-only", action="store_true",
-                       help="run nothing: write the report from the records there")
-    suite.add_argument("--backend", default="process", choices=["process", "serial", "ray"],
-                       help="where the runs go: --workers spawned processes, this process, or "
-                            "Ray tasks (a local Ray of --workers CPUs, or the cluster at "
-                            "--address; optional extra: pip install \"soft-arm-gym[ray]\")")
-    suite.add_argument("--address", default=None, metavar="ADDR",
-                       help="with --backend ray: an existing Ray cluster (auto, "
-                            "ray://host:10001, host:6379); the package must be importable on "
-                            "every node. Default: a local Ray")
+    parsers = {name: command.add_parser(sub) for name, command in COMMANDS.items()}
     args = parser.parse_args(argv)
-    subparsers = {"benchmark": benchmark, "estimation": estimation, "track": track,
-                  "ho2018": ho2018, "zhao2021": zhao2021, "zou2022": zou2022,
-                  "compare": compare, "suite": suite}
-    command = subparsers[args.command]
-    for option in ("policies", "kp", "seeds", "paths", "conditions", "experiments", "baselines"):
-        values = getattr(args, option, None)
-        if isinstance(values, list) and len(set(values)) != len(values):
-            command.error(f"--{option} must be distinct (each run once), got {values}")
-    if args.command == "suite":
-        _suite(suite, args)
-        return
-    check_output_dir(command, "--out", args.out)
-    if args.command == "ho2018":
-        _check_baselines(ho2018, args.baselines, ho2018_module.check_baselines)
-        ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
-                                     cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
-                                     baselines=tuple(args.baselines))
-        print(f"output directory: {args.out}")
-        return
-    if args.command == "zhao2021":
-        free, loaded = args.samples
-        if free + loaded < 24:
-            zhao2021.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
-                           f"{args.samples}")
-        _check_baselines(zhao2021, args.baselines, zhao2021_module.check_baselines)
-        from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
-
-        config = ReconstructionConfig(n_free=free, n_loaded=loaded,
-                                      max_iterations=args.iterations)
-        zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
-                                       baselines=tuple(args.baselines))
-        print(f"output directory: {args.out}")
-        return
-    if args.command == "zou2022":
-        from soft_gym.sensing.shape_dnn import ShapeDNNConfig
-
-        config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
-        zou2022_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
-                                      n_poses=args.poses)
-        print(f"output directory: {args.out}")
-        return
-    if args.command == "compare":
-        _compare(compare, args)
-        return
-    if args.command == "benchmark":
-        from agents.policies import shipped_agents
-
-        occluder = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
-                    "start_s": 40.0}
-        args = argparse.Namespace(
-            policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in
-                                                   shipped_agents("SoftArmTrackWang2023-v0")],
-            kp=[0.06], preset="wang2023", path="circle",
-            cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": 0.01},
-            faults=occluder, seeds=[0], out=args.out, workers=args.workers,
-            video=args.video)
-        # benchmark's settings are fixed: a refusal names the part (a shipped agent, ...)
-        _track(args, benchmark, options={})
-    elif args.command == "estimation":
-        if args.steps < 600:
-            estimation.error(f"--steps must be >= 600 (the F-emp calibration alone takes 450), "
-                             f"got {args.steps}")
-        experiments = list(EXPERIMENTS) if "all" in args.experiments else args.experiments
-        rows = run_experiments(experiments, args.out, steps=args.steps, seed=args.seed,
-                               **({"video": True} if args.video else {}))
-        from eval.report import markdown_table
-
-        print(markdown_table(rows, float_format="{:.2f}"))
-    else:
-        _track(args, track)
-    print(f"output directory: {args.out}")
-
-
-COMPARE_OPTIONS = {"env_kwargs.path": "--paths", "env_kwargs.cycles": "--cycles",
-                   "env_kwargs.feedback": "--feedback", "env_kwargs.scenario": "--conditions",
-                   "env_kwargs.faults": "--conditions", "policy": "--policies",
-                   "policy_params": "--kp", "seed": "--seeds"}
-"""The part of a run configuration -> the ``compare`` option that sets it."""
-
-
-def _compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    """``compare``: check the options and every run, run (each run's CSV written as it
-    finishes), print the table."""
-    from agents.policies import shipped_agents
-    from eval.runner import ConfigError
-
-    policies = args.policies or (["cc_model", "hybrid_gpr"]
-                                 + [f"sb3:{name}" for name in
-                                    shipped_agents("SoftArmTrackWang2023-v0")])
-    if args.feedback not in ("fused", "camera") and "occlusion" in args.conditions:
-        parser.error("the occlusion condition needs camera feedback: --feedback fused or "
-                     f"camera, got {args.feedback!r}")
-    try:
-        rows = compare_module.run_comparison(
-            policies, args.paths, args.conditions, args.seeds, args.out, cycles=args.cycles,
-            feedback=args.feedback, kp=args.kp, workers=args.workers,
-            **({"video": True} if args.video else {}), check=True)
-    except ConfigError as error:
-        option = COMPARE_OPTIONS.get(error.part, "--policies")
-        shown = {"--paths": error.config.env_kwargs.get("path"), "--kp": args.kp,
-                 "--feedback": args.feedback, "--cycles": args.cycles,
-                 "--conditions": error.config.labels.get("condition"),
-                 "--policies": error.config.policy, "--seeds": error.config.seed}[option]
-        fail(parser, option, f"{shown!r} refused: {error.message}")
-    from eval.report import markdown_table
-
-    print(markdown_table(rows, float_format="{:.2f}"))
-    print(f"output directory: {args.out}")
+    command_parser = parsers[args.command]
+    _check_distinct(command_parser, args)
+    if args.out is not None:  # suite's default output directory is checked once the spec is read
+        check_output_dir(command_parser, "--out", args.out)
+    COMMANDS[args.command].run(command_parser, args)
 
 
 if __name__ == "__main__":
