@@ -37,19 +37,28 @@ from __future__ import annotations
 import argparse
 import itertools
 import os
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from agents.policies import BASELINES, shipped_agents
 from eval import compare as compare_module
+from eval import runner  # runner.run_many, looked up at each call (tests stand in for it)
 from eval import suite as suite_module
+from eval.metrics import add_improvement, improvement, summarize, summary_table
 from eval.papers import estimation as estimation_module
 from eval.papers import ho2018 as ho2018_module
 from eval.papers import zhao2021 as zhao2021_module
 from eval.papers import zou2022 as zou2022_module
 from eval.papers.estimation import EXPERIMENTS, run_experiments
+from eval.report import (markdown_table, plot_error_time, plot_trajectory, write_records_csv,
+                         write_results_json)
+from eval.runner import ConfigError, RunConfig, check_configs
 from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
                            json_value, non_negative_int, positive_float, positive_int)
+from soft_gym.sensing.shape_dnn import ShapeDNNConfig
+from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
 
 
 DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
@@ -68,8 +77,6 @@ def _check_configs(parser: argparse.ArgumentParser, configs: list,
     """Check every run's configuration before the first run (:func:`eval.runner.check_configs`);
     a refusal is one ``parser.error`` line naming the option of the refused part (``options``:
     part -> option) and its value in the refused configuration."""
-    from eval.runner import ConfigError, check_configs
-
     try:
         check_configs(configs)
     except ConfigError as error:
@@ -96,11 +103,6 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     ``options``: the option naming each part of a configuration in errors (default
     :data:`TRACK_OPTIONS`; ``benchmark`` has its own).
     """
-    from eval.metrics import add_improvement, summarize, summary_table
-    from eval.report import markdown_table, plot_error_time, plot_trajectory, \
-        write_records_csv, write_results_json
-    from eval.runner import RunConfig, run_many
-
     out = Path(args.out)
     scenario, faults = args.scenario, args.faults  # parsed JSON (``json_value``)
     rows, records = [], {}
@@ -125,7 +127,7 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
         plot_trajectory(out / f"{label}_trajectory.png", record, label)
 
     print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
-    records_in_order = run_many(configs, workers=args.workers, progress=True, on_result=keep)
+    records_in_order = runner.run_many(configs, workers=args.workers, progress=True, on_result=keep)
     for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
         records[_track_label(policy, kp, seed)] = record
         rows.append((config.identity(), summarize(record)))
@@ -163,8 +165,6 @@ def _add_video_flag(parser: argparse.ArgumentParser) -> None:
 
 def _agents_against_first_gain(table: list[dict], kp: float) -> None:
     """SB3 agents have no K_p: their improvement is over ``cc_model`` at the first gain."""
-    from eval.metrics import improvement
-
     columns = {"improvement_%": "track_mean_mm", "improvement_last_%": "track_last_cycle_mm",
                "dev_improvement_last_%": "dev_last_cycle_mm"}
     for row in table:
@@ -181,8 +181,6 @@ def _check_baselines(parser: argparse.ArgumentParser, baselines: list[str],
                      check_agent=None) -> None:
     """``--baselines``: known baseline names or ``sb3:PATH``, before any work; ``check_agent``
     (the experiment module's ``check_baselines``) then tries each on the experiment's env."""
-    from agents.policies import BASELINES
-
     unknown = [name for name in baselines
                if name not in BASELINES and not (name.startswith("sb3:") and len(name) > 4)]
     if unknown:
@@ -227,8 +225,6 @@ def _benchmark_parser(sub) -> argparse.ArgumentParser:
 
 def _run_benchmark(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``benchmark``: ``track`` with the README's main job's fixed settings."""
-    from agents.policies import shipped_agents
-
     occluder = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
                 "start_s": 40.0}
     args = argparse.Namespace(
@@ -270,8 +266,6 @@ def _run_estimation(parser: argparse.ArgumentParser, args: argparse.Namespace) -
     experiments = list(EXPERIMENTS) if "all" in args.experiments else args.experiments
     rows = run_experiments(experiments, args.out, steps=args.steps, seed=args.seed,
                            **({"video": True} if args.video else {}))
-    from eval.report import markdown_table
-
     print(markdown_table(rows, float_format="{:.2f}"))
     print(f"output directory: {args.out}")
 
@@ -372,8 +366,6 @@ def _run_zhao2021(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         parser.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
                      f"{args.samples}")
     _check_baselines(parser, args.baselines, zhao2021_module.check_baselines)
-    from soft_gym.sensing.shape_reconstruction import ReconstructionConfig
-
     config = ReconstructionConfig(n_free=free, n_loaded=loaded,
                                   max_iterations=args.iterations)
     zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
@@ -401,8 +393,6 @@ def _zou2022_parser(sub) -> argparse.ArgumentParser:
 
 def _run_zou2022(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``zou2022``: the experiments with the given DNN data set and training."""
-    from soft_gym.sensing.shape_dnn import ShapeDNNConfig
-
     config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
     zou2022_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
                                   n_poses=args.poses)
@@ -447,9 +437,6 @@ COMPARE_OPTIONS = {"env_kwargs.path": "--paths", "env_kwargs.cycles": "--cycles"
 def _run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``compare``: check the options and every run, run (each run's CSV written as it
     finishes), print the table."""
-    from agents.policies import shipped_agents
-    from eval.runner import ConfigError
-
     policies = args.policies or (["cc_model", "hybrid_gpr"]
                                  + [f"sb3:{name}" for name in
                                     shipped_agents("SoftArmTrackWang2023-v0")])
@@ -468,8 +455,6 @@ def _run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> N
                  "--conditions": error.config.labels.get("condition"),
                  "--policies": error.config.policy, "--seeds": error.config.seed}[option]
         fail(parser, option, f"{shown!r} refused: {error.message}")
-    from eval.report import markdown_table
-
     print(markdown_table(rows, float_format="{:.2f}"))
     print(f"output directory: {args.out}")
 
@@ -506,8 +491,6 @@ def _suite_parser(sub) -> argparse.ArgumentParser:
 
 def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``suite``: check every option and the spec before any run, run, report."""
-    import sys
-
     backend = args.backend
     if args.address is not None and args.backend != "ray":
         parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
@@ -516,7 +499,7 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
         parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
                      "got ''")
     if args.backend == "ray":
-        from eval.suite import ray_backend
+        from eval.suite import ray_backend  # optional extra; importing it registers "ray"
 
         try:
             ray_backend.require_ray()
@@ -591,6 +574,7 @@ DISTINCT_OPTIONS = ("policies", "kp", "seeds", "paths", "conditions", "experimen
 
 
 def _check_distinct(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse (one line, exit 2) a list option that names a value twice."""
     for option in DISTINCT_OPTIONS:
         values = getattr(args, option, None)
         if isinstance(values, list) and len(set(values)) != len(values):

@@ -8,15 +8,18 @@ import copy
 from collections.abc import Mapping
 from typing import Any
 
+from tqdm import tqdm
+
+from agents.policies import SB3Policy, make_policy
+from eval.runner import uncalibrated_env_class
 from eval.suite.grid import Cell, arm_env, canonical_json, expand
 from eval.suite.spec import PolicyEntry, SuiteError, SuiteSpec
+
 
 class _EnvChecker:
     """Builds each distinct env configuration once (uncalibrated) and remembers the outcome."""
 
     def __init__(self) -> None:
-        from eval.runner import uncalibrated_env_class
-
         self.env_class = uncalibrated_env_class()
         self.errors: dict[str, str | None] = {}
         self.builds = 0
@@ -50,8 +53,6 @@ def check_suite(spec: SuiteSpec, progress: bool = False) -> list[Cell]:
         ValueError: (:class:`SuiteError`) naming the file, the key and the env's or policy's
             message.
     """
-    from tqdm import tqdm
-
     cells = expand(spec)
     checker = _EnvChecker()
     source = spec.source
@@ -101,8 +102,6 @@ def _raise_if(source: str, key: str, message: str | None) -> None:
 
 
 def _agent_error(name: str) -> str | None:
-    from agents.policies import SB3Policy
-
     try:
         SB3Policy.load(name[4:])
     except (ValueError, OSError) as error:
@@ -113,8 +112,6 @@ def _agent_error(name: str) -> str | None:
 def _policy_error(env, entry: PolicyEntry, seed: int) -> str | None:
     """A baseline's refusal of the entry's parameters on ``env``; ``None`` when it accepts them
     or refuses the arm itself (with its defaults too: an ``n/a`` run, not a suite error)."""
-    from agents.policies import make_policy
-
     params = {**entry.params, **{name: seed for name in entry.seed_params}}
     try:
         make_policy(entry.name, env=env, **params)

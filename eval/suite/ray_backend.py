@@ -57,7 +57,7 @@ def require_ray():
         ImportError: Ray is not installed (one line naming the extra to install).
     """
     try:
-        import ray
+        import ray  # here: an optional extra; the ImportError below names it
     except ImportError as error:
         raise ImportError(f"the ray backend needs Ray, an optional extra: {INSTALL_HINT}") \
             from error

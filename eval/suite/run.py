@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import math
+import multiprocessing
 import os
 import time
 import traceback
@@ -16,11 +17,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
+from tqdm import tqdm
 
+from eval.metrics import MM_PER_M, summarize
+from eval.runner import RunConfig, build, run_episode
 from eval.suite.check import check_suite
 from eval.suite.grid import Cell, expand, label_text
 from eval.suite.spec import SuiteSpec, load_suite
 from eval.suite.store import git_revision, is_finished, library_versions, records_dir, write_record
+
 
 class SuiteRunError(RuntimeError):
     """Runs that failed with an error other than a refusal (no record was written for them)."""
@@ -36,8 +42,6 @@ class SuiteRunError(RuntimeError):
 
 def cell_metrics(record: Mapping[str, np.ndarray]) -> dict[str, Any]:
     """The summary metrics of one run's per-step record (mm; see the module docstring)."""
-    from eval.metrics import MM_PER_M, summarize
-
     summary = summarize(record)
     track, deviation = summary["tracking"], summary["deviation"]
     feedback = np.linalg.norm(np.asarray(record["feedback_m"]) - np.asarray(record["tip_m"]),
@@ -69,8 +73,7 @@ def one_compute_thread() -> Iterator[None]:
     differently (lwpr_rwr and hybrid_gpr records differed in the tenth digit). On one thread a
     record is the same on every backend, worker count and machine.
     """
-    import torch
-    from threadpoolctl import threadpool_limits
+    import torch  # not at the top: +1.6 s for every python -m eval command (-X importtime)
 
     torch_threads = torch.get_num_threads()
     torch.set_num_threads(1)
@@ -89,8 +92,6 @@ def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
     ``"steps"`` (``None`` when n/a), or, for an error other than a refusal, ``status`` ``"error"``
     with the ``error`` and its ``traceback``.
     """
-    from eval.runner import RunConfig, build, run_episode
-
     start = time.perf_counter()
     config = task["config"]
     result = {"key": task["key"], "suite": task["suite"], "labels": dict(task["labels"]),
@@ -141,8 +142,6 @@ def process_map(fn: Callable[[Any], Any], items: Sequence[Any],
     if workers == 1 or len(items) <= 1:
         yield from serial_map(fn, items)
         return
-    import multiprocessing
-
     context = multiprocessing.get_context("spawn")
     pending_items = iter(items)
     with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=context) as pool:
@@ -212,8 +211,6 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
         ValueError: a bad argument or suite (before any run).
         SuiteRunError: some runs failed with an error other than a refusal (after the others).
     """
-    from tqdm import tqdm
-
     if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     if isinstance(backend, str):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import importlib
 import inspect
 import os
 import re
@@ -20,6 +21,14 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+
+import soft_gym.sensing.feedback  # noqa: F401  (registers the feedback sources)
+from agents.policies import BASELINES
+from eval.compare import policy_label
+from soft_gym.envs.soft_arm_env import SoftArmEnv
+from soft_gym.robots.presets import PRESETS
+from soft_gym.sensing.feedback_base import FEEDBACK_SOURCES
+from soft_gym.tasks.paths import PATH_SHAPES
 
 SUITES_DIR = Path(__file__).resolve().parents[1] / "suites"
 """The bundled suites, ``<name>.yaml``."""
@@ -42,8 +51,6 @@ _NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 
 
 def _env_keys() -> tuple[str, ...]:
-    from soft_gym.envs.soft_arm_env import SoftArmEnv
-
     names = [name for name in inspect.signature(SoftArmEnv.__init__).parameters
              if name != "self"]
     return tuple(name for name in names
@@ -171,12 +178,6 @@ def load_suite(spec: str | os.PathLike) -> SuiteSpec:
 
 def parse_suite(data: Any, source: str = "<suite>", text: str | None = None) -> SuiteSpec:
     """A :class:`SuiteSpec` from the parsed YAML ``data`` (``source`` names it in errors)."""
-    from agents.policies import BASELINES
-    from soft_gym.robots.presets import PRESETS
-    from soft_gym.sensing.feedback_base import FEEDBACK_SOURCES
-    from soft_gym.tasks.paths import PATH_SHAPES
-    import soft_gym.sensing.feedback  # noqa: F401  (registers the feedback sources)
-
     if text is None:
         text = yaml.safe_dump(data, sort_keys=False)
     _mapping(source, "", data, TOP_KEYS, required=("name", "seeds", "arms"))
@@ -294,8 +295,6 @@ def _env_block(source: str, key: str, value: Any, allow_feedback: bool) -> dict[
 
 
 def _baseline_parameters(name: str, baselines: Mapping[str, str]) -> list[str]:
-    import importlib
-
     module_name, class_name = baselines[name].split(":")
     cls = getattr(importlib.import_module(module_name), class_name)
     return [p for p in inspect.signature(cls.__init__).parameters if p not in ("self", "env")]
@@ -303,8 +302,6 @@ def _baseline_parameters(name: str, baselines: Mapping[str, str]) -> list[str]:
 
 def _policies(source: str, key: str, value: Any,
               baselines: Mapping[str, str]) -> tuple[PolicyEntry, ...]:
-    from eval.compare import policy_label
-
     if not isinstance(value, list) or not value:
         raise SuiteError(source, key, f"must be a non-empty list of policies: names from "
                                       f"{sorted(baselines)}, sb3:PATH, or mappings with keys "

@@ -10,16 +10,18 @@ import platform
 import subprocess
 import tempfile
 from collections.abc import Callable, Mapping
+from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from eval.report import to_jsonable
+
+
 def library_versions() -> dict[str, str]:
     """Versions of the package and the libraries a record depends on (``"unknown"`` where a
     package is not installed)."""
-    from importlib import metadata
-
     versions = {}
     for key, dist in (("soft_arm_gym", "soft-arm-gym"), ("gymnasium", "gymnasium"),
                       ("stable_baselines3", "stable-baselines3"), ("torch", "torch"),
@@ -111,8 +113,6 @@ def _atomic_write(path: Path, write: Callable[[Any], None], binary: bool) -> Non
 def write_record(out: str | os.PathLike, result: Mapping[str, Any]) -> Path:
     """Write one finished run: its per-step arrays (if any) and then its JSON record, each
     atomically. Returns the JSON record's path."""
-    from eval.report import to_jsonable
-
     key = result["key"]
     steps = result.get("steps")
     record = {k: v for k, v in result.items() if k not in ("steps", "error", "traceback")}
