@@ -37,13 +37,28 @@ from __future__ import annotations
 import argparse
 import itertools
 import os
+import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, NamedTuple
 
+from agents.policies import BASELINES, shipped_agents
 from eval import compare as compare_module
-from eval import estimation as estimation_module
-from eval.estimation import EXPERIMENTS, run_experiments
+from eval import runner  # runner.run_many, looked up at each call (tests stand in for it)
+from eval import suite as suite_module
+from eval.metrics import add_improvement, improvement, summarize, summary_table
+from eval.papers import estimation as estimation_module
+from eval.papers import ho2018 as ho2018_module
+from eval.papers import zhao2021 as zhao2021_module
+from eval.papers import zou2022 as zou2022_module
+from eval.papers.estimation import EXPERIMENTS, run_experiments
+from eval.report import (markdown_table, plot_error_time, plot_trajectory, write_records_csv,
+                         write_results_json)
+from eval.runner import ConfigError, RunConfig, check_configs
 from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
                            json_value, non_negative_int, positive_float, positive_int)
+from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
+from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
 
 DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
@@ -62,8 +77,6 @@ def _check_configs(parser: argparse.ArgumentParser, configs: list,
     """Check every run's configuration before the first run (:func:`eval.runner.check_configs`);
     a refusal is one ``parser.error`` line naming the option of the refused part (``options``:
     part -> option) and its value in the refused configuration."""
-    from eval.runner import ConfigError, check_configs
-
     try:
         check_configs(configs)
     except ConfigError as error:
@@ -90,11 +103,6 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     ``options``: the option naming each part of a configuration in errors (default
     :data:`TRACK_OPTIONS`; ``benchmark`` has its own).
     """
-    from eval.metrics import add_improvement, summarize, summary_table
-    from eval.report import markdown_table, plot_error_time, plot_trajectory, \
-        write_records_csv, write_results_json
-    from eval.runner import RunConfig, run_many
-
     out = Path(args.out)
     scenario, faults = args.scenario, args.faults  # parsed JSON (``json_value``)
     rows, records = [], {}
@@ -119,7 +127,7 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
         plot_trajectory(out / f"{label}_trajectory.png", record, label)
 
     print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
-    records_in_order = run_many(configs, workers=args.workers, progress=True, on_result=keep)
+    records_in_order = runner.run_many(configs, workers=args.workers, progress=True, on_result=keep)
     for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
         records[_track_label(policy, kp, seed)] = record
         rows.append((config.identity(), summarize(record)))
@@ -157,8 +165,6 @@ def _add_video_flag(parser: argparse.ArgumentParser) -> None:
 
 def _agents_against_first_gain(table: list[dict], kp: float) -> None:
     """SB3 agents have no K_p: their improvement is over ``cc_model`` at the first gain."""
-    from eval.metrics import improvement
-
     columns = {"improvement_%": "track_mean_mm", "improvement_last_%": "track_last_cycle_mm",
                "dev_improvement_last_%": "dev_last_cycle_mm"}
     for row in table:
@@ -175,8 +181,6 @@ def _check_baselines(parser: argparse.ArgumentParser, baselines: list[str],
                      check_agent=None) -> None:
     """``--baselines``: known baseline names or ``sb3:PATH``, before any work; ``check_agent``
     (the experiment module's ``check_baselines``) then tries each on the experiment's env."""
-    from agents.policies import BASELINES
-
     unknown = [name for name in baselines
                if name not in BASELINES and not (name.startswith("sb3:") and len(name) > 4)]
     if unknown:
@@ -207,82 +211,37 @@ def _add_workers(parser: argparse.ArgumentParser) -> None:
                         help="runs in parallel processes, >= 1 (up to 2 helps, one per core)")
 
 
-def _suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    """``suite``: check every option and the spec before any run, run, report."""
-    import sys
-
-    from eval import suite as suite_module
-    from eval import suite_report
-
-    if args.out is not None:
-        check_output_dir(parser, "--out", args.out)
-    backend = args.backend
-    if args.address is not None and args.backend != "ray":
-        parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
-                     f"{args.backend}")
-    if args.address is not None and not args.address.strip():
-        parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
-                     "got ''")
-    if args.backend == "ray":
-        from eval import suite_ray
-
-        try:
-            suite_ray.require_ray()
-        except ImportError as error:
-            parser.error(f"--backend ray: {error}")
-        backend = suite_ray.make_ray_map(args.address)
-    if args.seeds is not None and (any(seed < 0 for seed in args.seeds)
-                                   or len(set(args.seeds)) != len(args.seeds)):
-        parser.error(f"--seeds must be distinct integers >= 0, got {args.seeds}")
-    if args.report_only and args.resume:
-        parser.error("--resume runs the missing runs; --report-only runs none: give one")
-    try:
-        suite_report.require_rliable()
-    except ImportError as error:
-        parser.error(str(error))
-    try:
-        spec = suite_module.load_suite(args.spec)
-        if args.seeds is not None:
-            spec = spec.with_seeds(args.seeds)
-        cells = (suite_module.expand(spec) if args.report_only
-                 else suite_module.check_suite(spec, progress=True))
-    except ValueError as error:
-        parser.error(f"spec: {error}")
-    out = Path(args.out or f"results/suite_{spec.name}")
-    if args.out is None:
-        check_output_dir(parser, "--out", out)
-    if args.report_only and not suite_module.records_dir(out).is_dir():
-        parser.error(f"--report-only: no records under {out} (give the --out of a suite run)")
-    failure = None
-    if not args.report_only:
-        finished = (sum(suite_module.is_finished(out, cell.key) for cell in cells)
-                    if args.resume else 0)
-        print(f"{len(cells)} runs ({finished} already done) on {args.workers} worker(s)",
-              flush=True)
-        try:
-            suite_module.run_suite(spec, out, workers=args.workers, resume=args.resume,
-                                   progress=True, check=False, backend=backend)
-        except suite_module.SuiteRunError as error:
-            failure = error
-    print(suite_report.write_report(spec, out, cells=cells))
-    if failure is not None:
-        print(f"error: {failure}", file=sys.stderr)
-    print(f"output directory: {out}")
-    if failure is not None:
-        raise SystemExit(1)
-
-
-def main(argv: list[str] | None = None) -> None:
-    """``python -m eval``: parse and check every option (one-line errors, exit 2), then run."""
-    parser = argparse.ArgumentParser(prog="python -m eval", description=__doc__,
-                                     formatter_class=HelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True)
+# ------------------------------------------------------------------------------------ benchmark
+def _benchmark_parser(sub) -> argparse.ArgumentParser:
+    """The ``benchmark`` subcommand's parser (its runs are fixed)."""
     benchmark = sub.add_parser("benchmark", help="the small embedded default comparison",
                                formatter_class=HelpFormatter)
     benchmark.add_argument("--out", default="results/benchmark",
                            help="output directory (made; must be writable)")
     _add_workers(benchmark)
     _add_video_flag(benchmark)
+    return benchmark
+
+
+def _run_benchmark(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``benchmark``: ``track`` with the README's main job's fixed settings."""
+    occluder = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
+                "start_s": 40.0}
+    args = argparse.Namespace(
+        policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in
+                                               shipped_agents("SoftArmTrackWang2023-v0")],
+        kp=[0.06], preset="wang2023", path="circle",
+        cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": 0.01},
+        faults=occluder, seeds=[0], out=args.out, workers=args.workers,
+        video=args.video)
+    # benchmark's settings are fixed: a refusal names the part (a shipped agent, ...)
+    _track(args, parser, options={})
+    print(f"output directory: {args.out}")
+
+
+# ----------------------------------------------------------------------------------- estimation
+def _estimation_parser(sub) -> argparse.ArgumentParser:
+    """The ``estimation`` subcommand's parser."""
     estimation = sub.add_parser("estimation", help="wang2023 estimation experiments",
                                 description=estimation_module.__doc__,
                                 formatter_class=HelpFormatter)
@@ -296,6 +255,24 @@ def main(argv: list[str] | None = None) -> None:
     estimation.add_argument("--out", default="results/estimation",
                             help="output directory (made; must be writable)")
     _add_video_flag(estimation)
+    return estimation
+
+
+def _run_estimation(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``estimation``: the chosen experiments, then their table."""
+    if args.steps < 600:
+        parser.error(f"--steps must be >= 600 (the F-emp calibration alone takes 450), "
+                     f"got {args.steps}")
+    experiments = list(EXPERIMENTS) if "all" in args.experiments else args.experiments
+    rows = run_experiments(experiments, args.out, steps=args.steps, seed=args.seed,
+                           **({"video": True} if args.video else {}))
+    print(markdown_table(rows, float_format="{:.2f}"))
+    print(f"output directory: {args.out}")
+
+
+# ---------------------------------------------------------------------------------------- track
+def _track_parser(sub) -> argparse.ArgumentParser:
+    """The ``track`` subcommand's parser."""
     track = sub.add_parser("track", help="baselines tracking a path",
                            formatter_class=HelpFormatter)
     track.add_argument("--policies", nargs="+", default=["cc_model", "hybrid_gpr"],
@@ -324,8 +301,18 @@ def main(argv: list[str] | None = None) -> None:
                        help="output directory (made; must be writable)")
     _add_workers(track)
     _add_video_flag(track)
-    from eval import ho2018 as ho2018_module
+    return track
 
+
+def _run_track(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``track``: every run checked, then run (:func:`_track`)."""
+    _track(args, parser)
+    print(f"output directory: {args.out}")
+
+
+# --------------------------------------------------------------------------------------- ho2018
+def _ho2018_parser(sub) -> argparse.ArgumentParser:
+    """The ``ho2018`` subcommand's parser."""
     ho2018 = _paper_parser(sub, "ho2018", ho2018_module,
                            "ho2018 static and varying tip-load experiments",
                            "seeds (pre-training waypoints and episode)")
@@ -340,8 +327,21 @@ def main(argv: list[str] | None = None) -> None:
                              "[0, 3600]")
     ho2018.add_argument("--out", default="results/ho2018",
                         help="output directory (made; must be writable)")
-    from eval import zhao2021 as zhao2021_module
+    return ho2018
 
+
+def _run_ho2018(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``ho2018``: the further baselines checked, then the experiments."""
+    _check_baselines(parser, args.baselines, ho2018_module.check_baselines)
+    ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
+                                 cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
+                                 baselines=tuple(args.baselines))
+    print(f"output directory: {args.out}")
+
+
+# ------------------------------------------------------------------------------------- zhao2021
+def _zhao2021_parser(sub) -> argparse.ArgumentParser:
+    """The ``zhao2021`` subcommand's parser."""
     zhao2021 = _paper_parser(sub, "zhao2021", zhao2021_module,
                              "zhao2021 shape reconstruction and local-IK control experiments",
                              "seeds (exploration, training and episodes)")
@@ -356,8 +356,26 @@ def main(argv: list[str] | None = None) -> None:
                                "e.g. lwpr_rwr cc_model sb3:PATH")
     zhao2021.add_argument("--out", default="results/zhao2021",
                           help="output directory (made; must be writable)")
-    from eval import zou2022 as zou2022_module
+    return zhao2021
 
+
+def _run_zhao2021(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``zhao2021``: the sample counts and further baselines checked, then the experiments."""
+    free, loaded = args.samples
+    if free + loaded < 24:
+        parser.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
+                     f"{args.samples}")
+    _check_baselines(parser, args.baselines, zhao2021_module.check_baselines)
+    config = ReconstructionConfig(n_free=free, n_loaded=loaded,
+                                  max_iterations=args.iterations)
+    zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
+                                   baselines=tuple(args.baselines))
+    print(f"output directory: {args.out}")
+
+
+# -------------------------------------------------------------------------------------- zou2022
+def _zou2022_parser(sub) -> argparse.ArgumentParser:
+    """The ``zou2022`` subcommand's parser."""
     zou2022 = _paper_parser(sub, "zou2022", zou2022_module,
                             "zou2022 shape estimation (RSES, ASES, DNN) and control with each "
                             "shape source", "seeds (exploration, training, sensor noise, poses)")
@@ -370,6 +388,20 @@ def main(argv: list[str] | None = None) -> None:
                          help="random poses of the ASES fault experiment (>= 1)")
     zou2022.add_argument("--out", default="results/zou2022",
                          help="output directory (made; must be writable)")
+    return zou2022
+
+
+def _run_zou2022(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``zou2022``: the experiments with the given DNN data set and training."""
+    config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
+    zou2022_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
+                                  n_poses=args.poses)
+    print(f"output directory: {args.out}")
+
+
+# -------------------------------------------------------------------------------------- compare
+def _compare_parser(sub) -> argparse.ArgumentParser:
+    """The ``compare`` subcommand's parser."""
     compare = sub.add_parser(
         "compare", help="SB3 agents against the baselines, nominal and out of distribution",
         description=compare_module.__doc__, formatter_class=HelpFormatter)
@@ -392,8 +424,44 @@ def main(argv: list[str] | None = None) -> None:
                          help="output directory (made; must be writable)")
     _add_workers(compare)
     _add_video_flag(compare)
-    from eval import suite as suite_module
+    return compare
 
+
+COMPARE_OPTIONS = {"env_kwargs.path": "--paths", "env_kwargs.cycles": "--cycles",
+                   "env_kwargs.feedback": "--feedback", "env_kwargs.scenario": "--conditions",
+                   "env_kwargs.faults": "--conditions", "policy": "--policies",
+                   "policy_params": "--kp", "seed": "--seeds"}
+"""The part of a run configuration -> the ``compare`` option that sets it."""
+
+
+def _run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``compare``: check the options and every run, run (each run's CSV written as it
+    finishes), print the table."""
+    policies = args.policies or (["cc_model", "hybrid_gpr"]
+                                 + [f"sb3:{name}" for name in
+                                    shipped_agents("SoftArmTrackWang2023-v0")])
+    if args.feedback not in ("fused", "camera") and "occlusion" in args.conditions:
+        parser.error("the occlusion condition needs camera feedback: --feedback fused or "
+                     f"camera, got {args.feedback!r}")
+    try:
+        rows = compare_module.run_comparison(
+            policies, args.paths, args.conditions, args.seeds, args.out, cycles=args.cycles,
+            feedback=args.feedback, kp=args.kp, workers=args.workers,
+            **({"video": True} if args.video else {}), check=True)
+    except ConfigError as error:
+        option = COMPARE_OPTIONS.get(error.part, "--policies")
+        shown = {"--paths": error.config.env_kwargs.get("path"), "--kp": args.kp,
+                 "--feedback": args.feedback, "--cycles": args.cycles,
+                 "--conditions": error.config.labels.get("condition"),
+                 "--policies": error.config.policy, "--seeds": error.config.seed}[option]
+        fail(parser, option, f"{shown!r} refused: {error.message}")
+    print(markdown_table(rows, float_format="{:.2f}"))
+    print(f"output directory: {args.out}")
+
+
+# ---------------------------------------------------------------------------------------- suite
+def _suite_parser(sub) -> argparse.ArgumentParser:
+    """The ``suite`` subcommand's parser."""
     suite = sub.add_parser(
         "suite", help="the four-arm benchmark suite of a YAML spec: leaderboard, IQM with "
         "bootstrap CIs, performance profiles", description=suite_module.__doc__,
@@ -418,115 +486,113 @@ def main(argv: list[str] | None = None) -> None:
                        help="with --backend ray: an existing Ray cluster (auto, "
                             "ray://host:10001, host:6379); the package must be importable on "
                             "every node. Default: a local Ray")
-    args = parser.parse_args(argv)
-    subparsers = {"benchmark": benchmark, "estimation": estimation, "track": track,
-                  "ho2018": ho2018, "zhao2021": zhao2021, "zou2022": zou2022,
-                  "compare": compare, "suite": suite}
-    command = subparsers[args.command]
-    for option in ("policies", "kp", "seeds", "paths", "conditions", "experiments", "baselines"):
+    return suite
+
+
+def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``suite``: check every option and the spec before any run, run, report."""
+    backend = args.backend
+    if args.address is not None and args.backend != "ray":
+        parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
+                     f"{args.backend}")
+    if args.address is not None and not args.address.strip():
+        parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
+                     "got ''")
+    if args.backend == "ray":
+        from eval.suite import ray_backend  # optional extra; importing it registers "ray"
+
+        try:
+            ray_backend.require_ray()
+        except ImportError as error:
+            parser.error(f"--backend ray: {error}")
+        backend = ray_backend.make_ray_map(args.address)
+    if args.seeds is not None and (any(seed < 0 for seed in args.seeds)
+                                   or len(set(args.seeds)) != len(args.seeds)):
+        parser.error(f"--seeds must be distinct integers >= 0, got {args.seeds}")
+    if args.report_only and args.resume:
+        parser.error("--resume runs the missing runs; --report-only runs none: give one")
+    try:
+        suite_module.require_rliable()
+    except ImportError as error:
+        parser.error(str(error))
+    try:
+        spec = suite_module.load_suite(args.spec)
+        if args.seeds is not None:
+            spec = spec.with_seeds(args.seeds)
+        cells = (suite_module.expand(spec) if args.report_only
+                 else suite_module.check_suite(spec, progress=True))
+    except ValueError as error:
+        parser.error(f"spec: {error}")
+    out = Path(args.out or f"results/suite_{spec.name}")
+    if args.out is None:
+        check_output_dir(parser, "--out", out)
+    if args.report_only and not suite_module.records_dir(out).is_dir():
+        parser.error(f"--report-only: no records under {out} (give the --out of a suite run)")
+    failure = None
+    if not args.report_only:
+        finished = (sum(suite_module.is_finished(out, cell.key) for cell in cells)
+                    if args.resume else 0)
+        print(f"{len(cells)} runs ({finished} already done) on {args.workers} worker(s)",
+              flush=True)
+        try:
+            suite_module.run_suite(spec, out, workers=args.workers, resume=args.resume,
+                                   progress=True, check=False, backend=backend)
+        except suite_module.SuiteRunError as error:
+            failure = error
+    print(suite_module.write_report(spec, out, cells=cells))
+    if failure is not None:
+        print(f"error: {failure}", file=sys.stderr)
+    print(f"output directory: {out}")
+    if failure is not None:
+        raise SystemExit(1)
+
+
+# ------------------------------------------------------------------------------------- dispatch
+class Command(NamedTuple):
+    """One subcommand: ``add_parser(subparsers)`` adds and returns its parser; ``run(parser,
+    args)`` checks what the parser cannot and does the work (``parser.error`` for one-line
+    errors)."""
+
+    add_parser: Callable[[Any], argparse.ArgumentParser]
+    run: Callable[[argparse.ArgumentParser, argparse.Namespace], None]
+
+
+COMMANDS: dict[str, Command] = {
+    "benchmark": Command(_benchmark_parser, _run_benchmark),
+    "estimation": Command(_estimation_parser, _run_estimation),
+    "track": Command(_track_parser, _run_track),
+    "ho2018": Command(_ho2018_parser, _run_ho2018),
+    "zhao2021": Command(_zhao2021_parser, _run_zhao2021),
+    "zou2022": Command(_zou2022_parser, _run_zou2022),
+    "compare": Command(_compare_parser, _run_compare),
+    "suite": Command(_suite_parser, _run_suite),
+}
+"""Subcommand name -> its parser and its work, in the order ``--help`` lists them."""
+
+DISTINCT_OPTIONS = ("policies", "kp", "seeds", "paths", "conditions", "experiments", "baselines")
+"""List options whose values must not repeat (each run once)."""
+
+
+def _check_distinct(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse (one line, exit 2) a list option that names a value twice."""
+    for option in DISTINCT_OPTIONS:
         values = getattr(args, option, None)
         if isinstance(values, list) and len(set(values)) != len(values):
-            command.error(f"--{option} must be distinct (each run once), got {values}")
-    if args.command == "suite":
-        _suite(suite, args)
-        return
-    check_output_dir(command, "--out", args.out)
-    if args.command == "ho2018":
-        _check_baselines(ho2018, args.baselines, ho2018_module.check_baselines)
-        ho2018_module.run_and_report(args.experiments, args.seeds, args.out,
-                                     cycle_s=args.cycle_s, lead_in_s=args.lead_in_s,
-                                     baselines=tuple(args.baselines))
-        print(f"output directory: {args.out}")
-        return
-    if args.command == "zhao2021":
-        free, loaded = args.samples
-        if free + loaded < 24:
-            zhao2021.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
-                           f"{args.samples}")
-        _check_baselines(zhao2021, args.baselines, zhao2021_module.check_baselines)
-        from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
-
-        config = ReconstructionConfig(n_free=free, n_loaded=loaded,
-                                      max_iterations=args.iterations)
-        zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
-                                       baselines=tuple(args.baselines))
-        print(f"output directory: {args.out}")
-        return
-    if args.command == "zou2022":
-        from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
-
-        config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
-        zou2022_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
-                                      n_poses=args.poses)
-        print(f"output directory: {args.out}")
-        return
-    if args.command == "compare":
-        _compare(compare, args)
-        return
-    if args.command == "benchmark":
-        from agents.policies import shipped_agents
-
-        occluder = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
-                    "start_s": 40.0}
-        args = argparse.Namespace(
-            policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in
-                                                   shipped_agents("SoftArmTrackWang2023-v0")],
-            kp=[0.06], preset="wang2023", path="circle",
-            cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": 0.01},
-            faults=occluder, seeds=[0], out=args.out, workers=args.workers,
-            video=args.video)
-        # benchmark's settings are fixed: a refusal names the part (a shipped agent, ...)
-        _track(args, benchmark, options={})
-    elif args.command == "estimation":
-        if args.steps < 600:
-            estimation.error(f"--steps must be >= 600 (the F-emp calibration alone takes 450), "
-                             f"got {args.steps}")
-        experiments = list(EXPERIMENTS) if "all" in args.experiments else args.experiments
-        rows = run_experiments(experiments, args.out, steps=args.steps, seed=args.seed,
-                               **({"video": True} if args.video else {}))
-        from eval.report import markdown_table
-
-        print(markdown_table(rows, float_format="{:.2f}"))
-    else:
-        _track(args, track)
-    print(f"output directory: {args.out}")
+            parser.error(f"--{option} must be distinct (each run once), got {values}")
 
 
-COMPARE_OPTIONS = {"env_kwargs.path": "--paths", "env_kwargs.cycles": "--cycles",
-                   "env_kwargs.feedback": "--feedback", "env_kwargs.scenario": "--conditions",
-                   "env_kwargs.faults": "--conditions", "policy": "--policies",
-                   "policy_params": "--kp", "seed": "--seeds"}
-"""The part of a run configuration -> the ``compare`` option that sets it."""
-
-
-def _compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    """``compare``: check the options and every run, run (each run's CSV written as it
-    finishes), print the table."""
-    from agents.policies import shipped_agents
-    from eval.runner import ConfigError
-
-    policies = args.policies or (["cc_model", "hybrid_gpr"]
-                                 + [f"sb3:{name}" for name in
-                                    shipped_agents("SoftArmTrackWang2023-v0")])
-    if args.feedback not in ("fused", "camera") and "occlusion" in args.conditions:
-        parser.error("the occlusion condition needs camera feedback: --feedback fused or "
-                     f"camera, got {args.feedback!r}")
-    try:
-        rows = compare_module.run_comparison(
-            policies, args.paths, args.conditions, args.seeds, args.out, cycles=args.cycles,
-            feedback=args.feedback, kp=args.kp, workers=args.workers,
-            **({"video": True} if args.video else {}), check=True)
-    except ConfigError as error:
-        option = COMPARE_OPTIONS.get(error.part, "--policies")
-        shown = {"--paths": error.config.env_kwargs.get("path"), "--kp": args.kp,
-                 "--feedback": args.feedback, "--cycles": args.cycles,
-                 "--conditions": error.config.labels.get("condition"),
-                 "--policies": error.config.policy, "--seeds": error.config.seed}[option]
-        fail(parser, option, f"{shown!r} refused: {error.message}")
-    from eval.report import markdown_table
-
-    print(markdown_table(rows, float_format="{:.2f}"))
-    print(f"output directory: {args.out}")
+def main(argv: list[str] | None = None) -> None:
+    """``python -m eval``: parse and check every option (one-line errors, exit 2), then run."""
+    parser = argparse.ArgumentParser(prog="python -m eval", description=__doc__,
+                                     formatter_class=HelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    parsers = {name: command.add_parser(sub) for name, command in COMMANDS.items()}
+    args = parser.parse_args(argv)
+    command_parser = parsers[args.command]
+    _check_distinct(command_parser, args)
+    if args.out is not None:  # suite's default output directory is checked once the spec is read
+        check_output_dir(command_parser, "--out", args.out)
+    COMMANDS[args.command].run(command_parser, args)
 
 
 if __name__ == "__main__":

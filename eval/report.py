@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping, Sequence
+from importlib import metadata
 from pathlib import Path
 from typing import Any, Optional, Union
 
@@ -219,11 +220,9 @@ def write_json(path: PathLike, obj: Any) -> Path:
 def package_version() -> str:
     """The installed version of soft-arm-gym (``importlib.metadata``), or ``"unknown"`` when
     the package is not installed (run from a bare checkout)."""
-    from importlib.metadata import PackageNotFoundError, version
-
     try:
-        return version("soft-arm-gym")
-    except PackageNotFoundError:
+        return metadata.version("soft-arm-gym")
+    except metadata.PackageNotFoundError:
         return "unknown"
 
 

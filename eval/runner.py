@@ -20,7 +20,11 @@ bad run late in a batch fails before the first one starts; :func:`run_many` hand
 
 from __future__ import annotations
 
+import copy
 import functools
+import json
+import multiprocessing
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -30,7 +34,10 @@ import numpy as np
 from tqdm import tqdm
 
 import soft_gym  # noqa: F401  (registers the env ids)
-from agents.policies import BaselinePolicy, SB3Policy, make_policy
+from agents.policies import BASELINES, BaselinePolicy, SB3Policy, make_policy
+from eval.video import VideoWriter
+from soft_gym.envs.rendering import check_panels, default_panels, render_frame
+from soft_gym.envs.soft_arm_env import SoftArmEnv
 from soft_gym.tasks.paths import cycle_index
 
 
@@ -148,16 +155,11 @@ class _EpisodeVideo:
     """Frames of one episode streamed into a video file."""
 
     def __init__(self, env: gym.Env, path: str | Path, panels: Sequence[str] | None) -> None:
-        from eval.video import VideoWriter
-        from soft_gym.envs.rendering import check_panels, default_panels
-
         self.env = env
         self.panels = default_panels(env) if panels is None else check_panels(env, panels)
         self.writer = VideoWriter(path, env.unwrapped.metadata["render_fps"])
 
     def capture(self) -> None:
-        from soft_gym.envs.rendering import render_frame
-
         self.writer.append(render_frame(self.env, self.panels))
 
     def close(self) -> Path:
@@ -212,9 +214,6 @@ def run_many(configs: list[RunConfig], workers: int = 1, progress: bool = False,
             if on_result is not None:
                 on_result(index, records[index])
         return records
-    import multiprocessing
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-
     context = multiprocessing.get_context("spawn")
     bar = tqdm(total=len(configs), desc="runs", disable=not progress)
     first_error: BaseException | None = None
@@ -263,8 +262,6 @@ class ConfigError(ValueError):
 def make_uncalibrated_env(env_id: str, kwargs: dict[str, Any]) -> gym.Env:
     """The env of ``env_id`` with ``kwargs``, with every argument check and its simulator but no
     feedback calibration (the runs calibrate, cached on disk)."""
-    import copy
-
     try:
         spec = gym.spec(env_id)
     except gym.error.Error as error:
@@ -283,8 +280,6 @@ def make_uncalibrated_env(env_id: str, kwargs: dict[str, Any]) -> gym.Env:
 def uncalibrated_env_class():
     """:class:`SoftArmEnv` with every argument check and its simulator but no feedback
     calibration: what the runners and :mod:`eval.suite` build to check configurations."""
-    from soft_gym.envs.soft_arm_env import SoftArmEnv
-
     class UncalibratedEnv(SoftArmEnv):
         def _calibrate(self, use_cache: bool) -> None:  # the runs calibrate (cached on disk)
             pass
@@ -300,8 +295,6 @@ class _Checker:
 
     @staticmethod
     def _key(env_id: str, kwargs: dict[str, Any]) -> str:
-        import json
-
         return json.dumps([env_id, kwargs], sort_keys=True, default=repr)
 
     def env_error(self, env_id: str, kwargs: dict[str, Any]) -> str | None:
@@ -356,8 +349,6 @@ def check_configs(configs: Sequence[RunConfig], progress: bool = False) -> None:
     Raises:
         ConfigError: the first configuration refused, with the part refused and the message.
     """
-    from agents.policies import SB3Policy
-
     checker = _Checker()
     agents: dict[str, Any] = {}
     made: set[str] = set()
@@ -399,8 +390,6 @@ def check_configs(configs: Sequence[RunConfig], progress: bool = False) -> None:
 def _check_baseline(index: int, config: RunConfig, env: gym.Env) -> None:
     """Make the baseline of ``config`` on ``env``; a refusal of its name or parameters raises
     :class:`ConfigError`."""
-    from agents.policies import BASELINES
-
     if config.policy not in BASELINES:
         raise ConfigError(index, config, "policy",
                           f"policy must be one of {sorted(BASELINES)} or sb3:PATH, got "
@@ -421,8 +410,6 @@ def agent_error(name: str, env_id: str, env_kwargs: dict[str, Any]) -> str | Non
     ``env_kwargs`` plus the agent's own interface (a path that holds no model, another
     observation or action space), or ``None`` when it can. The env is built without calibrating
     its feedback, and closed."""
-    from agents.policies import SB3Policy
-
     try:
         policy = SB3Policy.load(name[4:])
         env = make_uncalibrated_env(env_id, {**env_kwargs, **policy.env_interface})

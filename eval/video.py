@@ -19,7 +19,7 @@ import numpy as np
 def ffmpeg_available() -> bool:
     """Whether imageio can write MP4 (the ``imageio-ffmpeg`` package and its ffmpeg binary)."""
     try:
-        import imageio_ffmpeg
+        import imageio_ffmpeg  # here: may be missing (GIF then); +24 ms per eval.runner import
 
         return bool(imageio_ffmpeg.get_ffmpeg_exe())
     except Exception:  # not installed, or no binary for this platform
@@ -75,7 +75,7 @@ class VideoWriter:
         self.frames += 1
 
     def _open(self, shape: tuple[int, ...]) -> None:
-        import imageio.v2 as imageio
+        import imageio.v2 as imageio  # here: +33 ms for every eval.runner import (-X importtime)
 
         self._shape = shape
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -120,7 +120,7 @@ def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float,
 
 def read_video(path: str | Path) -> np.ndarray:
     """All frames of a video written here, (n, H, W, 3) ``uint8`` (for tests and checks)."""
-    import imageio.v2 as imageio
+    import imageio.v2 as imageio  # here: +33 ms for every eval.runner import (-X importtime)
 
     path = Path(path)
     if path.suffix == ".gif":

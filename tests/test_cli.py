@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import eval.__main__ as eval_main
-import eval.estimation as estimation
+import eval.papers.estimation as estimation
 from soft_gym import demo
 from train import ship
 from train.__main__ import main as train_main

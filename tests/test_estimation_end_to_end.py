@@ -4,7 +4,7 @@ tip error against the simulator's true tip.
 One short run of the simulator (no camera: rendering and tracking would cost ~20 ms a step) drives
 the wang2023 arm through the pipeline's calibration spiral (``N_INIT`` steps that initialise
 F-emp, as :meth:`soft_gym.sensing.wang2023.pipeline.SensingPipeline.calibrate` does) and then through the
-estimation spiral of :mod:`eval.estimation`, reading the default FBG fiber (1 pm noise) every
+estimation spiral of :mod:`eval.papers.estimation`, reading the default FBG fiber (1 pm noise) every
 0.05 s step. The reference of every check is the simulator's true tip (``sim.tip_pose()``),
 never anything computed from the fiber.
 
@@ -25,7 +25,7 @@ Two properties that no other default-suite test checks against the true tip:
   the old condition, an OS-ELM without forgetting carries all of them and follows the change at
   a rate of 1/n; with forgetting the old samples fade as ``w^k``. Labels are the true tip
   position plus ``LABEL_NOISE_M`` of Gaussian noise per axis, a stand-in for the camera
-  estimates the pipeline labels F-emp with (its mean error is ~0.8 mm, eval/estimation.py).
+  estimates the pipeline labels F-emp with (its mean error is ~0.8 mm, eval/papers/estimation.py).
 * **The fiber's strain model** (:mod:`soft_gym.sensors.fbg`, eq. (F1): the helix factor
   ``cos^2 a - nu sin^2 a = -0.385``). F-emp cannot see it: it learns the map from this very
   fiber and standardises its inputs, so any consistent gain or sign error of the model is
@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from eval.estimation import ESTIMATION_SPIRAL
+from eval.papers.estimation import ESTIMATION_SPIRAL
 from soft_gym.kinematics import cc_segment_transform
 from soft_gym.robots import get_preset
 from soft_gym.robots.actuation import pressure_at_fraction
@@ -59,7 +59,7 @@ from soft_gym.sensing.wang2023.femp import FEmpEstimator
 from soft_gym.sensing.wang2023.pipeline import SensingPipeline
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber, FBGLayout
-from soft_gym.engines.pybullet.simulator import ArmSimulator
+from soft_gym.engines import make_simulator
 
 N_INIT = 450
 """Calibration steps that initialise F-emp (wang2023's ``N0``, the pipeline's default)."""
@@ -102,7 +102,7 @@ def run() -> Run:
     """The wang2023 arm through calibration, ``HISTORY`` steps, the bond loss, ``AFTER`` steps."""
     spec = get_preset("wang2023")
     exploration = SensingPipeline(EyeInHandCamera(), FBGFiber()).exploration
-    sim = ArmSimulator(spec)
+    sim = make_simulator(spec)
     try:
         sim.reset(settle_s=0.5)
         fiber = FBGFiber(rate_hz=None)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.estimation import INIT_SAMPLES, _phases, fusion_weights, run_estimation
+from eval.papers.estimation import INIT_SAMPLES, _phases, fusion_weights, run_estimation
 from eval.metrics import estimation_errors
 
 

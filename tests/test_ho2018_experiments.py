@@ -4,15 +4,15 @@ Tables 1-2 of Ho et al. 2018: under an unknown static tip load, online learning 
 tracking error cycle by cycle while the offline model's error without load does not improve;
 under a filling fluid tip the offline error grows (and goes unstable in the paper) while the
 online learner's ends far below it. The absolute millimetres differ from the paper's (see the
-closing of ``eval/ho2018.py``'s table: the simulated arm, its pressures for the paper's volumes,
-and the 10 Hz decisions).
+closing of ``eval/papers/ho2018.py``'s table: the simulated arm, its pressures for the paper's
+volumes, and the 10 Hz decisions).
 """
 
 from __future__ import annotations
 
 import pytest
 
-from eval.ho2018 import report_table, run_experiment
+from eval.papers.ho2018 import report_table, run_experiment
 
 pytestmark = pytest.mark.slow
 

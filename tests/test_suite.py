@@ -1,7 +1,7 @@
-"""The benchmark suite (eval/suite.py, eval/suite_report.py, ``python -m eval suite``): spec
-validation naming the file and key, deterministic expansion and keys, n/a records for a refusing
-baseline, resume redoing no finished run, the report's statistics against hand-computed
-references, and the command line's bad options."""
+"""The benchmark suite (eval/suite/, ``python -m eval suite``): spec validation naming the file
+and key, deterministic expansion and keys, n/a records for a refusing baseline, resume redoing no
+finished run, the report's statistics against hand-computed references, and the command line's
+bad options."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import scipy.stats
 
 import eval.__main__ as eval_main
 from eval import suite
-from eval import suite_report
+from eval.suite import report
 from suite_specs import assert_suite_cli_error, tiny_suite
 
 pytest.importorskip("rliable")
@@ -194,7 +194,7 @@ def test_run_records_na_and_resume_redoes_no_finished_run(tmp_path):
         assert suite.record_path(out, cell.key).stat().st_mtime_ns == mtimes[cell.key]
 
     # the report of these records
-    text = suite_report.write_report(spec, out, reps=200, profile_reps=100)
+    text = report.write_report(spec, out, reps=200, profile_reps=100)
     assert "| 1 | cc_model |" in text and "does not fit the env" in text
     for name in ("leaderboard.md", "runs.csv", "suite.json", "aggregate_iqm.png",
                  "performance_profiles.png", "plots/error_wang2023_circle_load_10g.png",
@@ -276,15 +276,15 @@ def _reference_interval(scores: np.ndarray, statistic, reps: int, seed: int) -> 
 
 def test_report_statistics_equal_hand_computed_references(tmp_path):
     spec, out = _synthetic_records(tmp_path)
-    rows = suite_report.collect_rows(suite.expand(spec), out)
-    matrices, tasks, excluded = suite_report.score_matrices(rows, "zou2022")
+    rows = report.collect_rows(suite.expand(spec), out)
+    matrices, tasks, excluded = report.score_matrices(rows, "zou2022")
     assert tasks == [("circle", "nominal"), ("circle", "loaded")]
     assert excluded == {"hybrid_gpr": "n/a"}
     np.testing.assert_array_equal(matrices["cc_model"], SCORES["cc_model"])
 
     # IQM by hand: cc_model's six scores 1 2 4 10 20 30, the middle half is 2 4 10 20
     assert scipy.stats.trim_mean(matrices["cc_model"], 0.25, axis=None) == 9.0
-    aggregates = suite_report.aggregate_scores(matrices, reps=400, seed=7)
+    aggregates = report.aggregate_scores(matrices, reps=400, seed=7)
     cc = aggregates["cc_model"]
     assert cc["iqm_mm"] == pytest.approx(9.0)
     assert cc["mean_mm"] == pytest.approx((7.0 / 3 + 20.0) / 2)   # mean of the task means
@@ -303,15 +303,15 @@ def test_report_statistics_equal_hand_computed_references(tmp_path):
     assert cc["iqm_ci_mm"][0] <= cc["iqm_mm"] <= cc["iqm_ci_mm"][1]
 
     taus = [0.0, 1.0, 2.0, 10.0, 25.0, 30.0]
-    profiles = suite_report.performance_profiles(matrices, taus, reps=300, seed=5)
+    profiles = report.performance_profiles(matrices, taus, reps=300, seed=5)
     assert profiles["cc_model"]["fraction"] == pytest.approx([0, 1 / 6, 2 / 6, 4 / 6, 5 / 6, 1])
     assert profiles["lwpr_rwr"]["fraction"] == pytest.approx([0, 4 / 6, 5 / 6, 1, 1, 1])
     reference = _reference_interval(matrices["cc_model"],
-                                    lambda x: suite_report.fraction_within(x, taus), 300, 5)
+                                    lambda x: report.fraction_within(x, taus), 300, 5)
     np.testing.assert_allclose(profiles["cc_model"]["ci_low"], reference[0])
     np.testing.assert_allclose(profiles["cc_model"]["ci_high"], reference[1])
 
-    boards = suite_report.leaderboards(rows)
+    boards = report.leaderboards(rows)
     nominal = boards[("zou2022", "nominal")]
     assert [(e["rank"], e["policy"]) for e in nominal] == [
         (1, "lwpr_rwr"), (2, "cc_model"), (None, "hybrid_gpr")]
@@ -321,7 +321,7 @@ def test_report_statistics_equal_hand_computed_references(tmp_path):
 
 
 def test_single_seed_intervals_collapse_to_the_point():
-    aggregates = suite_report.aggregate_scores({"a": np.array([[3.0, 5.0]])}, reps=50)
+    aggregates = report.aggregate_scores({"a": np.array([[3.0, 5.0]])}, reps=50)
     assert aggregates["a"]["iqm_ci_mm"] == [4.0, 4.0]
 
 

@@ -1,5 +1,5 @@
-"""The suite's Ray backend (eval/suite_ray.py, ``python -m eval suite --backend ray``): a small
-grid on a local Ray (two CPUs) writes the same records as the process pool; the map starts,
+"""The suite's Ray backend (eval/suite/ray_backend.py, ``python -m eval suite --backend ray``): a
+small grid on a local Ray (two CPUs) writes the same records as the process pool; the map starts,
 connects to and shuts down only the Ray it should (checked on a stand-in module, without Ray);
 the command line's backend options fail in one line before any work."""
 
@@ -17,7 +17,7 @@ import pytest
 import eval.__main__ as eval_main
 from eval import suite
 from suite_specs import assert_suite_cli_error, tiny_suite
-from eval import suite_ray
+from eval.suite import ray_backend
 
 
 GRID = tiny_suite("ray_grid", (0, 1))
@@ -75,10 +75,10 @@ def test_ray_records_equal_the_process_pool_records(tmp_path, local_ray, capsys)
 
 
 def test_the_ray_backend_is_registered_and_yields_as_tasks_complete(local_ray):
-    assert suite.BACKENDS["ray"] is suite_ray.ray_map
-    results = list(suite_ray.ray_map(math.sqrt, [1.0, 4.0, 9.0, 16.0], workers=2))
+    assert suite.BACKENDS["ray"] is ray_backend.ray_map
+    results = list(ray_backend.ray_map(math.sqrt, [1.0, 4.0, 9.0, 16.0], workers=2))
     assert sorted(results) == [1.0, 2.0, 3.0, 4.0]
-    assert list(suite_ray.ray_map(math.sqrt, [], workers=2)) == []
+    assert list(ray_backend.ray_map(math.sqrt, [], workers=2)) == []
     assert local_ray.is_initialized()
 
 
@@ -125,7 +125,7 @@ class FakeRay:
 def test_a_local_ray_gets_the_workers_cpus_and_is_shut_down(monkeypatch):
     fake = FakeRay()
     monkeypatch.setitem(sys.modules, "ray", fake)
-    assert list(suite_ray.ray_map(math.sqrt, [1.0, 4.0], workers=3)) == [1.0, 2.0]
+    assert list(ray_backend.ray_map(math.sqrt, [1.0, 4.0], workers=3)) == [1.0, 2.0]
     assert fake.calls[0] == ("init", {"num_cpus": 3, "include_dashboard": False})
     assert ("remote", {"num_cpus": 1}) in fake.calls
     assert fake.calls[-1] == ("shutdown",) and not fake.initialized
@@ -135,7 +135,7 @@ def test_an_address_connects_to_that_cluster_and_disconnects(monkeypatch):
     fake = FakeRay()
     monkeypatch.setitem(sys.modules, "ray", fake)
     runtime_env = {"working_dir": "."}
-    map_function = suite_ray.make_ray_map("ray://head:10001", runtime_env=runtime_env)
+    map_function = ray_backend.make_ray_map("ray://head:10001", runtime_env=runtime_env)
     assert list(map_function(math.sqrt, [9.0], 2)) == [3.0]
     assert fake.calls[0] == ("init", {"address": "ray://head:10001", "include_dashboard": False,
                                       "runtime_env": runtime_env})
@@ -145,7 +145,7 @@ def test_an_address_connects_to_that_cluster_and_disconnects(monkeypatch):
 def test_a_ray_initialised_before_is_used_and_left_running(monkeypatch):
     fake = FakeRay(initialized=True)
     monkeypatch.setitem(sys.modules, "ray", fake)
-    assert list(suite_ray.make_ray_map("auto")(math.sqrt, [4.0], 2)) == [2.0]
+    assert list(ray_backend.make_ray_map("auto")(math.sqrt, [4.0], 2)) == [2.0]
     assert not [call for call in fake.calls if call[0] in ("init", "shutdown")]
     assert fake.initialized
 
@@ -153,17 +153,17 @@ def test_a_ray_initialised_before_is_used_and_left_running(monkeypatch):
 def test_stopping_early_cancels_the_unfinished_tasks(monkeypatch):
     fake = FakeRay()
     monkeypatch.setitem(sys.modules, "ray", fake)
-    results = suite_ray.ray_map(math.sqrt, [1.0, 4.0, 9.0], workers=2)
+    results = ray_backend.ray_map(math.sqrt, [1.0, 4.0, 9.0], workers=2)
     assert next(results) == 1.0
     results.close()
     assert fake.calls.count(("cancel",)) == 2 and fake.calls[-1] == ("shutdown",)
 
 
 @pytest.mark.parametrize("call, name", [
-    (lambda: suite_ray.ray_map(math.sqrt, [1.0], workers=0), "workers"),
-    (lambda: suite_ray.ray_map(math.sqrt, [1.0], workers=True), "workers"),
-    (lambda: suite_ray.ray_map(math.sqrt, [1.0], address=" "), "address"),
-    (lambda: suite_ray.make_ray_map(""), "address"),
+    (lambda: ray_backend.ray_map(math.sqrt, [1.0], workers=0), "workers"),
+    (lambda: ray_backend.ray_map(math.sqrt, [1.0], workers=True), "workers"),
+    (lambda: ray_backend.ray_map(math.sqrt, [1.0], address=" "), "address"),
+    (lambda: ray_backend.make_ray_map(""), "address"),
 ])
 def test_bad_arguments_are_refused_before_any_work(call, name, monkeypatch):
     fake = FakeRay()
@@ -176,7 +176,7 @@ def test_bad_arguments_are_refused_before_any_work(call, name, monkeypatch):
 def test_without_ray_the_map_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray raises ImportError
     with pytest.raises(ImportError, match=r'pip install "soft-arm-gym\[ray\]"'):
-        suite_ray.ray_map(math.sqrt, [1.0], workers=1)
+        ray_backend.ray_map(math.sqrt, [1.0], workers=1)
 
 
 # ----------------------------------------------------------------------- command line

@@ -12,7 +12,7 @@ from dataclasses import asdict
 import numpy as np
 import pytest
 
-from eval import zhao2021
+from eval.papers import zhao2021
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
 SMALL = ReconstructionConfig(n_free=240, n_loaded=120, max_iterations=80)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval import zou2022
+from eval.papers import zou2022
 from eval.__main__ import main
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 

@@ -47,16 +47,24 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 from tqdm import tqdm
 
 import soft_gym  # noqa: F401
 from agents.policies import make_policy
+from eval.report import package_version, save_figure, write_json
+from eval.runner import agent_error
 from soft_gym.robots.presets import (base_point_from_paper, get_preset,
                                      paper_point_from_base, paper_pressures_to_chambers)
+from soft_gym.scenarios.loads import Push, SwayingMass, TipMass
+from soft_gym.sensing.zhao2021.backbone_fit import mean_backbone_error_m, resample_by_arc_length
 from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
 from soft_gym.procedures.zhao2021_exploration import cached_reconstruction
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensors.strain_gauge import StrainGauges
+from soft_gym.engines import make_simulator
+from soft_gym.procedures.positioning import drive_tip_to
 
 EXPERIMENTS = ("shape", "p2p", "sway", "circle")
 PRESET = "zhao2021"
@@ -112,10 +120,6 @@ def _walk_to(sim, sensor, command: np.ndarray, target: np.ndarray, step_pa: floa
 
 def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True) -> dict:
     """Table III, the mean backbone error and Table IV on the SR model of ``config``."""
-    from soft_gym.scenarios.loads import TipMass
-    from soft_gym.sensing.zhao2021.backbone_fit import mean_backbone_error_m, resample_by_arc_length
-    from soft_gym.engines import make_simulator
-
     spec = get_preset(PRESET)
     gauges = StrainGauges()
     reconstructor, report = cached_reconstruction(spec, gauges, config, progress=progress)
@@ -185,9 +189,6 @@ def reachable_point(point_m: np.ndarray, scenario=(), tries: int = 12) -> np.nda
     loads; else the nearest tip position the drive's pressure search finds, or the first point
     on the way from there towards the middle of the workspace (all chambers at half pressure)
     that the drive reaches, in 5 % steps (m, rounded to 0.1 mm)."""
-    from soft_gym.engines import make_simulator
-    from soft_gym.procedures.positioning import drive_tip_to
-
     spec = get_preset(PRESET)
     sim = make_simulator(spec)
     try:
@@ -224,8 +225,6 @@ def p2p_goal_m() -> np.ndarray:
     """The point-to-point goal in our frame, the same for every run: the paper's end point, or
     the point nearest to it that the arm reaches with the heaviest of the runs' tip loads (see
     :func:`reachable_point`)."""
-    from soft_gym.scenarios.loads import TipMass
-
     heaviest = max(load for *_, load in P2P_RUNS)
     return reachable_point(base_point_from_paper(np.array(P2P_END_MM) / 1000.0),
                            [TipMass(mass_kg=heaviest)])
@@ -302,8 +301,6 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
             max_steps: int = MAX_P2P_STEPS) -> dict:
     """Section VI-C-1's runs (and ``baselines`` on the free run), each at most ``max_steps``
     controller steps."""
-    from soft_gym.scenarios.loads import TipMass
-
     goal = p2p_goal_m()
     free_start = p2p_start_m()
     results = {}
@@ -333,8 +330,6 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
 
 def run_sway(sensing: dict, seed: int = 0, progress: bool = True) -> dict:
     """Section VI-C-2: a swaying 119 g block, then a pull at the middle from step 7 to 12."""
-    from soft_gym.scenarios.loads import Push, SwayingMass
-
     goal = p2p_goal_m()
     paper_start = base_point_from_paper(np.array(P2P_START_MM) / 1000.0)
     toward_axis = -np.r_[paper_start[:2], 0.0] / np.linalg.norm(paper_start[:2])
@@ -388,8 +383,6 @@ def _summary_circle(run: dict, load_steps) -> dict:
 def run_circle(sensing: dict, seed: int = 0, progress: bool = True,
                baselines: tuple[str, ...] = ()) -> dict:
     """Section VI-D: the circle free and with the 263 g block from step 29 to 60."""
-    from soft_gym.scenarios.loads import TipMass
-
     points = circle_points_m()
     results = {}
     runs = [("free", 0.0)] + [(f"{mass * 1000:.0f} g, steps {CIRCLE_LOAD_STEPS[0]}-"
@@ -422,8 +415,6 @@ def check_baselines(baselines: tuple[str, ...]) -> None:
     other spaces than the env it would drive (pose, target and pressure, with the agent's own
     interface), before any work; a baseline that refuses the arm is recorded as refused when it
     runs, not here."""
-    from eval.runner import agent_error
-
     for name in baselines:
         if name.startswith("sb3:"):
             message = agent_error(name, "SoftArmReach-v0",
@@ -530,11 +521,6 @@ def _xyz(point) -> str:
 
 def plot_control(path: str | Path, results: dict) -> Path:
     """Figs. 11-12-like figure: top-view paths, distance to the goal and ``d`` per step."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from eval.report import save_figure
-
     runs = dict(results.get("p2p", {}).get("runs", {}))
     if "sway" in results:
         runs["sway and pull"] = results["sway"]
@@ -561,8 +547,6 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
                    baselines: tuple[str, ...] = (), progress: bool = True) -> dict:
     """Run the experiments for every seed; write ``zhao2021_seed<N>.md/.png`` and
     ``zhao2021.json`` under ``out`` and print the tables."""
-    from eval.report import package_version, write_json
-
     unknown = sorted(set(experiments) - set(EXPERIMENTS))
     if unknown:
         raise ValueError(f"experiments must be among {list(EXPERIMENTS)}, got {unknown}")

@@ -2,7 +2,7 @@
 
 Importing this module registers the backend (:func:`eval.suite.register_backend`)::
 
-    import eval.suite_ray  # noqa: F401
+    import eval.suite.ray_backend  # noqa: F401
     from eval import suite
     suite.run_suite("small", "results/suite_small", workers=2, backend="ray")
 
@@ -43,7 +43,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
-from eval.suite import MapFunction, register_backend
+from eval.suite.run import MapFunction, register_backend
 
 BACKEND_NAME = "ray"
 INSTALL_HINT = 'pip install "soft-arm-gym[ray]"'
@@ -57,7 +57,7 @@ def require_ray():
         ImportError: Ray is not installed (one line naming the extra to install).
     """
     try:
-        import ray
+        import ray  # here: an optional extra; the ImportError below names it
     except ImportError as error:
         raise ImportError(f"the ray backend needs Ray, an optional extra: {INSTALL_HINT}") \
             from error

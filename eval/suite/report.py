@@ -55,8 +55,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
-from eval.suite import Cell, SuiteSpec, expand, read_record, read_steps
+from eval.metrics import MM_PER_M
+from eval.report import (markdown_table, package_version, plot_error_time, save_figure,
+                         write_json)
+from eval.suite.grid import Cell, expand
+from eval.suite.spec import SuiteSpec
+from eval.suite.store import git_revision, library_versions, read_record, read_steps
 
 SCORE = "last_cycle_error_mm"
 """The metric of a run that the leaderboard ranks and the aggregates summarise (mm)."""
@@ -79,7 +86,7 @@ _REASON_CHARS = 160
 def require_rliable():
     """``(rliable.library, rliable.metrics)``, or an ``ImportError`` saying how to install it."""
     try:
-        from rliable import library, metrics
+        from rliable import library, metrics  # here: +1.2 s for every python -m eval command
     except ImportError as error:
         raise ImportError("the suite report needs the rliable package (aggregate IQM, "
                           "stratified-bootstrap CIs, performance profiles): pip install "
@@ -304,9 +311,6 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
     Returns:
         The leaderboard (Markdown), as written to ``leaderboard.md``.
     """
-    from eval.report import package_version, write_json
-    from eval.suite import git_revision, library_versions
-
     require_rliable()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -383,8 +387,6 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
                          per_arm: Mapping[str, Mapping[str, Any]],
                          counts: Mapping[str, int]) -> str:
     """The text of ``leaderboard.md``."""
-    from eval.report import markdown_table
-
     lines = [f"# Suite {spec.name}", ""]
     if spec.description:
         lines += [spec.description.strip(), ""]
@@ -467,9 +469,6 @@ def _write_runs_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
 
 # ---------------------------------------------------------------------------------- plots
 def _figure(width_in: float, height_in: float, nrows: int, ncols: int = 1):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     figure = Figure(figsize=(width_in, height_in), dpi=120, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.subplots(nrows, ncols, squeeze=False)
@@ -483,8 +482,6 @@ def _colors(policies: Mapping[str, Any]) -> dict[str, str]:
 
 def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> None:
     """Per arm and policy: the IQM (dot) with its 95 % CI (bar) and the mean (cross)."""
-    from eval.report import save_figure
-
     arms = [preset for preset, info in per_arm.items() if info["aggregates"]]
     if not arms:
         return
@@ -511,8 +508,6 @@ def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> No
 
 def _plot_profiles(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> None:
     """Per arm: the fraction of runs with last-cycle error <= tau, with 95 % CI bands."""
-    from eval.report import save_figure
-
     arms = [preset for preset, info in per_arm.items() if info["profiles"]]
     if not arms:
         return
@@ -548,8 +543,6 @@ def _file_part(text: str) -> str:
 def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapping[str, Any]],
                      out: Path, seed: int) -> None:
     """Error against time and trajectories of every policy, per arm/path/condition, one seed."""
-    from eval.report import plot_error_time
-
     status = {row["key"]: row["status"] for row in rows}
     groups: dict[tuple[str, str, str], dict[str, str]] = {}
     for cell in cells:
@@ -571,9 +564,6 @@ def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapp
 def _plot_trajectories(path: Path, records: Mapping[str, Mapping[str, np.ndarray]],
                        title: str) -> None:
     """Every policy's true tip over the path, x-y plane (mm)."""
-    from eval.metrics import MM_PER_M
-    from eval.report import save_figure
-
     figure, axes = _figure(6.4, 5.4, 1)
     ax = axes[0, 0]
     first = next(iter(records.values()))

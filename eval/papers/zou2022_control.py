@@ -83,11 +83,17 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import BASELINES, BaselinePolicy, make_policy
 from eval.metrics import path_deviation_mm, tracking_error_mm
+from eval.report import markdown_table, save_figure
 from eval.runner import run_episode
+from soft_gym.robots.presets import get_preset
+from soft_gym.procedures.workspace import reachable_tips
+from soft_gym.tasks import TrackTask
 
 PRESET = "zou2022"
 ENV_ID = "SoftArmTrack-v0"
@@ -108,10 +114,6 @@ DEFAULT_DNN_OPTIONS: dict[str, Any] = {"n_samples": 3000}
 def cycle_duration_s(speed_m_s: float | None = None) -> float:
     """Duration of one cycle of :data:`CONTROL_PATH` on the zou2022 arm at ``speed_m_s`` (m/s;
     ``None``: the env's default speed, :data:`CYCLE_S`), in s."""
-    from soft_gym.procedures.workspace import reachable_tips
-    from soft_gym.robots.presets import get_preset
-    from soft_gym.tasks import TrackTask
-
     spec = get_preset(PRESET)
     task = TrackTask(spec, reachable_tips(spec), path=CONTROL_PATH, cycles=1,
                      speed_m_s=speed_m_s)
@@ -350,8 +352,6 @@ def strip_records(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
 def control_table(rows: Sequence[Mapping[str, Any]]) -> str:
     """A Markdown table of :func:`run_control`'s rows: the last cycle's errors (mm), the stereo
     source's lost steps (% of the run / of its last cycle) and the run time (s)."""
-    from eval.report import markdown_table
-
     shown = []
     for row in rows:
         line = {"policy": row["policy"], "feedback": row["feedback"],
@@ -394,11 +394,6 @@ def plot_control(path: str | Path,
     Returns:
         The path written.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from eval.report import save_figure
-
     if isinstance(records, Mapping):
         runs = {tuple(key): record for key, record in records.items() if record is not None}
         fault_starts = []

@@ -29,8 +29,9 @@ error against the truth (mm). Self-occlusion (Fig. 13b) is no fault here: it hap
 does, in the clean poses.
 
 ``control``: ``cc_model``, ``hybrid_gpr`` and ``lwpr_rwr`` tracking on zou2022 with each shape
-source as feedback, nominal and with the stereo pair faulted (:mod:`eval.zou2022_control`). The
-paper has no closed-loop experiment; this is the project's own comparison.
+source as feedback, nominal and with the stereo pair faulted
+(:mod:`eval.papers.zou2022_control`). The paper has no closed-loop experiment; this is the
+project's own comparison.
 
 Where the simulation differs from the paper (docs/architecture.md, "zou2022 experiments"): the
 simulated arm bends by pressure moments on a Cosserat-like chain, so the shape departs from
@@ -43,12 +44,17 @@ torsional effect is also ignored"), not hysteresis or cable friction; ASES's ref
 from __future__ import annotations
 
 import copy
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 from tqdm import tqdm
 
+from eval.papers.zou2022_control import control_table, plot_control, run_control, strip_records
+from eval.report import package_version, save_figure, write_json
 from soft_gym.robots.presets import get_preset
 from soft_gym.sensing.zou2022.cc_shape import cc_shape_points
 from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
@@ -313,8 +319,6 @@ def report_tables(results: dict) -> str:
             lines.append(f"| {name} | {100 * row['lost_share']:.0f} % | " + " | ".join(cells)
                          + " |")
     if results.get("control"):
-        from eval.zou2022_control import control_table
-
         lines += ["", "Control on zou2022 with each shape source", "",
                   control_table(results["control"]["rows"])]
     return "\n".join(lines)
@@ -322,11 +326,6 @@ def report_tables(results: dict) -> str:
 
 def plot_table3(path: str | Path, table3: dict) -> Path:
     """Fig. 16: histograms of the DNN's test-set errors per axis, against ASES and the truth."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from eval.report import save_figure
-
     fig = Figure(figsize=(13, 3.8))
     FigureCanvasAgg(fig)
     axes = fig.subplots(1, 3)
@@ -344,11 +343,6 @@ def plot_table3(path: str | Path, table3: dict) -> Path:
 def plot_table4(path: str | Path, table4: dict) -> Path:
     """Figs. 18d-e and 19: end-point trajectories, chamber lengths, and absolute errors per axis
     against ASES."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from eval.report import save_figure
-
     series = table4["_series"]
     time = series["time_s"]
     fig = Figure(figsize=(15, 8))
@@ -393,10 +387,6 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
                    control_options: dict | None = None, progress: bool = True) -> dict:
     """Run the experiments for every seed; write ``zou2022_seed<N>.md`` and the figures under
     ``out``, and ``zou2022.json``; print the tables."""
-    from dataclasses import asdict
-
-    from eval.report import package_version, write_json
-
     unknown = sorted(set(experiments) - set(EXPERIMENTS))
     if unknown:
         raise ValueError(f"experiments must be among {list(EXPERIMENTS)}, got {unknown}")
@@ -418,8 +408,6 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
         if "faults" in experiments:
             results["faults"] = run_faults(n_poses, seed, progress)
         if "control" in experiments:
-            from eval.zou2022_control import plot_control, run_control, strip_records
-
             dnn_options = {k: v for k, v in asdict(seeded).items()
                            if v != getattr(ShapeDNNConfig(), k) or k == "seed"}
             rows = run_control(seed, dnn_options, progress=progress, **(control_options or {}))

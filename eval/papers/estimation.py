@@ -38,6 +38,8 @@ from tqdm import tqdm
 import soft_gym  # noqa: F401
 from eval.metrics import estimation_errors
 from eval.report import markdown_table, plot_estimation, write_records_csv, write_results_json
+from eval.video import VideoWriter
+from soft_gym.envs.rendering import default_panels, render_frame
 from soft_gym.robots.actuation import Actuation, pressure_at_fraction
 from soft_gym.sensing.wang2023.exploration import spiral_fractions
 
@@ -122,9 +124,6 @@ def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: 
     actuation = Actuation.of_env(env)
     video = None
     if video_path is not None:
-        from eval.video import VideoWriter
-        from soft_gym.envs.rendering import default_panels, render_frame
-
         panels = default_panels(env)
         video = VideoWriter(video_path, unwrapped.metadata["render_fps"])
     env.reset(seed=seed)

@@ -1,0 +1,153 @@
+"""The four-arm benchmark suite: a declarative grid of arms, paths, conditions, policies and seeds.
+
+A suite is a YAML file (the bundled ones are ``eval/suites/<name>.yaml``: ``default``, ``small``).
+It is loaded and checked (:func:`load_suite`, :func:`check_suite`), expanded into cells, one run
+each (:func:`expand`), and run (:func:`run_suite`), every finished run written at once as one
+record; :mod:`eval.suite.report` turns the records into the leaderboard, aggregate scores and plots.
+
+Schema
+------
+Top level (every key other than these is refused):
+
+========================= ======== ===================================================
+key                       required meaning
+========================= ======== ===================================================
+``name``                  yes      suite name (letters, digits, ``_.-``)
+``description``           no       free text
+``seeds``                 yes      episode seeds, distinct integers >= 0
+``cycles``                no       path cycles per run (default 2); an arm may override
+``arms``                  yes      preset name -> arm block (below), run in file order
+========================= ======== ===================================================
+
+Arm block, ``arms.<preset>`` (a preset of :data:`soft_gym.robots.presets.PRESETS`):
+
+========================= ======== ===================================================
+key                       required meaning
+========================= ======== ===================================================
+``paths``                 yes      path names (``circle``, ``pentagram``, ``rectangle``, ...)
+``feedback``              no       feedback source of every run on this arm (the env's
+                                   ``feedback=``; default: the env's default, ``fused``)
+``env``                   no       further env keyword arguments of every run on this arm
+``cycles``                no       path cycles per run on this arm (default: the suite's)
+``conditions``            yes      condition name -> env keyword arguments (``{}``: nominal)
+``policies``              yes      list of policy entries (below)
+========================= ======== ===================================================
+
+A condition is a named bundle of keyword arguments of ``gymnasium.make("SoftArmTrack-v0", ...)``
+(:class:`soft_gym.envs.soft_arm_env.SoftArmEnv`): ``scenario`` (loads, :mod:`soft_gym.scenarios`),
+``faults`` (visual faults, :mod:`soft_gym.sensors.faults`), ``feedback``, ``sensing``,
+``sensors``, ``sensor_config``, ``speed_m_s``, ... (:data:`ENV_KEYS`). ``preset``, ``path``,
+``cycles`` and ``task`` are the suite's own and may not appear in ``env`` or a condition.
+
+Policy entry: a string (a baseline of :data:`agents.policies.BASELINES`, ``sb3:PATH`` or
+``sb3:<shipped agent>``) or a mapping:
+
+========================= ======== ===================================================
+key                       required meaning
+========================= ======== ===================================================
+``name``                  yes      as the string form
+``label``                 no       name in tables (default: the baseline's name or the
+                                   agent's directory name); distinct within an arm
+``params``                no       keyword arguments of the baseline (e.g. ``kp: 0.06``)
+``seed_params``           no       parameter names that receive the run's seed (e.g.
+                                   ``[seed]`` for the pre-training of ``lwpr_rwr``)
+``env``                   no       env keyword arguments this policy needs, applied last
+                                   (``local_ik_asdm`` reads ``strain``: its ``obs`` default
+                                   is :data:`POLICY_ENV_DEFAULTS`)
+========================= ======== ===================================================
+
+SB3 agents take no ``params``; their env gets the observation and action interface they were
+trained with (:func:`eval.runner.build`).
+
+Cells and keys
+--------------
+One cell per arm x path x condition x policy x seed, in that nesting order. Its resolved config
+is ``{"env_id", "env_kwargs", "policy", "policy_params", "seed", "cycles"}`` with ``env_kwargs``
+merged as ``preset, path, cycles, feedback`` < arm ``env`` < condition < policy ``env``. Its key
+is the first 16 hex digits of the SHA-256 of the config as canonical JSON (sorted keys, no
+spaces; ``1`` and ``1.0`` differ): the same config gives the same key in any suite, and changing
+one keyword argument changes the keys of the cells that use it and no other. Labels (names in
+tables) are not part of the key; two cells with equal configs are refused.
+
+Validation
+----------
+:func:`check_suite` refuses, before any run, with a ``ValueError`` naming the file, the key
+(``arms.wang2023.conditions.load_10g``) and what is allowed: an unknown key at any level, an
+unknown preset, path, feedback source, policy or policy parameter, and every value the env
+refuses. Each distinct env configuration is built once through the env's own checks (loads,
+faults, feedback options, the arm's maximum load, ...) without calibrating its feedback source,
+which is the expensive part (seconds to minutes, cached on disk) and is left to the runs; each
+baseline is then made on it, once with the entry's parameters and once with its defaults: a
+baseline refusing the arm with its defaults too is not a suite error but an ``n/a`` cell (below);
+one refusing only the given parameters is. SB3 agents are loaded once each.
+
+Running
+-------
+:func:`run_suite` runs every cell whose record is not there yet (all of them without
+``resume``). A run that finishes writes ``out/records/<key>.json`` at once and, when it ran, the
+per-step record ``out/records/<key>.npz`` (the arrays of :func:`eval.runner.run_episode`: m, s,
+Pa), each to a temporary file renamed into place, the JSON last, so a killed suite leaves no
+half record and ``resume`` redoes exactly the unfinished cells. The JSON record::
+
+    {"key", "suite", "labels": {"preset", "path", "condition", "policy", "seed"},
+     "config": resolved config, "status": "done" | "n/a", "reason": why n/a (else null),
+     "metrics": {"last_cycle_error_mm", "mean_error_mm", "max_error_mm", "rmse_error_mm",
+                 "final_error_mm", "last_cycle_max_error_mm", "path_deviation_mm",
+                 "last_cycle_path_deviation_mm", "feedback_error_mm", "per_cycle_error_mm",
+                 "per_cycle_path_deviation_mm", "n_steps", "n_cycles"} (null when n/a),
+     "wall_s", "versions": {soft_arm_gym, gymnasium, stable_baselines3, torch, numpy,
+     pybullet, python}, "git_revision", "steps_file"}
+
+``n/a``: the policy could not be set up on the cell's env (a ``ValueError`` while the env and
+policy are made and calibrated, e.g. ``cc_model`` and ``hybrid_gpr`` on a two-segment arm, an
+agent on an arm whose observation it cannot read); the reason is the error's text. Any other
+error leaves no record: the other runs go on, and :class:`SuiteRunError` lists the failed cells
+at the end (their tracebacks in ``out/errors/<key>.txt``); ``resume`` retries them.
+
+Backends. A backend is a function ``map(fn, items, workers)`` that applies ``fn`` to every item
+and yields the results as they complete (:data:`MapFunction`). ``"process"`` (default) runs them
+in ``workers`` spawned processes (in this process when ``workers == 1``), ``"serial"`` in this
+process. Another backend (a cluster) is registered from its own module with
+:func:`register_backend` and chosen by name, or passed as the function itself. Cells are
+ordered round-robin over (arm, policy, seed) groups, so that the first run of each group, which
+builds and caches its calibration or pre-training, starts before its siblings.
+"""
+
+from __future__ import annotations
+
+# The package, one module per job:
+#   spec.py          the YAML spec: loading, the schema's checks, the file's SHA-256
+#   grid.py          spec -> cells (one run each) and their keys (the hash of a resolved config)
+#   check.py         the spec checked before any run (envs built, baselines made, agents loaded)
+#   run.py           one cell in a worker, the backends (process pool, serial), run_suite
+#   store.py         the records on disk: write, read, finished or not (resume), provenance
+#   report.py        records -> leaderboard, aggregates with bootstrap CIs, plots
+#   ray_backend.py   the optional "ray" backend (importing it registers it)
+from eval.suite.check import check_suite
+from eval.suite.grid import ENV_ID, KEY_DIGITS, Cell, canonical_json, cell_key, expand
+from eval.suite.report import (DEFAULT_REPS, PROFILE_REPS, SCORE, aggregate_scores,
+                               collect_rows, fraction_within, leaderboard_markdown,
+                               leaderboards, performance_profiles, profile_taus,
+                               require_rliable, score_matrices, write_report)
+from eval.suite.run import (BACKENDS, MapFunction, SuiteRunError, cell_metrics,
+                            one_compute_thread, order_cells, process_map, register_backend,
+                            run_cell, run_suite, serial_map)
+from eval.suite.spec import (ARM_KEYS, DEFAULT_CYCLES, ENV_KEYS, POLICY_ENV_DEFAULTS,
+                             POLICY_KEYS, SUITE_ENV_KEYS, SUITES_DIR, TOP_KEYS, ArmEntry,
+                             PolicyEntry, SuiteError, SuiteSpec, bundled_suites, load_suite,
+                             parse_suite, resolve_suite_path)
+from eval.suite.store import (git_revision, is_finished, library_versions, read_record,
+                              read_steps, record_path, records_dir, steps_path, write_record)
+
+__all__ = ["ARM_KEYS", "BACKENDS", "DEFAULT_CYCLES", "DEFAULT_REPS", "ENV_ID", "ENV_KEYS",
+           "KEY_DIGITS", "POLICY_ENV_DEFAULTS", "POLICY_KEYS", "PROFILE_REPS", "SCORE",
+           "SUITES_DIR", "SUITE_ENV_KEYS", "TOP_KEYS", "ArmEntry", "Cell", "MapFunction",
+           "PolicyEntry", "SuiteError", "SuiteRunError", "SuiteSpec", "aggregate_scores",
+           "bundled_suites", "canonical_json", "cell_key", "cell_metrics", "check_suite",
+           "collect_rows", "expand", "fraction_within", "git_revision", "is_finished",
+           "leaderboard_markdown", "leaderboards", "library_versions", "load_suite",
+           "one_compute_thread", "order_cells", "parse_suite", "performance_profiles",
+           "process_map", "profile_taus", "read_record", "read_steps", "record_path",
+           "records_dir", "register_backend", "require_rliable", "resolve_suite_path",
+           "run_cell", "run_suite", "score_matrices", "serial_map", "steps_path",
+           "write_record", "write_report"]

@@ -1,0 +1,255 @@
+"""Running a suite: one cell in a worker (:func:`run_cell`), the backends that spread the cells
+over processes or a cluster (:data:`BACKENDS`), and :func:`run_suite`, which runs the cells not
+finished yet and writes each record as its run ends (:mod:`eval.suite`, "Running")."""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import math
+import multiprocessing
+import os
+import time
+import traceback
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+from tqdm import tqdm
+
+from eval.metrics import MM_PER_M, summarize
+from eval.runner import RunConfig, build, run_episode
+from eval.suite.check import check_suite
+from eval.suite.grid import Cell, expand, label_text
+from eval.suite.spec import SuiteSpec, load_suite
+from eval.suite.store import git_revision, is_finished, library_versions, records_dir, write_record
+
+
+class SuiteRunError(RuntimeError):
+    """Runs that failed with an error other than a refusal (no record was written for them)."""
+
+    def __init__(self, failures: list[dict[str, Any]]) -> None:
+        self.failures = failures
+        names = ", ".join(f"{f['key']} ({label_text(f['labels'])}: {f['error']})"
+                          for f in failures[:5])
+        more = f" and {len(failures) - 5} more" if len(failures) > 5 else ""
+        super().__init__(f"{len(failures)} run(s) failed: {names}{more}; tracebacks in "
+                         f"errors/<key>.txt; run again with resume to retry them")
+
+
+def cell_metrics(record: Mapping[str, np.ndarray]) -> dict[str, Any]:
+    """The summary metrics of one run's per-step record (mm; see the module docstring)."""
+    summary = summarize(record)
+    track, deviation = summary["tracking"], summary["deviation"]
+    feedback = np.linalg.norm(np.asarray(record["feedback_m"]) - np.asarray(record["tip_m"]),
+                              axis=1) * MM_PER_M
+    finite = feedback[np.isfinite(feedback)]
+    return {
+        "last_cycle_error_mm": track["per_cycle"]["mean_mm"][-1],
+        "mean_error_mm": track["mean_mm"],
+        "max_error_mm": track["max_mm"],
+        "rmse_error_mm": track["rmse_mm"],
+        "final_error_mm": track["final_mm"],
+        "last_cycle_max_error_mm": track["per_cycle"]["max_mm"][-1],
+        "path_deviation_mm": deviation["mean_mm"],
+        "last_cycle_path_deviation_mm": deviation["per_cycle"]["mean_mm"][-1],
+        "feedback_error_mm": float(np.mean(finite)) if finite.size else math.nan,
+        "per_cycle_error_mm": list(track["per_cycle"]["mean_mm"]),
+        "per_cycle_path_deviation_mm": list(deviation["per_cycle"]["mean_mm"]),
+        "n_steps": summary["n_steps"],
+        "n_cycles": summary["n_cycles"],
+    }
+
+
+@contextlib.contextmanager
+def one_compute_thread() -> Iterator[None]:
+    """Run the block with BLAS, OpenMP and torch on one thread each, restoring them after.
+
+    A cell's numbers must not depend on where it runs: a Ray task starts with
+    ``OMP_NUM_THREADS=1``, a pool worker with every core, and a sum split over threads rounds
+    differently (lwpr_rwr and hybrid_gpr records differed in the tenth digit). On one thread a
+    record is the same on every backend, worker count and machine.
+    """
+    import torch  # not at the top: +1.6 s for every python -m eval command (-X importtime)
+
+    torch_threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        with threadpool_limits(limits=1):
+            yield
+    finally:
+        torch.set_num_threads(torch_threads)
+
+
+def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
+    """Run one cell (a worker's job; picklable): ``task`` holds ``key``, ``suite``, ``labels``,
+    ``config``, ``versions`` and ``git_revision``.
+
+    Returns the JSON record (see the module docstring) with the per-step arrays under
+    ``"steps"`` (``None`` when n/a), or, for an error other than a refusal, ``status`` ``"error"``
+    with the ``error`` and its ``traceback``.
+    """
+    start = time.perf_counter()
+    config = task["config"]
+    result = {"key": task["key"], "suite": task["suite"], "labels": dict(task["labels"]),
+              "config": config, "status": "done", "reason": None, "metrics": None,
+              "wall_s": None, "versions": task["versions"],
+              "git_revision": task["git_revision"], "steps": None}
+    run_config = RunConfig(policy=config["policy"], env_kwargs=copy.deepcopy(config["env_kwargs"]),
+                           policy_params=copy.deepcopy(config["policy_params"]),
+                           env_id=config["env_id"], seed=config["seed"])
+    try:
+        with one_compute_thread():
+            try:
+                env, policy = build(run_config)
+            except ValueError as error:  # the policy cannot drive this arm or env
+                result.update(status="n/a", reason=" ".join(str(error).split()))
+            else:
+                try:
+                    steps = run_episode(env, policy, seed=config["seed"], progress=False)
+                finally:
+                    env.close()
+                result.update(metrics=cell_metrics(steps), steps=steps)
+    except Exception as error:  # noqa: BLE001 - reported, the other runs go on
+        result.update(status="error", error=f"{type(error).__name__}: {error}",
+                      traceback=traceback.format_exc())
+    result["wall_s"] = time.perf_counter() - start
+    return result
+
+
+MapFunction = Callable[[Callable[[Any], Any], Sequence[Any], int], Iterator[Any]]
+"""A backend: ``map(fn, items, workers)`` yields ``fn(item)`` for every item, as each completes
+(in any order)."""
+
+
+def serial_map(fn: Callable[[Any], Any], items: Sequence[Any], workers: int = 1) -> Iterator[Any]:
+    """Run ``fn`` on every item in this process, in order."""
+    for item in items:
+        yield fn(item)
+
+
+def process_map(fn: Callable[[Any], Any], items: Sequence[Any],
+                workers: int = 1) -> Iterator[Any]:
+    """Run ``fn`` on every item in ``workers`` spawned processes (in this process when
+    ``workers == 1`` or there is one item), yielding results as they complete.
+
+    At most ``2 * workers`` items are submitted ahead, so a stopped iteration leaves little
+    work behind, which is cancelled.
+    """
+    if workers == 1 or len(items) <= 1:
+        yield from serial_map(fn, items)
+        return
+    context = multiprocessing.get_context("spawn")
+    pending_items = iter(items)
+    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=context) as pool:
+        running = set()
+        try:
+            for item in pending_items:
+                running.add(pool.submit(fn, item))
+                if len(running) >= 2 * workers:
+                    break
+            while running:
+                done, running = wait(running, return_when=FIRST_COMPLETED)
+                for future in done:
+                    for item in pending_items:
+                        running.add(pool.submit(fn, item))
+                        break
+                    yield future.result()
+        finally:
+            for future in running:
+                future.cancel()
+
+
+BACKENDS: dict[str, MapFunction] = {"process": process_map, "serial": serial_map}
+"""Backend name -> map function (see :data:`MapFunction`)."""
+
+
+def register_backend(name: str, map_function: MapFunction) -> None:
+    """Make ``map_function`` available as ``run_suite(..., backend=name)``."""
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"backend name must be non-empty text, got {name!r}")
+    if not callable(map_function):
+        raise ValueError(f"map_function must be callable, got {map_function!r}")
+    BACKENDS[name] = map_function
+
+
+def order_cells(cells: Sequence[Cell]) -> list[Cell]:
+    """Cells round-robin over their (arm, policy, seed) groups, in first-seen group order."""
+    groups: dict[tuple, list[Cell]] = {}
+    for cell in cells:
+        labels = cell.labels
+        groups.setdefault((labels["preset"], labels["policy"], labels["seed"]), []).append(cell)
+    ordered, depth = [], max((len(g) for g in groups.values()), default=0)
+    for i in range(depth):
+        ordered += [group[i] for group in groups.values() if i < len(group)]
+    return ordered
+
+
+def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, workers: int = 1,
+              resume: bool = False, backend: str | MapFunction = "process",
+              progress: bool = True, check: bool = True) -> dict[str, Any]:
+    """Run the suite's cells and write one record per run as it finishes.
+
+    Args:
+        spec: a loaded suite, a suite file or a bundled suite name.
+        out: output directory (records under ``out/records``).
+        workers: parallel runs (>= 1).
+        resume: skip the cells whose record is there; without it every cell runs again.
+        backend: a name from :data:`BACKENDS` or a map function (:data:`MapFunction`);
+            ``"ray"`` is there once :mod:`eval.suite.ray_backend` is imported (it imports
+            this module).
+        progress: show a progress bar over the runs.
+        check: run :func:`check_suite` first (the command line has already done so).
+
+    Returns:
+        ``{"cells", "skipped", "done", "n/a", "wall_s"}``: counts and the wall time (s).
+
+    Raises:
+        ValueError: a bad argument or suite (before any run).
+        SuiteRunError: some runs failed with an error other than a refusal (after the others).
+    """
+    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if isinstance(backend, str):
+        if backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {sorted(BACKENDS)} or a map function, "
+                             f"got {backend!r}")
+        map_function = BACKENDS[backend]
+    elif callable(backend):
+        map_function = backend
+    else:
+        raise ValueError(f"backend must be one of {sorted(BACKENDS)} or a map function, got "
+                         f"{backend!r}")
+    if not isinstance(spec, SuiteSpec):
+        spec = load_suite(spec)
+    cells = check_suite(spec, progress=progress) if check else expand(spec)
+    start = time.perf_counter()
+    todo = [cell for cell in cells if not (resume and is_finished(out, cell.key))]
+    records_dir(out).mkdir(parents=True, exist_ok=True)
+    versions, revision = library_versions(), git_revision()
+    tasks = [{"key": cell.key, "suite": spec.name, "labels": cell.labels, "config": cell.config,
+              "versions": versions, "git_revision": revision} for cell in order_cells(todo)]
+    counts = {"cells": len(cells), "skipped": len(cells) - len(todo), "done": 0, "n/a": 0}
+    failures = []
+    bar = tqdm(total=len(tasks), desc=f"suite {spec.name}", unit="run", disable=not progress)
+    for result in map_function(run_cell, tasks, workers):
+        if result["status"] == "error":
+            failures.append(result)
+            errors = Path(out) / "errors"
+            errors.mkdir(parents=True, exist_ok=True)
+            (errors / f"{result['key']}.txt").write_text(
+                f"{label_text(result['labels'])}\n{result['traceback']}", encoding="utf-8")
+        else:
+            write_record(out, result)
+            counts[result["status"]] += 1
+        bar.set_postfix_str(label_text(result["labels"]), refresh=False)
+        bar.update(1)
+    bar.close()
+    counts["wall_s"] = time.perf_counter() - start
+    if failures:
+        raise SuiteRunError(failures)
+    return counts
+
