@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import importlib
 import inspect
 import os
 import re
@@ -291,10 +290,9 @@ def _env_block(source: str, key: str, value: Any, allow_feedback: bool) -> dict[
     return copy.deepcopy(dict(value))
 
 
-def _baseline_parameters(name: str, baselines: Mapping[str, str]) -> list[str]:
-    module_name, class_name = baselines[name].split(":")
-    cls = getattr(importlib.import_module(module_name), class_name)
-    return [p for p in inspect.signature(cls.__init__).parameters if p not in ("self", "env")]
+def _baseline_parameters(name: str, baselines: Mapping[str, type]) -> list[str]:
+    return [p for p in inspect.signature(baselines[name].__init__).parameters
+            if p not in ("self", "env")]
 
 
 def _policies(source: str, key: str, value: Any,
