@@ -294,8 +294,8 @@ class SoftArmEnv(gym.Env):
         return {**defaults.get(name, {}), **self.config.sensor_config.get(name, {})}
 
     def _build_observation_space(self) -> None:
-        obs, part_spaces = self.obs_parts, {part: OBSERVATION_PARTS[part].space(self)
-                                            for part in self.obs_parts}
+        self._parts = [OBSERVATION_PARTS[part] for part in self.obs_parts]
+        obs, part_spaces = self.obs_parts, {part.name: part.space(self) for part in self._parts}
         ends = np.cumsum([int(np.prod(part_spaces[part].shape)) for part in obs])
         self._part_slices = {part: slice(end - int(np.prod(part_spaces[part].shape)), end)
                              for part, end in zip(obs, ends)}
@@ -541,7 +541,7 @@ class SoftArmEnv(gym.Env):
         return np.clip(array, -1.0, 1.0)  # only float32 rounding beyond +-1 reaches here
 
     def _observation(self):
-        parts = {part: OBSERVATION_PARTS[part].read(self) for part in self.obs_parts}
+        parts = {part.name: part.read(self) for part in self._parts}
         if self.obs_format == "dict":
             return parts
         return np.concatenate([parts[p] for p in self.obs_parts]).astype(np.float32)
