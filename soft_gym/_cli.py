@@ -13,6 +13,7 @@ import argparse
 import json
 import math
 import os
+import tempfile
 from pathlib import Path
 from typing import Any, Callable, NoReturn
 
@@ -115,8 +116,6 @@ def output_dir_error(path: str | os.PathLike) -> str | None:
     both are tried with a temporary entry that is removed at once (permission bits alone do not
     tell, e.g. for root or on read-only file systems).
     """
-    import tempfile
-
     path = Path(path)
     if path.exists():
         if not path.is_dir():

@@ -34,6 +34,8 @@ from typing import Any, Sequence
 import cv2
 import numpy as np
 
+from soft_gym.scenarios.loads import FillingLoad, Flick, Push, SwayingMass, _TipMassBase
+
 BACKGROUND = (236, 240, 245)
 FLOOR = (212, 219, 204)
 GRID = (160, 170, 156)
@@ -339,8 +341,6 @@ class SceneRenderer:
 
     def _draw_loads(self, image: np.ndarray, sim, tip: np.ndarray, size: int) -> None:
         """Tip masses, filling containers, swaying masses' lines and acting forces' arrows."""
-        from soft_gym.scenarios.loads import Flick, FillingLoad, Push, SwayingMass, _TipMassBase
-
         camera, time_s = self.camera, sim.time_s
         tip_px = _pixel(camera.project(tip))
         hang = 0  # pixels already taken under (or over) the tip

@@ -42,10 +42,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 from soft_gym.robots.spec import GRAVITY_M_S2
 from soft_gym.scenarios.loads import (MAX_FILL_RATE_KG_S, MAX_FORCE_N, MAX_MASS_KG,
-                                      FillingLoad)
+                                      FillingLoad, Push, SwayingMass, TipMass)
+from soft_gym.sensors.faults import make_faults
 
 LOAD_KINDS = ("none", "tip_mass", "filling_load", "swaying_mass", "push")
 FAULT_KINDS = ("none", "moving_occluder", "low_light", "led_glare", "motion_blur")
@@ -113,8 +115,6 @@ class RandomizationConfig:
         if isinstance(config, cls):
             return config
         if isinstance(config, (str, Path)):
-            import yaml
-
             path = Path(config)
             if not path.is_file():
                 raise ValueError(f"randomization file {str(path)!r} does not exist")
@@ -198,8 +198,6 @@ class DomainRandomizer:
 
     def heaviest_loads_n(self, gravity_m_s2: float = GRAVITY_M_S2) -> dict[str, float]:
         """Heaviest weight or force (N) each load kind with non-zero odds can draw, by range."""
-        from soft_gym.scenarios import FillingLoad, Push, SwayingMass, TipMass
-
         c, odds = self.config, self.config.load_weights
         heaviest = {("tip_mass", "tip_mass_kg"): TipMass(mass_kg=c.tip_mass_kg[1]),
                     ("filling_load", "filling_added_kg"):
@@ -211,9 +209,6 @@ class DomainRandomizer:
         return {name: value for name, value in loads_n.items() if value > 0}
 
     def sample(self, rng: np.random.Generator) -> EpisodeDraw:
-        from soft_gym.scenarios import FillingLoad, Push, SwayingMass, TipMass
-        from soft_gym.sensors.faults import make_faults
-
         c = self.config
         uniform = lambda bounds: float(rng.uniform(*bounds))  # noqa: E731
         load = _choose(rng, c.load_weights)

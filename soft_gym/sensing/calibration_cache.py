@@ -20,8 +20,13 @@ import json
 import os
 import pickle
 import warnings
+from importlib import metadata
 from pathlib import Path
 from typing import Any, Callable
+
+import cv2
+import numpy
+import platformdirs
 
 CACHE_ENV_VARIABLE = "SOFT_GYM_CACHE"
 _FORMAT = 1
@@ -30,11 +35,6 @@ _memory: dict[str, Any] = {}
 
 def library_versions() -> dict[str, str]:
     """Versions whose change can change a calibration (package and numerical libraries)."""
-    from importlib import metadata
-
-    import cv2
-    import numpy
-
     versions = {"numpy": numpy.__version__, "opencv": cv2.__version__,
                 "soft_gym source": _source_digest()}
     for name in ("soft-arm-gym", "pybullet"):
@@ -58,8 +58,6 @@ def _source_digest() -> str:
 
 def cache_directory() -> Path:
     """Where calibration files live (``<user cache dir>/soft-arm-gym/calibration``)."""
-    import platformdirs
-
     return Path(platformdirs.user_cache_dir("soft-arm-gym")) / "calibration"
 
 

@@ -27,6 +27,7 @@ Conventions: camera frame as OpenCV (x right, y down, z forward); poses are 4x4 
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from dataclasses import dataclass, field
 
@@ -206,8 +207,6 @@ class VisionPoseEstimator:
 
     def __deepcopy__(self, memo: dict) -> "VisionPoseEstimator":
         """A copy with its own map (OpenCV's ORB and matcher objects are rebuilt, not copied)."""
-        import copy
-
         settings = {f.name: copy.deepcopy(getattr(self, f.name), memo)
                     for f in dataclasses.fields(self) if f.init}
         twin = VisionPoseEstimator(**settings)

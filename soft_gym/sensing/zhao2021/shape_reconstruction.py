@@ -23,6 +23,8 @@ import numpy as np
 from soft_gym._validation import (fields_from_options, require_integer, require_non_negative,
                                   require_positive)
 from soft_gym.robots.spec import ArmSpec
+from soft_gym.sensing.zhao2021.backbone_fit import fit_backbone
+from soft_gym.sensing.zhao2021.shape_exploration import N_KEY_POINTS
 
 
 @dataclass(frozen=True)
@@ -112,8 +114,6 @@ class ShapeReconstructor:
     def reconstruct(self, pressures_pa: np.ndarray, readings: np.ndarray) -> ShapeEstimate:
         """Key points and backbone from the last ``w + 1`` steps' pressures (Pa, ``(w + 1,
         n_chambers)``) and gauge readings (``(w + 1, n_gauges)``), oldest first."""
-        from soft_gym.sensing.zhao2021.backbone_fit import fit_backbone
-
         points = self.key_points(pressures_pa, readings)
         fit = fit_backbone(np.vstack([np.zeros(3), points]), n_points=self.n_points)
         return ShapeEstimate(points, fit.points_m, points[-1].copy(),
@@ -124,7 +124,7 @@ class ShapeReconstructor:
 
     @classmethod
     def from_state(cls, state: dict[str, Any]) -> "ShapeReconstructor":
-        from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor
+        from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor  # imports PyTorch (+1.1 s)
 
         return cls(SFEPDPredictor.from_state(state["predictor"]), state["n_points"])
 
@@ -135,7 +135,7 @@ class ShapeReconstructor:
     @classmethod
     def load(cls, path: str | Path, n_points: int = 60) -> "ShapeReconstructor":
         """Read networks written by :meth:`save`; a corrupt file is refused by name."""
-        from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor
+        from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor  # imports PyTorch (+1.1 s)
 
         return cls(SFEPDPredictor.load(path), n_points)
 
@@ -153,10 +153,9 @@ def fit_reconstruction(spec: ArmSpec, data, config: ReconstructionConfig = Recon
     Returns the reconstructor and a report: the training's per-network validation RMSE
     (normalised) and its iterations.
     """
-    import torch
+    import torch  # PyTorch: +1.1 s at import (-X importtime); the env needs it only to train
 
-    from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor
-    from soft_gym.sensing.zhao2021.shape_exploration import N_KEY_POINTS
+    from soft_gym.sensing.zhao2021.sfe_pd import SFEPDPredictor  # imports PyTorch, as above
 
     predictor = SFEPDPredictor(N_KEY_POINTS, spec.n_chambers,
                                data.readings.shape[1], seed=config.seed, dropout=config.dropout)

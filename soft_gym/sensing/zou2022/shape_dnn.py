@@ -46,6 +46,8 @@ from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import (fields_from_options, require_in_range, require_integer,
                                   require_non_negative, require_positive)
 from soft_gym.robots.spec import ArmSpec
+from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
+from soft_gym.sensors.stereo import StereoCamera
 
 PAPER_SAMPLES = 31 ** 3
 """Section 5.1: 0-3 bar in 0.1 bar steps in each of three chambers."""
@@ -173,8 +175,6 @@ def rotate_about_axis(lengths_m: np.ndarray, points_m: np.ndarray,
 def default_stereo():
     """The stereo camera of the data set and of the ``stereo`` source: a 320 x 180 pair (the
     ZED's 1280 x 720 aspect at a quarter size), 70 deg horizontal field, 12 cm baseline."""
-    from soft_gym.sensors.stereo import StereoCamera
-
     return StereoCamera(intrinsics=STEREO_INTRINSICS)
 
 
@@ -185,8 +185,6 @@ STEREO_INTRINSICS = {"width": 320, "height": 180, "hfov_deg": 70.0, "near_m": 0.
 def true_shape_points(spec: ArmSpec, backbone_m: np.ndarray) -> np.ndarray:
     """``P_0 .. P_6`` (m, (7, 3)) of a simulated backbone: the base and the material points at
     sixths of the rest length (as the ``ground_truth`` source gives them)."""
-    from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
-
     backbone = np.asarray(backbone_m, dtype=float)
     return np.concatenate([backbone[..., :1, :], key_points_from_backbone(spec, backbone)],
                           axis=-2)
@@ -197,7 +195,7 @@ def build_network(hidden_widths: tuple[int, ...] = HIDDEN_WIDTHS, n_inputs: int 
                   n_outputs: int = 3 * N_POINTS):
     """Table 2's network (eq. 18): linear layers through ``hidden_widths`` with ReLU, then a
     linear output layer."""
-    from torch import nn
+    from torch import nn  # +1.1 s at import (-X importtime): only to train or load
 
     layers: list[Any] = []
     width = n_inputs
@@ -228,7 +226,7 @@ class ShapeDNN:
 
     def __init__(self, n_inputs: int = 3, hidden_widths: tuple[int, ...] = HIDDEN_WIDTHS,
                  seed: int = 0) -> None:
-        import torch
+        import torch  # +1.1 s at import (-X importtime): only to train or load the DNN
 
         self.n_inputs = require_integer("n_inputs", n_inputs, 1)
         self.hidden_widths = ShapeDNNConfig(hidden_widths=hidden_widths).hidden_widths
@@ -249,7 +247,7 @@ class ShapeDNN:
             progress: bool = True) -> TrainingReport:
         """Train on ``train`` rows, keep the weights of the epoch with the lowest validation
         MSE (eq. 19; Adam). Runs torch on one thread."""
-        import torch
+        import torch  # +1.1 s at import (-X importtime): only to train or load the DNN
 
         lengths, points = self._check_data(lengths_m, points_m)
         train = self._check_index("train", train, len(lengths))
@@ -312,7 +310,7 @@ class ShapeDNN:
         return self.report
 
     def _cache_layers(self) -> None:
-        from torch import nn
+        from torch import nn  # +1.1 s at import (-X importtime): only to train or load
 
         self._layers = [(m.weight.detach().numpy().astype(np.float64).T.copy(),
                          m.bias.detach().numpy().astype(np.float64).copy())
@@ -350,7 +348,7 @@ class ShapeDNN:
 
     def predict_torch(self, lengths_m: np.ndarray) -> np.ndarray:
         """The same as :meth:`predict` through the torch module (float32): a reference."""
-        import torch
+        import torch  # +1.1 s at import (-X importtime): only to train or load the DNN
 
         x = np.atleast_2d(np.asarray(lengths_m, dtype=np.float64))
         self.network.eval()
@@ -374,7 +372,7 @@ class ShapeDNN:
 
     @classmethod
     def from_state(cls, state: dict[str, Any]) -> "ShapeDNN":
-        import torch
+        import torch  # +1.1 s at import (-X importtime): only to train or load the DNN
 
         dnn = cls(state["n_inputs"], tuple(state["hidden_widths"]), state["seed"])
         dnn.network.load_state_dict({k: torch.as_tensor(np.asarray(v))
