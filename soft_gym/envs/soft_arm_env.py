@@ -113,7 +113,7 @@ from soft_gym.engines import make_simulator
 from soft_gym.envs.config import EnvConfig, check_arguments
 from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.envs.rendering import SceneRenderer
-from soft_gym.procedures.calibration import calibrate
+from soft_gym.procedures.calibration import calibrate, calibration_key
 from soft_gym.procedures.positioning import drive_tip_to
 from soft_gym.procedures.workspace import reachable_tips
 from soft_gym.robots.actuation import Actuation
@@ -362,9 +362,8 @@ class SoftArmEnv(gym.Env):
         """What the feedback source and its calibration procedure know of this env: the arm,
         the rest before calibrating, the cache key, fresh sensors as this env configures them
         (without faults) and fresh copies of its fixed loads."""
-        key = {"arm": repr(self.arm), "scenario": repr(self.loads), "settle_s": self.settle_s,
-               "sensors": repr(sorted((name, repr(self.config.sensor_config.get(name)))
-                                      for name in self.sensors))}
+        key = calibration_key(self.arm, self.loads, self.settle_s,
+                              {name: self.config.sensor_config.get(name) for name in self.sensors})
         return CalibrationContext(
             spec=self.arm, settle_s=self.settle_s, key=key,
             make_sensor=lambda name: make_sensor(name, **self._sensor_options(name)),

@@ -16,12 +16,13 @@ recalibrating leaves its episodes as they were.
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
 from soft_gym._registry import Registry
 from soft_gym.engines import make_simulator
+from soft_gym.robots.spec import ArmSpec
 from soft_gym.procedures.wang2023_calibration import calibrate_pipeline
 from soft_gym.procedures.zhao2021_exploration import cached_reconstruction
 from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
@@ -32,6 +33,17 @@ from soft_gym.sensors.stereo import StereoCamera
 from soft_gym.simulator import Simulator
 
 Calibration = Callable[[FeedbackSource, CalibrationContext, bool], None]
+
+
+def calibration_key(spec: ArmSpec, loads: list, settle_s: float,
+                    sensor_settings: dict[str, Any]) -> dict[str, Any]:
+    """The cache key of everything an env decides that changes a calibration: the arm, its
+    fixed loads, the rest before calibrating (s) and each simulated sensor's user settings (the
+    source adds its own options, :meth:`~soft_gym.sensing.feedback_base.FeedbackSource.calibration_key`;
+    the cache adds the package's source digest and the libraries' versions)."""
+    return {"arm": repr(spec), "scenario": repr(loads), "settle_s": settle_s,
+            "sensors": repr(sorted((name, repr(settings))
+                                   for name, settings in sensor_settings.items()))}
 
 
 def private_simulator(context: CalibrationContext) -> Simulator:
@@ -115,6 +127,6 @@ def calibrate(source: FeedbackSource, context: CalibrationContext,
     CALIBRATIONS[source.name](source, context, use_cache)
 
 
-__all__ = ["CALIBRATIONS", "calibrate", "private_simulator",
+__all__ = ["CALIBRATIONS", "calibrate", "calibration_key", "private_simulator",
                       "calibrate_wang2023_pipeline", "calibrate_zhao2021_reconstruction",
                       "calibrate_zou2022_dnn"]
