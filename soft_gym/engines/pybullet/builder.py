@@ -137,7 +137,7 @@ class _JointTable:
     thread_band: list[float] = field(default_factory=list)
 
     def add(self, spec: ArmSpec, k: int, j: int, station: int, joint_kind: int) -> None:
-        """Append the joint of ``joint_kind`` at link ``j`` of segment ``k`` (global ``station``)."""
+        """Append the ``joint_kind`` joint of link ``j`` of segment ``k`` (global ``station``)."""
         segment = spec.segments[k]
         ds = segment.link_length_m
         spring = _joint_spring(spec, k, j, joint_kind)
