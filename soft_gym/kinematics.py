@@ -42,7 +42,17 @@ Quaternions are scalar-last ``(x, y, z, w)`` and returned with ``w >= 0``.
 
 from __future__ import annotations
 
-from typing import Any, Dict, Literal, Optional, Sequence, Tuple, Union, overload
+from typing import (
+    Any,
+    Dict,
+    Literal,
+    NamedTuple,
+    Optional,
+    Sequence,
+    Tuple,
+    Union,
+    overload,
+)
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -706,6 +716,268 @@ def cc_inverse_single(target_position: ArrayLike, d: float) -> FloatArray:
     return lengths
 
 
+# --------------------------------------------------------------------------------------------
+# cc_inverse: argument checks, initial guess, damped least squares, result
+# --------------------------------------------------------------------------------------------
+
+# Damping above which a target is given up (every recent step was rejected).
+_MAX_DAMPING = 1e8
+_EYE3: FloatArray = np.eye(3)
+
+
+class _InverseProblem(NamedTuple):
+    """The checked arguments of :func:`cc_inverse`, with the batch flattened to one axis."""
+
+    target: FloatArray
+    """Desired tip positions (m), shape (n_items, 3)."""
+    batch: Tuple[int, ...]
+    """The caller's batch shape (``target_position.shape[:-1]``)."""
+    n_chambers: int
+    """Chambers of the arm, ``3 * n_segments``."""
+    d: FloatArray
+    """Chamber distance from the segment axis (m), shape (n_items, n_segments)."""
+    rest: FloatArray
+    """Rest (straight) segment lengths (m), shape (n_segments,)."""
+    lower: FloatArray
+    """Lower bound on the chamber lengths (m), shape (n_items, n_chambers)."""
+    upper: FloatArray
+    """Upper bound on the chamber lengths (m), shape (n_items, n_chambers); may be ``inf``."""
+
+
+def _validate_n_segments(n_segments: Any) -> int:
+    """``n_segments`` as an int; raises ``ValueError`` unless it is an integer >= 1."""
+    if not _is_int(n_segments) or n_segments < 1:
+        raise ValueError(f"n_segments must be an integer >= 1, got {n_segments!r}")
+    return int(n_segments)
+
+
+def _broadcast_d(d: DistanceLike, n_segments: int, batch: Tuple[int, ...]) -> FloatArray:
+    """Chamber distance ``d`` (m), checked and broadcast to one row per target: shape
+    (prod(batch), n_segments)."""
+    d_arr = _validate_d(d, n_segments)
+    try:
+        return np.broadcast_to(d_arr, batch + (n_segments,)).reshape(-1, n_segments)
+    except ValueError as error:
+        raise ValueError(
+            f"d must be a float, one value per segment, or broadcastable to "
+            f"{batch + (n_segments,)}, got shape {d_arr.shape}"
+        ) from error
+
+
+def _check_iteration_settings(
+    damping: Any, max_iterations: Any, tolerance: Any, regularisation: Any
+) -> None:
+    """Raise ``ValueError`` unless ``damping >= 0`` (m/m), ``max_iterations >= 0`` (an
+    integer), ``tolerance > 0`` (m) and ``regularisation`` in [0, 1]."""
+    if not (_is_real(damping) and np.isfinite(damping) and damping >= 0.0):
+        raise ValueError(f"damping must be a finite number >= 0, got {damping!r}")
+    if not _is_int(max_iterations) or max_iterations < 0:
+        raise ValueError(f"max_iterations must be an integer >= 0, got {max_iterations!r}")
+    if not (_is_real(tolerance) and np.isfinite(tolerance) and tolerance > 0.0):
+        raise ValueError(f"tolerance must be a finite number > 0, got {tolerance!r}")
+    if not (_is_real(regularisation) and 0.0 <= regularisation <= 1.0):
+        raise ValueError(f"regularisation must be within [0, 1], got {regularisation!r}")
+
+
+def _broadcast_lengths(name: str, value: ArrayLike, shape: Tuple[int, ...]) -> FloatArray:
+    """Chamber lengths ``value`` (m) as floats broadcast to ``shape`` (batch + (n_chambers,));
+    not checked for sign or finiteness."""
+    array = _as_float(name, value)
+    try:
+        return np.broadcast_to(array, shape)
+    except ValueError as error:
+        raise ValueError(
+            f"{name} must be broadcastable to shape {shape}, got shape {array.shape}"
+        ) from error
+
+
+def _length_bound(
+    name: str, value: Optional[ArrayLike], default: float, shape: Tuple[int, ...]
+) -> FloatArray:
+    """One bound on the chamber lengths (m) broadcast to ``shape``: ``default`` where ``value``
+    is None; ``max_lengths`` may be ``inf`` but not NaN, every bound is > 0."""
+    if value is None:
+        return np.full(shape, default)
+    array = _broadcast_lengths(name, value, shape)
+    if name == "max_lengths":
+        if np.any(np.isnan(array)):
+            raise ValueError(f"{name} must not contain NaN, got {array.tolist()}")
+        bad = array <= 0.0
+        if np.any(bad):
+            val, index = _first_bad(array, bad)
+            raise ValueError(f"{name} must be > 0, got {val!r} at index {index}")
+    else:
+        _check_positive(name, array)
+    return array
+
+
+def _length_bounds(
+    min_lengths: Optional[ArrayLike], max_lengths: Optional[ArrayLike], shape: Tuple[int, ...]
+) -> Tuple[FloatArray, FloatArray]:
+    """Lower and upper chamber-length bounds (m), each flattened to (n_items, n_chambers);
+    the lower defaults to 1e-6 m, the upper to ``inf``, and lower <= upper everywhere."""
+    n_chambers = shape[-1]
+    lower = _length_bound("min_lengths", min_lengths, _DEFAULT_MIN_LENGTH, shape)
+    upper = _length_bound("max_lengths", max_lengths, np.inf, shape)
+    lower, upper = lower.reshape(-1, n_chambers), upper.reshape(-1, n_chambers)
+    if np.any(lower > upper):
+        raise ValueError(
+            "min_lengths must be <= max_lengths element-wise, got min_lengths "
+            f"{lower.max()!r} > max_lengths {upper.min()!r} somewhere"
+        )
+    return lower, upper
+
+
+def _inverse_problem(
+    target_position: ArrayLike,
+    d: DistanceLike,
+    n_segments: Any,
+    rest_length: Union[float, Sequence[float]],
+    min_lengths: Optional[ArrayLike],
+    max_lengths: Optional[ArrayLike],
+    damping: Any,
+    max_iterations: Any,
+    tolerance: Any,
+    regularisation: Any,
+) -> _InverseProblem:
+    """Check the arguments of :func:`cc_inverse` (in the order of its signature, so that the
+    first bad one is reported) and flatten them to one batch axis."""
+    target = _validate_target(target_position)
+    n_segments = _validate_n_segments(n_segments)
+    n_chambers = 3 * n_segments
+    batch = target.shape[:-1]
+    d_full = _broadcast_d(d, n_segments, batch)
+    rest = _validate_per_segment("rest_length", rest_length, n_segments)
+    _check_iteration_settings(damping, max_iterations, tolerance, regularisation)
+    lower, upper = _length_bounds(min_lengths, max_lengths, batch + (n_chambers,))
+    return _InverseProblem(target.reshape(-1, 3), batch, n_chambers, d_full, rest, lower, upper)
+
+
+def _split_single_arc(problem: _InverseProblem) -> FloatArray:
+    """The single CC arc through each target (:func:`cc_inverse_single`) split over the segments
+    in proportion to their rest lengths, which keeps its curvature in every segment (exact for
+    the CC model, Wang et al. 2023 (wang2023), eqs. (19)-(24)); the straight rest pose where no
+    such arc exists or a chamber length would not be positive. Chamber lengths (m), shape
+    (n_items, n_chambers)."""
+    rest_lengths = np.repeat(problem.rest, 3)
+    arc_s, arc_kx, arc_ky, valid = _single_arc(problem.target)
+    share = problem.rest / problem.rest.sum()
+    seg_s = arc_s[:, None] * share
+    guess = _lengths(seg_s, arc_kx[:, None], arc_ky[:, None], problem.d)
+    valid = valid & np.all(guess > 0.0, axis=-1)
+    return np.where(valid[:, None], guess, rest_lengths)
+
+
+def _initial_guess(problem: _InverseProblem, initial_lengths: Optional[ArrayLike]) -> FloatArray:
+    """Starting chamber lengths (m) of the iteration, shape (n_items, n_chambers), clipped to the
+    bounds: ``initial_lengths`` (checked > 0) if given, else :func:`_split_single_arc`."""
+    if initial_lengths is not None:
+        init = _broadcast_lengths(
+            "initial_lengths", initial_lengths, problem.batch + (problem.n_chambers,)
+        )
+        _check_positive("initial_lengths", init)
+        lengths = init.reshape(-1, problem.n_chambers).copy()
+    else:
+        lengths = _split_single_arc(problem)
+    return np.clip(lengths, problem.lower, problem.upper)
+
+
+def _damped_step(
+    lengths: FloatArray,
+    d: FloatArray,
+    error: FloatArray,
+    lam: FloatArray,
+    nu: FloatArray,
+    reference: FloatArray,
+) -> FloatArray:
+    """One damped least-squares step (m) of the chamber lengths, trust-region limited
+    (:func:`_limit_step`)::
+
+        dl = J^T (J J^T + lambda^2 I)^-1 e + (I - J^+ J) * nu * (l_ref - l)
+
+    with the analytic Jacobian ``J`` of the CC model (Wang et al. 2023 (wang2023),
+    eqs. (19)-(24)), tip error ``e`` (m), damping ``lam`` and null-space gain ``nu`` per item.
+    Shapes: ``lengths``, ``reference`` (n, n_chambers); ``d`` (n, n_segments); ``error`` (n, 3);
+    ``lam``, ``nu`` (n,).
+    """
+    _, jac = _jacobian(lengths, d)
+    jac_t = np.swapaxes(jac, -1, -2)
+    system = jac @ jac_t + (lam**2 + 1e-18)[:, None, None] * _EYE3
+    primary = (jac_t @ np.linalg.solve(system, error[..., None]))[..., 0]
+    null = np.eye(lengths.shape[-1]) - np.linalg.pinv(jac, rcond=1e-10) @ jac
+    secondary = (null @ (nu[:, None] * (reference - lengths))[..., None])[..., 0]
+    return _limit_step(primary + secondary, lengths, d)
+
+
+def _refine(
+    problem: _InverseProblem,
+    lengths: FloatArray,
+    damping: float,
+    max_iterations: int,
+    tolerance: float,
+    regularisation: float,
+) -> Tuple[FloatArray, FloatArray, NDArray[np.int_]]:
+    """Levenberg-Marquardt iteration of :func:`_damped_step` from ``lengths`` (also the
+    null-space reference ``l_ref``), each step clipped to the bounds and accepted only if it
+    reduces the tip error; ``lambda`` x10 after a rejected step, /10 (not below ``damping``)
+    after an accepted one; ``nu`` x0.8 per iteration and x0.5 more after a rejection.
+
+    Returns ``(lengths, residual, iterations)``: chamber lengths (m), shape
+    (n_items, n_chambers), the final tip error (m) and the iterations taken, shape (n_items,).
+    """
+    target, d_full, lower, upper = problem.target, problem.d, problem.lower, problem.upper
+    n_items = target.shape[0]
+    reference = lengths.copy()
+    error = target - _forward(lengths, d_full)
+    residual = np.linalg.norm(error, axis=-1)
+    lam = np.full(n_items, float(damping))
+    nu = np.full(n_items, float(regularisation))
+    iterations = np.zeros(n_items, dtype=int)
+    for _ in range(max_iterations):
+        active = np.flatnonzero((residual >= tolerance) & (lam < _MAX_DAMPING))
+        if active.size == 0:
+            break
+        l_act = lengths[active]
+        d_act = d_full[active]
+        step = _damped_step(
+            l_act, d_act, error[active], lam[active], nu[active], reference[active]
+        )
+        candidate = np.clip(l_act + step, lower[active], upper[active])
+        cand_error = target[active] - _forward(candidate, d_act)
+        cand_residual = np.linalg.norm(cand_error, axis=-1)
+        accept = cand_residual < residual[active]
+        iterations[active] += 1
+        acc, rej = active[accept], active[~accept]
+        lengths[acc] = candidate[accept]
+        error[acc] = cand_error[accept]
+        residual[acc] = cand_residual[accept]
+        lam[acc] = np.maximum(lam[acc] / 10.0, damping)
+        lam[rej] = np.maximum(lam[rej], 1e-6) * 10.0
+        nu[active] *= _REGULARISATION_DECAY
+        nu[rej] *= 0.5
+    return lengths, residual, iterations
+
+
+def _inverse_info(
+    residual: FloatArray,
+    iterations: NDArray[np.int_],
+    batch: Tuple[int, ...],
+    tolerance: float,
+) -> Dict[str, Any]:
+    """The ``info`` of :func:`cc_inverse`: ``'converged'``, ``'residual_m'`` (m) and
+    ``'iterations'`` per target, in the caller's batch shape (Python scalars without a batch)."""
+    converged = (residual < tolerance).reshape(batch)
+    residual_out = residual.reshape(batch)
+    iterations_out = iterations.reshape(batch)
+    if batch == ():
+        return {
+            "converged": bool(converged),
+            "residual_m": float(residual_out),
+            "iterations": int(iterations_out),
+        }
+    return {"converged": converged, "residual_m": residual_out, "iterations": iterations_out}
+
+
 @overload
 def cc_inverse(
     target_position: ArrayLike,
@@ -803,132 +1075,15 @@ def cc_inverse(
         ``(lengths, info)``.  Unreachable targets give the closest solution found and
         ``converged = False``.
     """
-    target = _validate_target(target_position)
-    if not _is_int(n_segments) or n_segments < 1:
-        raise ValueError(f"n_segments must be an integer >= 1, got {n_segments!r}")
-    n_segments = int(n_segments)
-    n_chambers = 3 * n_segments
-    batch = target.shape[:-1]
-    d_arr = _validate_d(d, n_segments)
-    try:
-        d_full = np.broadcast_to(d_arr, batch + (n_segments,)).reshape(-1, n_segments)
-    except ValueError as error:
-        raise ValueError(
-            f"d must be a float, one value per segment, or broadcastable to "
-            f"{batch + (n_segments,)}, got shape {d_arr.shape}"
-        ) from error
-    rest = _validate_per_segment("rest_length", rest_length, n_segments)
-    if not (_is_real(damping) and np.isfinite(damping) and damping >= 0.0):
-        raise ValueError(f"damping must be a finite number >= 0, got {damping!r}")
-    if not _is_int(max_iterations) or max_iterations < 0:
-        raise ValueError(f"max_iterations must be an integer >= 0, got {max_iterations!r}")
-    if not (_is_real(tolerance) and np.isfinite(tolerance) and tolerance > 0.0):
-        raise ValueError(f"tolerance must be a finite number > 0, got {tolerance!r}")
-    if not (_is_real(regularisation) and 0.0 <= regularisation <= 1.0):
-        raise ValueError(f"regularisation must be within [0, 1], got {regularisation!r}")
-
-    def _bound(name: str, value: Optional[ArrayLike], default: float) -> FloatArray:
-        if value is None:
-            return np.full(batch + (n_chambers,), default)
-        array = _as_float(name, value)
-        try:
-            array = np.broadcast_to(array, batch + (n_chambers,))
-        except ValueError as error:
-            raise ValueError(
-                f"{name} must be broadcastable to shape {batch + (n_chambers,)}, got shape "
-                f"{array.shape}"
-            ) from error
-        if name == "max_lengths":
-            if np.any(np.isnan(array)):
-                raise ValueError(f"{name} must not contain NaN, got {array.tolist()}")
-            bad = array <= 0.0
-            if np.any(bad):
-                val, index = _first_bad(array, bad)
-                raise ValueError(f"{name} must be > 0, got {val!r} at index {index}")
-        else:
-            _check_positive(name, array)
-        return array
-
-    lower = _bound("min_lengths", min_lengths, _DEFAULT_MIN_LENGTH).reshape(-1, n_chambers)
-    upper = _bound("max_lengths", max_lengths, np.inf).reshape(-1, n_chambers)
-    if np.any(lower > upper):
-        raise ValueError(
-            "min_lengths must be <= max_lengths element-wise, got min_lengths "
-            f"{lower.max()!r} > max_lengths {upper.min()!r} somewhere"
-        )
-
-    flat_target = target.reshape(-1, 3)
-    n_items = flat_target.shape[0]
-    rest_lengths = np.repeat(rest, 3)
-    if initial_lengths is not None:
-        init = _as_float("initial_lengths", initial_lengths)
-        try:
-            init = np.broadcast_to(init, batch + (n_chambers,))
-        except ValueError as error:
-            raise ValueError(
-                f"initial_lengths must be broadcastable to shape {batch + (n_chambers,)}, "
-                f"got shape {init.shape}"
-            ) from error
-        _check_positive("initial_lengths", init)
-        lengths = init.reshape(-1, n_chambers).copy()
-    else:
-        arc_s, arc_kx, arc_ky, valid = _single_arc(flat_target)
-        share = rest / rest.sum()
-        seg_s = arc_s[:, None] * share
-        guess = _lengths(seg_s, arc_kx[:, None], arc_ky[:, None], d_full)
-        valid = valid & np.all(guess > 0.0, axis=-1)
-        lengths = np.where(valid[:, None], guess, rest_lengths)
-    lengths = np.clip(lengths, lower, upper)
-    reference = lengths.copy()
-
-    error = flat_target - _forward(lengths, d_full)
-    residual = np.linalg.norm(error, axis=-1)
-    lam = np.full(n_items, float(damping))
-    nu = np.full(n_items, float(regularisation))
-    iterations = np.zeros(n_items, dtype=int)
-    max_lambda = 1e8
-    eye3 = np.eye(3)
-    eye_n = np.eye(n_chambers)
-    for _ in range(max_iterations):
-        active = np.flatnonzero((residual >= tolerance) & (lam < max_lambda))
-        if active.size == 0:
-            break
-        l_act = lengths[active]
-        d_act = d_full[active]
-        _, jac = _jacobian(l_act, d_act)
-        jac_t = np.swapaxes(jac, -1, -2)
-        system = jac @ jac_t + (lam[active] ** 2 + 1e-18)[:, None, None] * eye3
-        primary = (jac_t @ np.linalg.solve(system, error[active][..., None]))[..., 0]
-        null = eye_n - np.linalg.pinv(jac, rcond=1e-10) @ jac
-        secondary = (null @ (nu[active, None] * (reference[active] - l_act))[..., None])[..., 0]
-        step = _limit_step(primary + secondary, l_act, d_act)
-        candidate = np.clip(l_act + step, lower[active], upper[active])
-        cand_error = flat_target[active] - _forward(candidate, d_act)
-        cand_residual = np.linalg.norm(cand_error, axis=-1)
-        accept = cand_residual < residual[active]
-        iterations[active] += 1
-        acc, rej = active[accept], active[~accept]
-        lengths[acc] = candidate[accept]
-        error[acc] = cand_error[accept]
-        residual[acc] = cand_residual[accept]
-        lam[acc] = np.maximum(lam[acc] / 10.0, damping)
-        lam[rej] = np.maximum(lam[rej], 1e-6) * 10.0
-        nu[active] *= _REGULARISATION_DECAY
-        nu[rej] *= 0.5
-
-    result = lengths.reshape(batch + (n_chambers,))
+    problem = _inverse_problem(
+        target_position, d, n_segments, rest_length, min_lengths, max_lengths,
+        damping, max_iterations, tolerance, regularisation,
+    )
+    lengths = _initial_guess(problem, initial_lengths)
+    lengths, residual, iterations = _refine(
+        problem, lengths, damping, max_iterations, tolerance, regularisation
+    )
+    result = lengths.reshape(problem.batch + (problem.n_chambers,))
     if not return_info:
         return result
-    converged = (residual < tolerance).reshape(batch)
-    residual_out = residual.reshape(batch)
-    iterations_out = iterations.reshape(batch)
-    info: Dict[str, Any]
-    if batch == ():
-        info = {
-            "converged": bool(converged),
-            "residual_m": float(residual_out),
-            "iterations": int(iterations_out),
-        }
-    else:
-        info = {"converged": converged, "residual_m": residual_out, "iterations": iterations_out}
-    return result, info
+    return result, _inverse_info(residual, iterations, problem.batch, tolerance)

@@ -531,7 +531,7 @@ def test_contact_detection_is_off_only_while_the_arm_is_alone_and_changes_no_mot
         sim.set_pressures(pressures)
         sim.step_physics(1.0)
         tips[name] = [sim.tip_pose()[0]]
-    assert not alone._contacts_on and kept_on._contacts_on
+    assert not alone._contacts.on and kept_on._contacts.on
     # a sphere just beside the bent tip, in the path of its swing back
     swing = alone.tip_pose()[0] - np.array([0.0, 0.0, spec.length_m])
     obstacle_centre = alone.tip_pose()[0] - 0.25 * swing
@@ -545,7 +545,7 @@ def test_contact_detection_is_off_only_while_the_arm_is_alone_and_changes_no_mot
             tips[name].append(sim.tip_pose()[0])
             if name == "alone":
                 touched += bool(sim.client.getContactPoints(sim.arm.body_id, obstacles[name]))
-    assert alone._contacts_on
+    assert alone._contacts.on
     assert touched > 0, "the arm never touched the obstacle: the test checks nothing"
     np.testing.assert_array_equal(np.array(tips["alone"]), np.array(tips["kept_on"]))
 
@@ -561,11 +561,11 @@ def test_contact_detection_sees_a_collidable_body_that_reuses_a_removed_bodys_id
     marker = client.createMultiBody(
         0.0, -1, client.createVisualShape(pybullet.GEOM_SPHERE, radius=0.005), [0.5, 0.5, 0.5])
     sim.step_physics(spec.control_period_s)
-    assert not sim._contacts_on
+    assert not sim._contacts.on
     client.removeBody(marker)
     tip = sim.tip_pose()[0]
     sphere = _sphere(sim, tip + np.array([0.0, 0.0, 0.004]), 0.005)
     assert sphere == marker and client.getNumBodies() == 2
     sim.step_physics(spec.control_period_s)
-    assert sim._contacts_on
+    assert sim._contacts.on
     assert client.getContactPoints(sim.arm.body_id, sphere)

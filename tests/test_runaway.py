@@ -82,7 +82,7 @@ def test_clearing_loads_restores_the_arm_as_built():
     for link in range(fresh.arm.n_joints):
         assert (loaded.client.getDynamicsInfo(loaded.arm.body_id, link)
                 == fresh.client.getDynamicsInfo(fresh.arm.body_id, link))
-    assert loaded.tip_payload_kg == 0.0 and not loaded._forces
+    assert loaded.tip_payload_kg == 0.0 and not loaded._held.forces
     q = np.linspace(-0.2, 0.2, fresh.arm.n_joints)
     assert np.array_equal(loaded.mass_matrix(q), fresh.mass_matrix(q))
 

@@ -17,25 +17,23 @@ from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.engines.pybullet.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
-from soft_gym.engines.pybullet.world import PyBulletWorld
-from soft_gym.robots.pneumatics import (
-    PneumaticSupply,
-    chamber_area_growth,
-    effective_pressure_pa,
-    loads_of_effective_pressure,
-    twist_of_effective_pressure,
+from soft_gym.engines.pybullet.contacts import ContactSwitch
+from soft_gym.engines.pybullet.external_loads import HeldForces, TipPayload
+from soft_gym.engines.pybullet.mass_matrix import LinkInertias
+from soft_gym.engines.pybullet.springs import (
+    STIFFNESS_MARGIN,
+    SpringGains,
+    pressure_to_rest_matrix,
+    tangent_stiffness_at,
+    weightless_equilibrium,
 )
+from soft_gym.engines.pybullet.world import PyBulletWorld
+from soft_gym.robots.pneumatics import PneumaticSupply, chamber_area_growth, effective_pressure_pa
 from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
 from soft_gym.robots.stops import STOP_STIFFNESS_FACTOR, THREAD_STIFFNESS_FACTOR, EndStops
 from soft_gym.scenarios.loads import heaviest_total_load_n
 from soft_gym.simulator import Load
 
-
-_IMPLICIT_FRACTION = 0.25
-"""``theta`` of the semi-implicit spring update (see ``ArmSimulator._update_implicit_gains``)."""
-
-_STIFFNESS_MARGIN = 1.25
-"""Factor on the tangent stiffness used in the implicit term, so it stays ahead of stiffening."""
 
 _FAST_MOTION_PER_SUBSTEP = 0.2
 """A joint moving faster than this fraction of its mass-matrix refresh tolerance (0.05 rad or 5 %
@@ -84,24 +82,17 @@ class ArmSimulator:
         self.arm: ArmBody = build_arm(self.client, spec)
         self.world = PyBulletWorld(self.client, self.arm.body_id, self.arm.tip_link,
                                    np.array([0.0, 0.0, self.arm.station_rest_length[-1]]))
-        # links with a collision shape, and whether their contact detection is on (see
-        # _sync_contact_detection)
-        self._collider_links = [
-            link for link in range(self.arm.n_joints)
-            if self.client.getCollisionShapeData(self.arm.body_id, link)]
-        self._contacts_on = True
-        self._body_count = 0  # bodies in the world at the last look
-        self._nominal_inertia = self._read_link_inertia()
+        # the arm's contact detection, off while nothing can touch it
+        self._contacts = ContactSwitch(self.client, self.arm.body_id, self.arm.n_joints)
+        # the semi-implicit gains; a change of a link's mass or inertia refreshes them
+        self._gains = SpringGains(self.arm.n_joints)
         # PyBullet builds its inverse-dynamics tree (behind calculateMassMatrix) on the first call
         # and never updates it when a link's mass changes later; build it now, from the nominal
         # masses, and add every change on top (:meth:`mass_matrix`)
-        self.client.calculateMassMatrix(self.arm.body_id, [0.0] * self.arm.n_joints)
-        self._inertia_changes: dict[int, tuple[float, np.ndarray]] = {}
-        # every link's centre of mass in its own frame (m): PyBullet never moves it
-        self._centre_of_mass = {
-            link: np.asarray(self.client.getDynamicsInfo(self.arm.body_id, link)[3])
-            for link in range(self.arm.n_joints)}
-        self._tip_payloads: dict[str, float] = {}
+        self._inertias = LinkInertias(self.client, self.arm.body_id, self.arm.n_joints,
+                                      on_change=self._gains.invalidate)
+        self._held = HeldForces(self.client, self.arm)
+        self._payload = TipPayload(self.arm, self._inertias, self._held)
         self.supply = PneumaticSupply(spec)
         self._area_growth = chamber_area_growth(spec)
         self._area_grows = bool(np.any(self._area_growth))
@@ -128,19 +119,15 @@ class ArmSimulator:
         self._state = np.zeros(4 * self.arm.n_joints)
         self._torque = np.zeros(self.arm.n_joints)  # the substep's joint torques (buffer)
         self._previous_velocity_valid = False
-        self._torque_gain = np.zeros((self.arm.n_joints, 4 * self.arm.n_joints))
         self._torque_offset = np.zeros(self.arm.n_joints)
-        self._solve = np.eye(self.arm.n_joints)
-        self._implicit_stiffness = np.zeros(self.arm.n_joints)
         self._load_torque = np.zeros(self.arm.n_joints)
-        self._gain_configuration = np.zeros(self.arm.n_joints)
         # joint motion after which the mass matrix is refreshed early: 0.05 rad or 5 % strain
         self._configuration_tolerance = np.where(
             self._kind == AXIAL, 0.05 * self.arm.station_rest_length[self.arm.joint_station], 0.05)
         # joint speeds (rad/s or m/s) above which a substep is split in two, in four
         self._fast_speed = _FAST_MOTION_PER_SUBSTEP * self._configuration_tolerance / self.physics_dt_s
         self._refinement = 1  # pieces per substep (see _refinement_for)
-        self._pressure_to_rest_nominal = self._pressure_to_rest_matrix()
+        self._pressure_to_rest_nominal = pressure_to_rest_matrix(spec, self.arm)
         self._pressure_to_rest = self._pressure_to_rest_nominal
         self._substeps_per_gain_update = self._substeps_per_actuation * max(
             1, int(round(spec.control_period_s / spec.actuation_update_s)))
@@ -149,8 +136,6 @@ class ArmSimulator:
         self.loads: list[Load] = []
         self.time_s = 0.0
         self._substep = 0
-        self._forces: dict[str, tuple[int, np.ndarray, np.ndarray]] = {}
-        self._off_body_forces: set[str] = set()
         self.reset()
 
     # ----------------------------------------------------------- public face (docs/architecture.md)
@@ -170,7 +155,7 @@ class ArmSimulator:
         # the substep loop is the simulator's hot path: every name it uses is bound locally, the
         # joint states are read with one call, the arrays it writes are preallocated, and the
         # end stops are skipped with one test while every joint is in its free range
-        self._sync_contact_detection()
+        self._contacts.sync()
         body, joints, client_id = self.arm.body_id, self._joints, self._client_id
         # pybullet's functions called directly: BulletClient's per-call keyword merging costs
         # about 1 us a call, three calls a substep
@@ -188,6 +173,10 @@ class ArmSimulator:
         free_centre, free_half_width = stops.free_centre, stops.free_half_width
         per_actuation = self._substeps_per_actuation
         torque = self._torque
+        gains = self._gains
+        torque_gain = gains.torque_gain  # written in place, never replaced
+        held = self._held
+        held_forces = held.forces  # changed in place by the loads, never replaced
         dot, absolute, add, multiply = np.dot, np.abs, np.add, np.multiply
         end = self._substep + n
         pieces = 0  # pieces of the current substep done (several while the arm whips)
@@ -209,10 +198,10 @@ class ArmSimulator:
                 multiply(k0, q, out=spring)
             if (absolute(q - free_centre) > free_half_width).any():
                 add(spring, stop_force(q), out=spring)
-            dot(self._torque_gain, state, out=torque)
+            dot(torque_gain, state, out=torque)
             add(self._torque_offset, torque, out=torque)
-            if self._forces:
-                torque += self._solve @ self._external_joint_torque(q)
+            if held_forces:
+                torque += gains.solve @ held.joint_torque(q)
             set_motors(body, joints, torque_mode, forces=torque.tolist(), physicsClientId=client_id)
             simulate(physicsClientId=client_id)
             previous_velocity[:] = velocity
@@ -224,7 +213,7 @@ class ArmSimulator:
             if not self._previous_velocity_valid:
                 # a substep has been measured: bring in the other-forces term from now on
                 self._previous_velocity_valid = True
-                self._update_implicit_gains(q, self._implicit_stiffness)
+                self._update_implicit_gains(q, gains.implicit_stiffness)
         self.time_s = self._substep * self.physics_dt_s
         self._check_within_stops()
 
@@ -232,8 +221,8 @@ class ArmSimulator:
         """Set gravity in the base frame (m/s^2)."""
         self.gravity = as_finite_array("vector_m_s2", vector_m_s2, shape=(3,))
         self.client.setGravity(*self.gravity)
-        if self._tip_payloads:
-            self._apply_tip_payload()
+        if self._payload.masses:
+            self._payload.apply(self.gravity)
 
     def apply_tip_force(self, force_n: np.ndarray) -> None:
         """Apply a force (N, base frame) at the tip, held until changed (zeros removes it)."""
@@ -325,15 +314,13 @@ class ArmSimulator:
         they do not touch a fiber or gauge on the body.
         """
         forces = np.zeros((len(self.arm.station_link), 3))
-        body_forces = {key for key in self._forces if key not in self._off_body_forces}
         index_of_link = {int(link): i for i, link in enumerate(self.arm.station_link)}
         for contact in self.client.getContactPoints(bodyA=self.arm.body_id):
             i = index_of_link.get(contact[3])
             if i is not None:
                 # contact[7] is the normal on B pointing to A; contact[9] the normal force (N)
                 forces[i] += np.asarray(contact[7]) * contact[9]
-        for key in body_forces:
-            link, force, _ = self._forces[key]
+        for link, force in self._held.body_forces():
             i = index_of_link.get(link)
             if i is not None:
                 forces[i] += force
@@ -387,8 +374,11 @@ class ArmSimulator:
         straight to 2-3 bar, can tear its joints apart in the first milliseconds).
         """
         self.supply.reset(pressure_pa)
-        start = (np.zeros(len(self._joints)) if pressure_pa is None
-                 else self._weightless_equilibrium(self.supply.pressure_pa))
+        if pressure_pa is None:
+            start = np.zeros(len(self._joints))
+        else:  # where the springs balance the pressure load alone
+            effective = effective_pressure_pa(self.spec, self.supply.pressure_pa)
+            start = weightless_equilibrium(self._pressure_to_rest @ effective, self.arm)
         for joint, position in zip(self._joints, start):
             self.client.resetJointState(self.arm.body_id, joint, float(position), 0.0)
         self._state[:] = 0.0
@@ -434,7 +424,7 @@ class ArmSimulator:
         self._pressure_to_rest = self._pressure_to_rest_nominal / scale
         self._stiffness0 = scale / self.arm.compliance
         self._damping = self.arm.damping_time_s * self._stiffness0
-        self._implicit_stiffness = np.zeros(self.arm.n_joints)  # forces a gain refresh
+        self._gains.invalidate()
 
     def set_time_constant_scale(self, scale: float) -> None:
         """Multiply the pneumatic supply's time constants by ``scale`` (domain randomisation)."""
@@ -462,11 +452,9 @@ class ArmSimulator:
         for load in self.loads:
             load.detach(self)
         self.loads.clear()
-        self._tip_payloads.clear()
-        for link in list(self._inertia_changes):
-            self._set_link_inertia(link, *self._nominal_inertia[link])
-        self._forces.clear()
-        self._off_body_forces.clear()
+        self._payload.masses.clear()
+        self._inertias.restore_nominal()
+        self._held.clear()
 
     def set_external_force(self, key: str, link: int, force_n: np.ndarray,
                            local_point_m: tuple[float, float, float] | None = None,
@@ -477,19 +465,7 @@ class ArmSimulator:
         ``on_body=False`` marks a force on the tip cap rather than on the body's surface (see
         :meth:`link_contact_forces`).
         """
-        link = int(self.arm.station_link[link])
-        force = np.asarray(force_n, dtype=float)
-        if not np.any(force):
-            self._forces.pop(key, None)
-            self._off_body_forces.discard(key)
-            return
-        if on_body:
-            self._off_body_forces.discard(key)
-        else:
-            self._off_body_forces.add(key)
-        if local_point_m is None:
-            local_point_m = (0.0, 0.0, 0.5 * self._link_length(link))
-        self._forces[key] = (int(link), force, np.asarray(local_point_m, dtype=float))
+        self._held.set(key, link, force_n, local_point_m, on_body)
 
     def set_tip_payload(self, key: str, mass_kg: float) -> None:
         """Carry a point mass (kg) at the tip under ``key`` (tip masses, a filling container).
@@ -497,20 +473,12 @@ class ArmSimulator:
         Payloads of several keys add up; ``0`` removes one. The tip link's mass and inertia and
         the weight at the tip follow at once; :meth:`clear_loads` removes them all.
         """
-        mass_kg = require_non_negative("mass_kg", mass_kg)
-        if mass_kg == 0.0:
-            if self._tip_payloads.pop(key, None) is None:
-                return
-        elif self._tip_payloads.get(key) == mass_kg:
-            return
-        else:
-            self._tip_payloads[key] = mass_kg
-        self._apply_tip_payload()
+        self._payload.set(key, require_non_negative("mass_kg", mass_kg), self.gravity)
 
     @property
     def tip_payload_kg(self) -> float:
         """Total point mass carried at the tip (kg)."""
-        return float(sum(self._tip_payloads.values()))
+        return float(sum(self._payload.masses.values()))
 
     def link_mass(self, link: int) -> float:
         return float(self.client.getDynamicsInfo(self.arm.body_id, link)[0])
@@ -522,37 +490,6 @@ class ArmSimulator:
             pass
 
     # ------------------------------------------------------------------ internals
-    def _weightless_equilibrium(self, pressure_pa: np.ndarray) -> np.ndarray:
-        """Joint positions where the springs balance the pressure load alone: per joint the real
-        root of ``q (1 + beta (s q)^2) = q_rest`` (the secant stiffening of
-        :meth:`_update_actuation`), kept inside 98 % of the joint's limits."""
-        rest = self._pressure_to_rest @ effective_pressure_pa(self.spec, pressure_pa)
-        a = self.arm.stiffening * self.arm.strain_scale ** 2
-        q = rest.copy()
-        stiff = a > 0
-        if np.any(stiff):
-            # Cardano for q^3 + q / a - rest / a = 0, which has one real root (increasing)
-            p3 = 1.0 / (3.0 * a[stiff])
-            half = 0.5 * rest[stiff] / a[stiff]
-            root = np.sqrt(half ** 2 + p3 ** 3)
-            q[stiff] = np.cbrt(half + root) + np.cbrt(half - root)
-        return np.clip(q, 0.98 * self.arm.lower_limit, 0.98 * self.arm.upper_limit)
-
-    def _pressure_to_rest_matrix(self) -> np.ndarray:
-        """Matrix (n_joints, n_chambers) from effective chamber pressures (Pa,
-        :func:`~soft_gym.robots.pneumatics.effective_pressure_pa`) to each joint's rest
-        deflection under the small-strain compliance (the effective pressure -> load map is
-        linear)."""
-        columns = []
-        for chamber in range(self.spec.n_chambers):
-            unit = np.zeros(self.spec.n_chambers)
-            unit[chamber] = 1.0
-            axial, moment = loads_of_effective_pressure(self.spec, unit)
-            twist = twist_of_effective_pressure(self.spec, unit)
-            per_kind = np.stack([moment[:, 0], moment[:, 1], twist, axial], axis=1)
-            columns.append((self.arm.compliance_parts * per_kind[:, self._kind].T).sum(axis=1))
-        return np.stack(columns, axis=1)
-
     def _segment_bend_weights(self) -> np.ndarray:
         """Weights (n_segments, n_joints) turning joint angles into each segment's total bending.
 
@@ -597,19 +534,20 @@ class ArmSimulator:
         for load in self.loads:
             load.update(self, now_s)
         if self.loads and pybullet.getNumBodies(
-                physicsClientId=self._client_id) != self._body_count:
-            self._sync_contact_detection()  # a load added or removed a body
+                physicsClientId=self._client_id) != self._contacts.body_count:
+            self._contacts.sync()  # a load added or removed a body
         pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
         if self._area_grows:  # effective_pressure_pa, with the growth looked up once
             pressure = pressure * (1.0 + self._area_growth * pressure / self.spec.p_max_pa)
         self._load_torque = self._stiffness0 * (self._pressure_to_rest @ pressure)
-        tangent = self._tangent_stiffness(q)
+        tangent = tangent_stiffness_at(q, self._stiffness0, self._stiffening, self.arm, self._stops)
+        gains = self._gains
         if (self._substep % self._substeps_per_gain_update == 0
-                or (tangent > self._implicit_stiffness).any()
-                or (np.abs(q - self._gain_configuration) > self._configuration_tolerance).any()):
+                or (tangent > gains.implicit_stiffness).any()
+                or (np.abs(q - gains.gain_configuration) > self._configuration_tolerance).any()):
             # stiffening outgrew the implicit gains, or the arm moved enough to change M
-            self._update_implicit_gains(q, _STIFFNESS_MARGIN * tangent)
-        self._torque_offset = self._solve @ self._load_torque
+            self._update_implicit_gains(q, STIFFNESS_MARGIN * tangent)
+        self._torque_offset = gains.solve @ self._load_torque
 
     def _refinement_for(self, velocity: np.ndarray) -> int:
         """Pieces to split each substep into, judged at every actuation update from the joint
@@ -639,37 +577,7 @@ class ArmSimulator:
         self._refinement = refinement
         self.client.setPhysicsEngineParameter(fixedTimeStep=self.physics_dt_s / refinement)
         self._previous_velocity_valid = False
-        self._update_implicit_gains(q, self._implicit_stiffness)
-
-    def _sync_contact_detection(self) -> None:
-        """Switch the arm's contact detection off while nothing else in the world can touch it,
-        and back on as soon as something can.
-
-        Why: the arm never collides with itself, so while it is alone (no other body with a
-        collision shape: no obstacle, and the camera's scene, which is visual only unless built
-        with ``collide=True``) PyBullet's broadphase and narrowphase find nothing, yet cost
-        2.5-10 % of a ground-truth step. Alone, the arm's links get an empty collision filter;
-        otherwise they keep PyBullet's own for a dynamic link (group 1, every mask bit), and
-        setting it again puts them back in the broadphase, which then meets every body added
-        meanwhile (tests/test_physics.py checks trajectories against detection kept on all
-        along). The world is looked at whole at every ``step_physics`` call (PyBullet reuses a
-        removed body's id, so no cheaper key tells a visual body from a collidable one that took
-        its place; 1-2 us a body, 48 us in a camera env's 34-body world), and again at an
-        actuation update when a load changed the number of bodies.
-        """
-        client_id = self._client_id
-        count = self._body_count = pybullet.getNumBodies(physicsClientId=client_id)
-        bodies = (pybullet.getBodyUniqueId(index, physicsClientId=client_id)
-                  for index in range(count))
-        touchable = any(
-            pybullet.getCollisionShapeData(uid, link, physicsClientId=client_id)
-            for uid in bodies if uid != self.arm.body_id
-            for link in range(-1, pybullet.getNumJoints(uid, physicsClientId=client_id)))
-        if touchable != self._contacts_on:
-            group, mask = (1, -1) if touchable else (0, 0)
-            for link in self._collider_links:
-                self.client.setCollisionFilterGroupMask(self.arm.body_id, link, group, mask)
-            self._contacts_on = touchable
+        self._update_implicit_gains(q, self._gains.implicit_stiffness)
 
     def _check_within_stops(self) -> None:
         """Raise if a joint has gone far past its end stop: the simulation has diverged, and
@@ -684,54 +592,15 @@ class ArmSimulator:
                 f"limit at t = {self.time_s:.3f} s with loads {self.loads!r}: the simulation "
                 "diverged")
 
-    def _tangent_stiffness(self, q: np.ndarray) -> np.ndarray:
-        """Tangent stiffness of every joint at ``q``: ``k0 (1 + 3 beta strain^2)`` plus the end
-        stops' (:class:`~soft_gym.robots.stops.EndStops`), a thread about to go taut counted as
-        taut (:meth:`~soft_gym.robots.stops.EndStops.implicit_stiffness_at`)."""
-        tangent = self._stiffness0
-        if self._stiffening:
-            strain_squared = (q * self.arm.strain_scale) ** 2
-            tangent = self._stiffness0 * (1.0 + 3.0 * self.arm.stiffening * strain_squared)
-        return tangent + self._stops.implicit_stiffness_at(q)
-
     def _update_implicit_gains(self, q: np.ndarray, tangent_stiffness: np.ndarray) -> None:
-        """Semi-implicit spring update (Newmark-like, a stable-PD form).
-
-        The joint torque uses the end-of-substep velocity ``v+``:
-
-            tau = K (q_rest - q - theta h v+) - D v+,   M (v+ - v) = h (tau + tau_other),
-
-        solved for ``tau`` with the joint-space mass matrix ``M`` and the other generalised forces
-        ``tau_other`` (gravity, Coriolis, contacts, constraints, external forces) measured from the
-        previous substep's acceleration. With ``theta = 1/4`` the stiff link-local modes stay
-        bounded at any step (their effective ``omega h`` is at most 2) while the slow modes see
-        almost no numerical damping; at rest ``tau = K (q_rest - q)`` exactly, so static shapes do
-        not depend on the step. ``D`` is the stiffness-proportional material damping. ``K`` in the
-        implicit term is the tangent stiffness (with a margin), refreshed once per control period
-        or sooner when stiffening outgrows it.
-        """
-        h = self.physics_dt_s / self._refinement
-        stiffness = tangent_stiffness
-        self._implicit_stiffness = tangent_stiffness
-        self._gain_configuration = q.copy()
-        mass = self.mass_matrix(q)
-        velocity_gain = self._damping + _IMPLICIT_FRACTION * h * stiffness
-        response = h * velocity_gain[:, None] * np.linalg.inv(mass)
-        solve = np.linalg.inv(np.eye(len(q)) + response)
-        other_gain = solve @ response
-        other_from_velocity = other_gain @ mass / h
-        n = len(q)
-        # torque = S (k0 q_rest - K(q) q) - S D' v - G (M (v - v_prev) / h - tau_prev)
-        gain = self._torque_gain
-        gain[:, :n] = -solve
-        gain[:, n:2 * n] = -solve * velocity_gain[None, :]
-        if self._previous_velocity_valid:
-            gain[:, n:2 * n] -= other_from_velocity
-            gain[:, 2 * n:3 * n] = other_from_velocity
-            gain[:, 3 * n:] = other_gain
-        else:  # just after a reset there is no previous substep to measure the other forces from
-            gain[:, 2 * n:] = 0.0
-        self._solve = solve
+        """Refresh the semi-implicit spring update's gains at ``q`` with ``tangent_stiffness``
+        (N m/rad or N/m) in the implicit term (:meth:`SpringGains.update
+        <soft_gym.engines.pybullet.springs.SpringGains.update>`): the mass matrix at ``q``, the
+        current (piece of) substep and damping; the other-forces term only once a substep has
+        measured it."""
+        self._gains.update(q, tangent_stiffness, self.mass_matrix(q),
+                           self.physics_dt_s / self._refinement, self._damping,
+                           self._previous_velocity_valid)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """Joint-space mass matrix (kg, kg m, kg m^2) at joint positions ``q``, with the links'
@@ -741,88 +610,4 @@ class ArmSimulator:
         ones, see ``__init__``); each changed link adds ``dm Jv^T Jv + Jw^T R dI R^T Jw`` with its
         centre-of-mass Jacobians ``Jv``, ``Jw`` and orientation ``R``.
         """
-        body, positions = self.arm.body_id, q.tolist()
-        mass = np.array(self.client.calculateMassMatrix(body, positions))
-        if self._inertia_changes:
-            zeros = [0.0] * len(positions)
-            for link, (added_mass, added_inertia) in self._inertia_changes.items():
-                # the point is given in the link frame (not about the centre of mass)
-                linear, angular = self.client.calculateJacobian(
-                    body, link, self._centre_of_mass[link].tolist(), positions, zeros, zeros)
-                jv, jw = np.asarray(linear), np.asarray(angular)
-                rotation = quaternion_to_matrix(np.asarray(
-                    self.client.getLinkState(body, link, computeForwardKinematics=1)[1]))
-                world_inertia = (rotation * added_inertia) @ rotation.T
-                mass += added_mass * jv.T @ jv + jw.T @ world_inertia @ jw
-        return mass
-
-    def _read_link_inertia(self) -> dict[int, tuple[float, np.ndarray]]:
-        """Mass (kg) and principal inertia (kg m^2) of every link, as PyBullet holds them."""
-        info = {link: self.client.getDynamicsInfo(self.arm.body_id, link)
-                for link in range(self.arm.n_joints)}
-        return {link: (float(i[0]), np.array(i[2], dtype=float)) for link, i in info.items()}
-
-    def _set_link_inertia(self, link: int, mass_kg: float, inertia_kg_m2: np.ndarray) -> None:
-        """Give ``link`` a mass and principal inertia (its centre of mass stays where it is)."""
-        nominal_mass, nominal_inertia = self._nominal_inertia[link]
-        self.client.changeDynamics(self.arm.body_id, link, mass=float(mass_kg),
-                                   localInertiaDiagonal=np.asarray(inertia_kg_m2).tolist())
-        added = (mass_kg - nominal_mass, np.asarray(inertia_kg_m2) - nominal_inertia)
-        if added[0] == 0.0 and not np.any(added[1]):
-            self._inertia_changes.pop(link, None)
-        else:
-            self._inertia_changes[link] = added
-        self._implicit_stiffness = np.zeros(self.arm.n_joints)  # refresh M at the next update
-
-    def _apply_tip_payload(self) -> None:
-        """Put the sum of the tip payloads on the tip link: mass, inertia and weight at the tip.
-
-        PyBullet keeps the link's centre of mass ``c`` where it is, so the payload's mass sits at
-        ``c``: its inertia about ``c`` gains ``m r^2`` about the transverse axes (``r`` from ``c``
-        to the tip), and a held force couple (``m g`` at the tip, ``-m g`` at ``c``) moves the
-        weight's line of action to the tip without changing the net force.
-        """
-        link = self.arm.tip_link
-        payload = sum(self._tip_payloads.values())
-        nominal_mass, nominal_inertia = self._nominal_inertia[link]
-        com = self._centre_of_mass[link]
-        tip_point = np.array([0.0, 0.0, self.arm.station_rest_length[-1]])
-        lever_m = np.linalg.norm(tip_point - com)
-        inertia = nominal_inertia + payload * lever_m**2 * np.array([1.0, 1.0, 0.0])
-        self._set_link_inertia(link, nominal_mass + payload, inertia)
-        weight = payload * self.gravity
-        self.set_external_force("payload_tip", -1, weight, tuple(tip_point), on_body=False)
-        self.set_external_force("payload_com", -1, -weight, tuple(com), on_body=False)
-
-    def _external_joint_torque(self, q: np.ndarray) -> np.ndarray:
-        """Generalised force (N m or N per joint) of the held external forces at ``q``.
-
-        ``tau = Jv^T F + Jw^T (r x F)`` per link, with the Jacobians of the link frame's origin and
-        ``r`` from that origin to the point of action. The simulator applies it through the
-        semi-implicit update as part of the joint torque, evaluated at the substep's own
-        configuration: measured after the fact like gravity (one substep late), a force of a few
-        newtons on a light link makes the update unstable.
-        """
-        body, positions = self.arm.body_id, q.tolist()
-        zeros = [0.0] * len(positions)
-        per_link: dict[int, list] = {}
-        for link, force, local_point in self._forces.values():
-            per_link.setdefault(link, []).append((force, local_point))
-        torque = np.zeros(len(positions))
-        for link, held in per_link.items():
-            rotation = self._link_rotation(link)
-            force = sum(f for f, _ in held)
-            moment = sum(np.cross(rotation @ point, f) for f, point in held)
-            linear, angular = self.client.calculateJacobian(body, link, [0.0, 0.0, 0.0],
-                                                            positions, zeros, zeros)
-            torque += np.asarray(linear).T @ force + np.asarray(angular).T @ moment
-        return torque
-
-    def _link_rotation(self, link: int) -> np.ndarray:
-        """Rotation matrix of ``link``'s frame (base frame) in the current state."""
-        state = self.client.getLinkState(self.arm.body_id, link, computeForwardKinematics=1)
-        return quaternion_to_matrix(np.asarray(state[5]))
-
-    def _link_length(self, link: int) -> float:
-        matches = np.nonzero(self.arm.station_link == link)[0]
-        return float(self.arm.station_rest_length[matches[0]]) if len(matches) else 0.0
+        return self._inertias.mass_matrix(q)

@@ -1,0 +1,155 @@
+"""Loads held on the arm between physics substeps: external forces and the tip payload.
+
+A held force (docs/architecture.md, "Held external forces") enters the joint torques through
+the semi-implicit update as the generalised force ``tau = Jv^T F + Jw^T (r x F)``, evaluated at
+each substep's own configuration. A tip payload (docs/architecture.md, "Tip payloads and the mass
+matrix") is a point mass carried at the tip: the tip link's mass and inertia, and a held force
+couple for its weight.
+"""
+
+from __future__ import annotations
+
+from typing import Iterator
+
+import numpy as np
+from pybullet_utils import bullet_client
+
+from soft_gym._quaternion import quaternion_to_matrix
+from soft_gym.engines.pybullet.builder import ArmBody
+from soft_gym.engines.pybullet.mass_matrix import LinkInertias
+
+
+class HeldForces:
+    """Forces held on the arm's links until replaced or set to zero, by key.
+
+    Args:
+        client: the arm's ``BulletClient``.
+        arm: the built arm.
+
+    Attributes:
+        forces: key -> (multibody link, force (N, base frame), point of action (m, link frame)).
+        off_body: keys of the forces on the tip cap rather than on the body's surface.
+    """
+
+    def __init__(self, client: bullet_client.BulletClient, arm: ArmBody) -> None:
+        self.client, self.arm = client, arm
+        self.forces: dict[str, tuple[int, np.ndarray, np.ndarray]] = {}
+        self.off_body: set[str] = set()
+
+    def set(self, key: str, link: int, force_n: np.ndarray,
+            local_point_m: tuple[float, float, float] | None = None,
+            on_body: bool = True) -> None:
+        """Hold ``force_n`` (N, base frame) on the arm's ``link`` (0 at the base, negative
+        counts from the tip) at ``local_point_m`` (m, link frame; default the middle of the
+        link); a zero force removes the key. ``on_body=False`` marks a force on the tip cap."""
+        link = int(self.arm.station_link[link])
+        force = np.asarray(force_n, dtype=float)
+        if not np.any(force):
+            self.forces.pop(key, None)
+            self.off_body.discard(key)
+            return
+        if on_body:
+            self.off_body.discard(key)
+        else:
+            self.off_body.add(key)
+        if local_point_m is None:
+            local_point_m = (0.0, 0.0, 0.5 * self._link_length(link))
+        self.forces[key] = (int(link), force, np.asarray(local_point_m, dtype=float))
+
+    def clear(self) -> None:
+        """Remove every held force."""
+        self.forces.clear()
+        self.off_body.clear()
+
+    def body_forces(self) -> Iterator[tuple[int, np.ndarray]]:
+        """``(multibody link, force (N, base frame))`` of every force pressing on the body's
+        surface (not on the tip cap)."""
+        body_forces = {key for key in self.forces if key not in self.off_body}
+        for key in body_forces:
+            link, force, _ = self.forces[key]
+            yield link, force
+
+    def joint_torque(self, q: np.ndarray) -> np.ndarray:
+        """Generalised force (N m or N per joint) of the held forces at ``q`` (rad or m).
+
+        ``tau = Jv^T F + Jw^T (r x F)`` per link, with the Jacobians of the link frame's origin and
+        ``r`` from that origin to the point of action. The simulator applies it through the
+        semi-implicit update as part of the joint torque, evaluated at the substep's own
+        configuration: measured after the fact like gravity (one substep late), a force of a few
+        newtons on a light link makes the update unstable.
+        """
+        body, positions = self.arm.body_id, q.tolist()
+        zeros = [0.0] * len(positions)
+        per_link: dict[int, list] = {}
+        for link, force, local_point in self.forces.values():
+            per_link.setdefault(link, []).append((force, local_point))
+        torque = np.zeros(len(positions))
+        for link, held in per_link.items():
+            rotation = self._link_rotation(link)
+            force = sum(f for f, _ in held)
+            moment = sum(np.cross(rotation @ point, f) for f, point in held)
+            linear, angular = self.client.calculateJacobian(body, link, [0.0, 0.0, 0.0],
+                                                            positions, zeros, zeros)
+            torque += np.asarray(linear).T @ force + np.asarray(angular).T @ moment
+        return torque
+
+    def _link_rotation(self, link: int) -> np.ndarray:
+        """Rotation matrix of ``link``'s frame (base frame) in the current state."""
+        state = self.client.getLinkState(self.arm.body_id, link, computeForwardKinematics=1)
+        return quaternion_to_matrix(np.asarray(state[5]))
+
+    def _link_length(self, link: int) -> float:
+        """Rest length (m) of the arm link carried by multibody ``link`` (0 for a joint-only
+        sub-link)."""
+        matches = np.nonzero(self.arm.station_link == link)[0]
+        return float(self.arm.station_rest_length[matches[0]]) if len(matches) else 0.0
+
+
+class TipPayload:
+    """Point masses (kg) carried at the tip, by key; they add up.
+
+    Args:
+        arm: the built arm.
+        inertias: the arm's link inertias (the tip link's mass and inertia follow the payload).
+        forces: the arm's held forces (the payload's weight acts at the tip through them).
+
+    Attributes:
+        masses: key -> mass (kg), each > 0.
+    """
+
+    def __init__(self, arm: ArmBody, inertias: LinkInertias, forces: HeldForces) -> None:
+        self.arm, self.inertias, self.forces = arm, inertias, forces
+        self.masses: dict[str, float] = {}
+
+    def set(self, key: str, mass_kg: float, gravity: np.ndarray) -> None:
+        """Carry ``mass_kg`` (kg, >= 0; 0 removes the key) under ``key``, with ``gravity``
+        (m/s^2, base frame); nothing changes if the key already carries that mass."""
+        if mass_kg == 0.0:
+            if self.masses.pop(key, None) is None:
+                return
+        elif self.masses.get(key) == mass_kg:
+            return
+        else:
+            self.masses[key] = mass_kg
+        self.apply(gravity)
+
+    def apply(self, gravity: np.ndarray) -> None:
+        """Put the sum of the payloads on the tip link: mass, inertia and weight at the tip
+        (``gravity`` in m/s^2, base frame).
+
+        PyBullet keeps the link's centre of mass ``c`` where it is, so the payload's mass sits at
+        ``c``: its inertia about ``c`` gains ``m r^2`` about the transverse axes (``r`` from ``c``
+        to the tip), and a held force couple (``m g`` at the tip, ``-m g`` at ``c``) moves the
+        weight's line of action to the tip without changing the net force.
+        """
+        link = self.arm.tip_link
+        payload = sum(self.masses.values())
+        nominal_mass, nominal_inertia = self.inertias.nominal[link]
+        com = self.inertias.centre_of_mass[link]
+        tip_point = np.array([0.0, 0.0, self.arm.station_rest_length[-1]])
+        lever_m = np.linalg.norm(tip_point - com)
+        inertia = nominal_inertia + payload * lever_m**2 * np.array([1.0, 1.0, 0.0])
+        self.inertias.set_link_inertia(link, nominal_mass + payload, inertia)
+        weight = payload * gravity
+        self.forces.set("payload_tip", -1, weight, tuple(tip_point), on_body=False)
+        self.forces.set("payload_com", -1, -weight, tuple(com), on_body=False)
