@@ -18,7 +18,7 @@ from soft_gym import demo
 from train import ship
 from train.__main__ import main as train_main
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DEFAULT = re.compile(r"\(default:\s+[^)]+\)")
 
 

@@ -16,7 +16,8 @@ from eval.papers import zhao2021
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
 SMALL = ReconstructionConfig(n_free=240, n_loaded=120, max_iterations=80)
-"""The small model of tests/test_shape_reconstruction.py (one training per test process)."""
+"""The small model of tests/soft_gym/sensing/zhao2021/test_shape_reconstruction.py (one training
+per test process)."""
 
 
 def test_paper_start_is_reached_and_the_goal_is_the_nearest_reachable_point():

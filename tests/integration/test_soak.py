@@ -18,7 +18,7 @@ import pytest
 
 from soft_gym.robots.presets import PRESETS
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location("bench_soak", ROOT / "bench" / "soak.py")
 soak = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(soak)

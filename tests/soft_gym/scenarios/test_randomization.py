@@ -85,7 +85,7 @@ def test_faults_drawn_only_with_a_camera():
 def test_yaml_config_matches_defaults():
     from pathlib import Path
 
-    path = Path(__file__).resolve().parent.parent / "train" / "configs" / "randomization.yaml"
+    path = Path(__file__).resolve().parents[3] / "train" / "configs" / "randomization.yaml"
     assert RandomizationConfig.from_any(path) == RandomizationConfig()
 
 

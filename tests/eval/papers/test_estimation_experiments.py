@@ -1,7 +1,7 @@
 """The wang2023 estimation experiments (Section IV-C/F, Figs. 6-7, Tables III and VI) end to end.
 
 The default suite runs a 40 %-length lighting run; the full 4000-step runs are marked slow
-(``pytest -m slow tests/test_estimation_experiments.py``, about 9 minutes).
+(``pytest -m slow tests/eval/papers/test_estimation_experiments.py``, about 9 minutes).
 """
 
 from __future__ import annotations

@@ -24,7 +24,7 @@ import soft_gym  # noqa: F401  (registers the environment ids)
 from soft_gym.engines.pybullet.quiet_import import c_stdout_silenced
 from soft_gym.engines.pybullet.scene import build_scene
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 linux_only = pytest.mark.skipif(not os.path.exists("/proc/self/statm"),
                                 reason="reads /proc/self (Linux)")

@@ -20,7 +20,7 @@ from train.config import (ALGORITHMS, check_hyperparameters, parse_key_values,
                           parse_python_value, read_hyperparameters, split_hyperparameters)
 from train.trainer import TrainRequest, train
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 FAST_ENV = {"feedback": "ground_truth", "path": "circle", "speed_m_s": 0.02}
 
 
