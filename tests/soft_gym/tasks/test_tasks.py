@@ -1,5 +1,5 @@
-"""Checks of ``soft_gym.tasks.tasks`` that mutation testing found missing
-(docs/mutation_testing.md).
+"""The reach and track tasks of ``soft_gym.tasks.tasks`` on a known reachable set: the checks
+that mutation testing found missing (docs/mutation_testing.md).
 
 Each test pins a documented behaviour of the reach and track tasks: episode length and
 termination, random targets drawn from the whole reachable set, a fixed goal within reach, the

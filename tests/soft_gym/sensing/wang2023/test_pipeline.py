@@ -1,5 +1,5 @@
-"""Checks of ``soft_gym.sensing.wang2023.pipeline`` that mutation testing found missing
-(docs/mutation_testing.md).
+"""The sensing pipeline ``soft_gym.sensing.wang2023.pipeline`` on scripted stand-ins: the checks
+that mutation testing found missing (docs/mutation_testing.md).
 
 Each test pins a documented behaviour of the sensing pipeline (wang2023 Fig. 1): the option
 checks and defaults, F-emp's update threshold taken from the fusion, the calibration sequence
