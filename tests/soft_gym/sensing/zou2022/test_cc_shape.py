@@ -1,5 +1,6 @@
-"""Checks of ``soft_gym.sensing.zou2022.cc_shape`` (RSES, zou2022 eqs. 2-10) that mutation testing found
-missing (docs/mutation_testing.md).
+"""RSES, ``soft_gym.sensing.zou2022.cc_shape`` (zou2022 eqs. 2-10), against analytic arcs: the
+checks that mutation testing found missing (docs/mutation_testing.md; RSES beside the other
+zou2022 estimators, and its bad input, is in test_zou2022_shape.py).
 
 Each test pins a documented behaviour that a surviving mutant changed unnoticed: the points of a
 *two*-segment arm with unequal rest lengths and chamber distances (material points at equal

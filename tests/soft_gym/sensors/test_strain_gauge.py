@@ -1,5 +1,6 @@
-"""Checks of ``soft_gym.sensors.strain_gauge`` that mutation testing found missing
-(docs/mutation_testing.md).
+"""The strain gauges of ``soft_gym.sensors.strain_gauge`` on a stand-in simulator: the checks
+that mutation testing found missing (docs/mutation_testing.md; the gauges on the simulated arm
+against beam references are in test_sensors_strain.py).
 
 Each test pins a documented behaviour of :class:`StrainGauges` that a surviving mutant changed
 unnoticed. The gauges read a stand-in simulator (a known curvature profile and known link

@@ -1,5 +1,6 @@
-"""Checks of ``soft_gym.sensors.fbg`` that mutation testing found missing
-(docs/mutation_testing.md).
+"""The FBG fiber of ``soft_gym.sensors.fbg`` on a stand-in simulator: the checks that mutation
+testing found missing (docs/mutation_testing.md; the fiber on the simulated arm against beam
+references is in test_sensors_strain.py).
 
 Each test pins a documented behaviour of the FBG fiber (wang2023) that a surviving mutant changed
 unnoticed. The fiber reads a stand-in simulator (known vertex curvatures, link strains and twist
