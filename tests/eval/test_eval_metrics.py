@@ -129,6 +129,7 @@ def test_path_deviation_is_nan_without_polyline() -> None:
     assert summary["deviation"]["n"] == 0
 
 
+@pytest.mark.smoke
 def test_tracking_error_of_known_lag() -> None:
     per_cycle, lag = 40, 3
     rec = _track_record(per_cycle=per_cycle, lag=lag)
@@ -179,6 +180,7 @@ def test_reach_record_is_one_cycle() -> None:
     assert s["tracking"]["per_cycle"]["mean_mm"] == [pytest.approx(2.0)]
 
 
+@pytest.mark.smoke
 def test_error_stats_match_numpy() -> None:
     rng = np.random.default_rng(3)
     e = rng.gamma(2.0, 1.5, size=500)
@@ -235,6 +237,7 @@ def test_estimation_errors_and_phases() -> None:
 # ---------------------------------------------------------------------------
 
 
+@pytest.mark.smoke
 def test_improvement_formula() -> None:
     assert improvement(10.0, 2.5) == pytest.approx(0.75)
     # Table I of Wang et al. 2023, K_p = 0.04: 16.942 -> 2.305 mm is 86.4 %.

@@ -42,6 +42,7 @@ def test_gif_where_ffmpeg_is_absent(tmp_path, monkeypatch):
     np.testing.assert_array_equal(frames[:, 0, 0, 0], 20 * np.arange(5))
 
 
+@pytest.mark.smoke
 def test_writer_refuses_no_frames_mixed_shapes_and_bad_input(tmp_path):
     with pytest.raises(ValueError, match="no frames"):
         write_video(tmp_path / "empty.mp4", [], fps=20.0)

@@ -213,6 +213,7 @@ EVAL_BAD = [
 ]
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("argv, option, also", EVAL_BAD,
                          ids=[" ".join(case[0][:1] + case[0][-2:]) for case in EVAL_BAD])
 def test_eval_bad_option_exits_2_with_one_line(argv, option, also, tmp_path, capsys):
@@ -328,6 +329,7 @@ TRAIN_BAD = [
 ]
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("argv, option, also", TRAIN_BAD,
                          ids=[" ".join(case[0]) for case in TRAIN_BAD])
 def test_train_bad_option_exits_2_with_one_line(argv, option, also, tmp_path, capsys):

@@ -162,6 +162,7 @@ def test_straight_pose(n_segments: int, length: float) -> None:
     )
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize(
     "s, theta_deg, phi",
     [(0.1, 30.0, 0.0), (0.07, 120.0, 1.0), (0.16, 90.0, -2.5), (0.12, 5.0, np.pi), (0.09, 60.0, 2.0)],
@@ -191,6 +192,7 @@ def test_single_segment_matches_analytic_arc(s: float, theta_deg: float, phi: fl
     np.testing.assert_allclose(matrix, reference[:3, :3], atol=1e-13)
 
 
+@pytest.mark.smoke
 def test_multi_segment_matches_transform_chain() -> None:
     rng = np.random.default_rng(1)
     for n_segments in (2, 3):
@@ -253,6 +255,7 @@ def test_lengthening_a_chamber_bends_away_from_it() -> None:
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("n_segments", [1, 2])
 def test_inverse_reaches_forward_mapped_targets(n_segments: int) -> None:
     rng = np.random.default_rng(4 + n_segments)
@@ -323,6 +326,7 @@ def test_inverse_batch_shape() -> None:
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("n_segments", [1, 2])
 def test_jacobian_matches_central_differences(n_segments: int) -> None:
     rng = np.random.default_rng(8 + n_segments)
@@ -515,6 +519,7 @@ STRAIGHT = np.full(3, 0.1)
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize(
     "call, message",
     [

@@ -9,6 +9,8 @@ from scipy.spatial.transform import Rotation
 from soft_gym._quaternion import (axis_rotation, matrix_to_quaternion, quaternion_multiply,
                                   quaternion_to_matrix, rotation_vector_to_quaternion)
 
+pytestmark = pytest.mark.smoke
+
 ROTATIONS = Rotation.random(12, random_state=0)
 
 

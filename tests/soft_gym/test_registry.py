@@ -12,6 +12,8 @@ from soft_gym.scenarios import SCENARIO_ELEMENTS, TipMass, make_scenario
 from soft_gym.sensors import SENSORS, make_sensor
 from soft_gym.sensors.faults import FAULT_PRESETS, FAULTS, LowLight, make_faults
 
+pytestmark = pytest.mark.smoke
+
 
 def test_parse_spec_flattens_every_accepted_form_in_order():
     mass = TipMass(mass_kg=0.01)

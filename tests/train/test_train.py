@@ -55,6 +55,7 @@ def test_every_algorithm_has_a_config():
         read_hyperparameters("sac", "x", "no/such/file.yml")
 
 
+@pytest.mark.smoke
 def test_key_values_are_yaml():
     assert parse_key_values(["a=1", "b=[circle, pentagram]", "c=em", "d=true"], "x") == {
         "a": 1, "b": ["circle", "pentagram"], "c": "em", "d": True}
@@ -62,6 +63,7 @@ def test_key_values_are_yaml():
         parse_key_values(["novalue"], "--env-kwargs")
 
 
+@pytest.mark.smoke
 def test_hyperparameters_are_checked_by_key_and_value():
     """A key the algorithm does not take is refused naming those it does; values out of range
     are refused naming what is allowed; every shipped config passes."""
@@ -171,6 +173,7 @@ def test_checkpoints_load_with_their_own_normalization_or_are_refused(tmp_path):
     env.close()
 
 
+@pytest.mark.smoke
 def test_cli_help_and_bad_input(capsys):
     with pytest.raises(SystemExit) as exit_info:
         train_main(["--help"])

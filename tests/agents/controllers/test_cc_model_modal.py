@@ -27,6 +27,7 @@ SCHEDULED = ModalLengthMap(mean_lengths_m=np.array([0.077, 0.16, 0.20, 0.23]),
                            bending_gains_pa_m=np.array([12e6, 13e6, 13.5e6, 14e6]))
 
 
+@pytest.mark.smoke
 def test_one_gain_for_extension_and_bending_is_eq_27():
     alpha, rest, p_pre = 2.0e6, 0.077, 40e3  # Pa/m, m, Pa
     modal = ModalLengthMap(np.array([rest, rest + 0.05]), np.array([p_pre, p_pre + alpha * 0.05]),

@@ -81,6 +81,7 @@ def test_asdm_grows_the_step_when_the_arm_under_reaches(env):
     assert len(fast) < len(slow) / 2
 
 
+@pytest.mark.smoke
 def test_asdm_rule_signs(env):
     controller = LocalIKASDMController(env, step_mm=8.0, adaptive=True, gain=0.12, cache=False)
     controller.network = _LinearPlantInverse(np.eye(3, 6) * 1e-6)

@@ -55,6 +55,7 @@ def _fields(p, u, n, seed=1):
     return centres, metrics
 
 
+@pytest.mark.smoke
 def test_fit_and_online_refit_match_the_paper_equations_written_out():
     _, p, u, du, dp = _linear_data(60)
     model = RewardWeightedInverse(3, 6, attractor_gain=0.1, ridge=0.5, window=30,

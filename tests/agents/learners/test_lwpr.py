@@ -212,6 +212,7 @@ def test_normalisation_equals_learning_on_scaled_data():
                                scale_out * plain.predict_batch(grid), rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.smoke
 def test_predict_matches_predict_batch_and_empty_model():
     model = LWPR(2, 2)
     mean, conf = model.predict([0.1, 0.2], return_confidence=True)

@@ -89,6 +89,7 @@ def test_pure_incremental_factor_over_1000_steps_has_no_drift():
     assert gp.adds_since_refactor == 1000        # never refactorised
 
 
+@pytest.mark.smoke
 def test_factor_equals_numpy_cholesky_of_window_matrix():
     X, Y = _stream(130, seed=5)
     gp = SlidingWindowGP(window=40, length_scales=0.8, signal_variance=2.0, noise_variance=1e-3,
@@ -158,6 +159,7 @@ def test_empty_window_returns_prior_and_shapes():
 
 
 # --------------------------------------------------------------------------- 1-D sanity
+@pytest.mark.smoke
 def test_learns_sine_and_std_grows_away_from_data():
     rng = np.random.default_rng(4)
     gp = SlidingWindowGP(window=120, length_scales=1.0, noise_variance=1e-4, mean="zero")

@@ -62,6 +62,7 @@ def test_probe_calibration_estimates_a_positive_linear_gain_per_chamber():
     assert np.ptp(alpha) / alpha.mean() < 0.01
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("name", ["cc_model", "hybrid_gpr"])
 def test_a_baseline_calibrates_on_first_predict_without_touching_the_env(name):
     """make_policy(name, env=env) predicts in a plain loop: the first predict() calibrates on a
@@ -327,6 +328,7 @@ def _ready_baseline(name: str, env) -> Any:
     return policy
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("name", sorted(BASELINES))
 def test_every_baseline_refuses_a_bad_observation_before_touching_its_state(name, track, zhao):
     """A bad observation raises ValueError naming ``observation`` and the shape wanted; the

@@ -33,6 +33,7 @@ def _row(rows, feedback, condition):
     return row
 
 
+@pytest.mark.smoke
 def test_constants():
     assert CONTROL_POLICIES == ("cc_model", "hybrid_gpr", "lwpr_rwr")
     assert CONTROL_FEEDBACK == ("encoder_cc", "stereo", "encoder_dnn")
@@ -120,6 +121,7 @@ def test_a_baseline_that_cannot_drive_the_arm_is_a_refused_row(tmp_path):
         plot_control(tmp_path / "none.png", rows)
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("kwargs, name", [
     ({"seed": -1}, "seed"), ({"seed": 1.5}, "seed"), ({"cycles": 0}, "cycles"),
     ({"policies": ("pid",)}, "policies"), ({"policies": "cc_model"}, "policies"),

@@ -59,6 +59,7 @@ STRUCTURE_ERRORS = {
 }
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("case", sorted(STRUCTURE_ERRORS))
 def test_structure_errors_name_the_file_the_key_and_what_is_allowed(case, tmp_path):
     text, key, allowed = STRUCTURE_ERRORS[case]
@@ -114,6 +115,7 @@ def test_bundled_suites_load_and_expand():
 
 
 # ---------------------------------------------------------------------- expansion and keys
+@pytest.mark.smoke
 def test_expansion_and_keys_are_deterministic(tmp_path):
     first = suite.expand(suite.load_suite(_write(tmp_path, TINY, "a.yaml")))
     again = suite.expand(suite.load_suite(_write(tmp_path, TINY, "b.yaml")))

@@ -191,6 +191,7 @@ def test_pure_moment_gives_constant_curvature_arc(make_sim, preset, fractions):
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("azimuth_deg", [0.0, 90.0, 225.0])
 def test_transverse_tip_force_matches_cantilever(make_sim, azimuth_deg):
     """Small transverse tip force, gravity off, no stiffening: ``delta = F L^3 / (3 E I)``

@@ -32,7 +32,8 @@ def test_registered_ids_pass_gymnasium_and_sb3_checkers(env_id):
     env.close()
 
 
-@pytest.mark.parametrize("preset", sorted(PRESETS))
+@pytest.mark.parametrize("preset", [pytest.param(name, marks=pytest.mark.smoke) if name == "wang2023"
+                                    else name for name in sorted(PRESETS)])
 @pytest.mark.parametrize("task", ["reach", "track"])
 def test_every_preset_passes_checker_through_generic_ids(task, preset):
     env = gym.make("SoftArmReach-v0" if task == "reach" else "SoftArmTrack-v0", preset=preset)
@@ -95,6 +96,7 @@ def test_two_envs_in_one_process_are_independent():
     b.close()
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("bad", [np.array([np.nan, 0, 0]), np.array([np.inf, 0, 0]),
                                  np.zeros(4), np.zeros((1, 3)), np.array([1.5, 0, 0]), "abc"])
 def test_bad_actions_raise_value_error_naming_action(bad):

@@ -28,6 +28,7 @@ def test_one_copy_of_the_chamber_angles():
         chamber_angles(0)
 
 
+@pytest.mark.smoke
 def test_absolute_map_is_the_documented_formula_and_round_trips():
     rng = np.random.default_rng(0)
     low, high = SPEC.p_pre_pa, SPEC.p_max_pa
@@ -44,6 +45,7 @@ def test_absolute_map_is_the_documented_formula_and_round_trips():
     np.testing.assert_allclose(pressure_at_fraction(SPEC, 0.25), low + 0.25 * (high - low))
 
 
+@pytest.mark.smoke
 def test_delta_map_is_the_documented_formula_and_its_inverse_reaches_the_wanted_pressure():
     rng = np.random.default_rng(1)
     low, high = SPEC.p_pre_pa, SPEC.p_max_pa

@@ -22,6 +22,7 @@ def test_off_by_default():
     env.close()
 
 
+@pytest.mark.smoke
 def test_same_seed_same_episode_and_seeds_differ():
     env = _env(randomization=True)
     draws, tips = [], []

@@ -43,6 +43,7 @@ def test_swaying_mass_hangs_at_its_length_below_the_tip():
     assert ball[2] > tip[2]  # hanging mount: gravity is +z in the base frame
 
 
+@pytest.mark.smoke
 def test_push_moves_the_tip_along_the_force_and_releases():
     free = _bent_sim()
     pushed = _bent_sim(Push(force_n=(0.0, 0.1, 0.0), start_s=0.0, end_s=3.0, ramp_s=0.5))

@@ -186,6 +186,7 @@ ZHAO = get_preset("zhao2021")   # two segments of 107 mm, four links each, six c
 
 
 # ---------------------------------------------------------------------------------- ground truth
+@pytest.mark.smoke
 def test_ground_truth_is_the_truth_sensors_pose_and_backbone_and_key_points() -> None:
     arcs = np.r_[0.0, np.cumsum([0.02675] * 8)]
     backbone = np.c_[0.3 * arcs ** 2, -arcs ** 3, arcs + 0.01]
@@ -206,6 +207,7 @@ def test_ground_truth_is_the_truth_sensors_pose_and_backbone_and_key_points() ->
     np.testing.assert_allclose(points[1:], expected, rtol=0, atol=1e-15)
 
 
+@pytest.mark.smoke
 def test_em_splits_the_trackers_reading() -> None:
     reading = np.array([0.01, -0.02, 0.15, 0.0, 0.0, 0.6, 0.8], dtype=np.float32)
     estimate = EMFeedback().estimate(Measurement(0.0, {"em": reading}))

@@ -325,6 +325,7 @@ def test_bad_fiber_settings_are_refused_by_name(kwargs, message) -> None:
         FBGFiber(**kwargs)
 
 
+@pytest.mark.smoke
 def test_reading_is_f2_of_the_strain_with_seeded_noise() -> None:
     rng = np.random.default_rng(2)
     sim = StandIn(WANG, rng.normal(0, 5, (5, 2)), rng.normal(0, 0.05, 4), rng.normal(0, 3, 4))

@@ -169,6 +169,7 @@ def test_outside_of_bend_is_stretched(make_sim):
     assert read(inside, sim)[0] < -1.0
 
 
+@pytest.mark.smoke
 def test_fbg_amplitude_linear_in_curvature_and_phase_follows_direction(make_sim):
     """wang2023 Fig. 3: amplitude grows with the bend, the phase follows its direction."""
     spec = linear(get_preset("wang2023"))

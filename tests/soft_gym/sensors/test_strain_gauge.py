@@ -88,6 +88,7 @@ def _read(gauges: StrainGauges, sim, seed: int = 0) -> np.ndarray:
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("n_points", [1, 2, 3])
 def test_strain_is_the_gauss_average_of_the_surface_strain(n_points: int) -> None:
     """Gauges of 20 mm straddling a vertex (a kink of the profile and a jump of the link

@@ -389,6 +389,7 @@ def test_pathspec_validation(kwargs: dict, field: str) -> None:
 # ---------------------------------------------------------------------------
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("shape", PATH_SHAPES)
 def test_path_deviation_zero_on_path(shape: str) -> None:
     spec = PathSpec(shape, (0.1, 0.0, 0.2), 0.07, 0.01, plane_normal=(0.2, 0.4, 1.0))

@@ -49,6 +49,7 @@ def test_reach_episode_steps_bounds() -> None:
         ReachTask(SPEC, reachable_tips_m=TIPS, episode_steps=0)
 
 
+@pytest.mark.smoke
 def test_random_targets_come_from_the_whole_reachable_set() -> None:
     """Before the first reset the target is the set's first point; each reset draws one of
     its points, every one of them over enough episodes, reproducibly for a seed; the current
@@ -153,6 +154,7 @@ def test_track_options_reach_the_path() -> None:
     np.testing.assert_allclose(task.trajectory_m, reference, rtol=0, atol=1e-12)
 
 
+@pytest.mark.smoke
 def test_track_presents_current_and_next_target_and_holds_the_last() -> None:
     task = TrackTask(SPEC, TIPS, speed_m_s=0.02)
     trajectory, last = task.trajectory_m, task.episode_steps - 1

@@ -22,6 +22,7 @@ def _weighted_ridge(model: OSELM, x: np.ndarray, z: np.ndarray, weights: np.ndar
     return np.linalg.solve(information, phi.T @ (weights[:, None] * z))
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("forgetting", [1.0, 0.99])
 def test_recursive_updates_equal_batch_weighted_least_squares(forgetting):
     x, z = _data(300)

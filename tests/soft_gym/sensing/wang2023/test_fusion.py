@@ -15,6 +15,7 @@ CAMERA = (np.array([0.01, 0.0, 0.09]), Rotation.from_euler("x", 10, degrees=True
 FEMP = (np.array([0.012, 0.002, 0.088]), Rotation.from_euler("y", 20, degrees=True).as_quat())
 
 
+@pytest.mark.smoke
 def test_camera_below_lower_bound_femp_above_upper_bound_or_lost():
     fusion = PoseFusion(1.0, 2.0)
     position, quaternion = fusion.fuse(*CAMERA, *FEMP, reprojection_error_px=0.5)
@@ -37,6 +38,7 @@ def test_blend_is_convex_and_continuous_at_both_bounds():
     np.testing.assert_allclose(mid, 0.5 * (CAMERA[0] + FEMP[0]))
 
 
+@pytest.mark.smoke
 def test_slerp_matches_scipy():
     rotations = Rotation.from_quat([CAMERA[1], FEMP[1]])
     reference = Slerp([0, 1], rotations)

@@ -250,6 +250,7 @@ def test_key_point_noise_raises_the_error_only_modestly():
     assert means[0.0] < means[2.0] < means[4.0]
 
 
+@pytest.mark.smoke
 def test_random_constant_curvature_shapes_property():
     # Seeded stand-in for a hypothesis property test (hypothesis is not installed): random
     # bends up to 120 deg per segment in any planes; measured worst 1.1 mm over 1500 shapes.

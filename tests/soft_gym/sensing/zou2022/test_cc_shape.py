@@ -65,6 +65,7 @@ def _reference(arcs, rest, n_points: int) -> tuple[np.ndarray, np.ndarray]:
     return np.array(points), rotation
 
 
+@pytest.mark.smoke
 @pytest.mark.parametrize("n_points", [2, 5, 7, 10])
 def test_two_segments_with_unequal_rest_lengths_follow_the_chained_arcs(n_points: int) -> None:
     rest = (0.13, 0.05)    # the second segment is shorter at rest: fewer of the points on it

@@ -151,6 +151,7 @@ def test_resample_polyline_spaces_points_evenly():
 
 
 # ---------------------------------------------------------------------------------- RSES
+@pytest.mark.smoke
 @pytest.mark.parametrize("kappa, phi", [(0.0, 0.0), (4.0, 0.3), (9.0, 2.5), (12.0, -2.0)])
 def test_rses_matches_an_analytic_arc(kappa, phi):
     arc = 0.18
