@@ -16,10 +16,11 @@ import soft_gym
 from soft_gym.envs.config import MAX_ACTION_RATE_WEIGHT, MAX_SETTLE_S
 from soft_gym.envs.soft_arm_env import SoftArmEnv
 from soft_gym.robots import PRESETS, get_preset
-from soft_gym.scenarios import FillingLoad, Flick, ObstacleRod, Push, SwayingMass, TipMass
-from soft_gym.scenarios.loads import MAX_FILL_RATE_KG_S, MAX_FORCE_N, MAX_MASS_KG, MAX_SWAY_LENGTH_M
-from soft_gym.scenarios.randomization import RandomizationConfig
 from soft_gym.robots.spec import ArmSpec
+from soft_gym.scenarios import FillingLoad, Flick, ObstacleRod, Push, SwayingMass, TipMass
+from soft_gym.scenarios.loads import (MAX_FILL_RATE_KG_S, MAX_FORCE_N, MAX_MASS_KG,
+                                      MAX_SWAY_LENGTH_M)
+from soft_gym.scenarios.randomization import RandomizationConfig
 
 ALL_IDS = soft_gym.registered_ids()
 

@@ -17,13 +17,13 @@ from soft_gym.procedures import calibration as procedures
 from soft_gym.robots import get_preset
 from soft_gym.sensing import calibration_cache
 from soft_gym.sensing import FEEDBACK_SOURCES, FeedbackEstimate, FeedbackSource
-from soft_gym.sensing.wang2023 import pipeline
-from soft_gym.sensing.zhao2021 import shape_reconstruction
 from soft_gym.sensing.feedback import EMFeedback, GroundTruthFeedback
-from soft_gym.sensing.wang2023.feedback import CameraFeedback, FEmpFeedback, FusedFeedback
-from soft_gym.sensing.zhao2021.feedback import StrainShapeFeedback
 from soft_gym.sensing.feedback_base import CalibrationContext
 from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensing.wang2023 import pipeline
+from soft_gym.sensing.wang2023.feedback import CameraFeedback, FEmpFeedback, FusedFeedback
+from soft_gym.sensing.zhao2021 import shape_reconstruction
+from soft_gym.sensing.zhao2021.feedback import StrainShapeFeedback
 
 QUICK = {"n_init": 40}
 """A short calibration (40 labelled exploration steps) for tests that only compare runs."""
