@@ -20,7 +20,7 @@ Three soaks, each printing its figures (and ``--json PATH`` writing them all):
    RSS growth and the mean tracking error.
 
 The issue-sized run (10^6 steps per preset, 1,000 cycles, 20,000 fused steps per schedule) takes
-hours on one core; ``tests/test_soak.py`` runs it under ``-m slow``. Example::
+hours on one core; ``tests/integration/test_soak.py`` runs it under ``-m slow``. Example::
 
     PYTHONPATH=. python bench/soak.py --steps 100000 --cycles 200 --fused-steps 4000
     PYTHONPATH=. python bench/soak.py --only cycles --cycles 1000

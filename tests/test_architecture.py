@@ -24,6 +24,10 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
+import pytest
+
+pytestmark = pytest.mark.smoke
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("soft_gym", "agents", "train", "eval")
 LOWER_LAYER = "soft_gym"

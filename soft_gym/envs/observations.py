@@ -4,7 +4,7 @@
 :class:`ObservationPart` gives the part's space (from the arm and the simulated sensors) and its
 value at a step (from the step's measurement, the feedback estimate, the task and the pressures).
 The env's docstring and the README's table are checked against this one
-(``tests/test_readme.py``, ``tests/test_env.py``).
+(``tests/test_readme.py``, ``tests/soft_gym/envs/test_env.py``).
 
 | part       | size            | content                                                   | unit |
 |------------|-----------------|-----------------------------------------------------------|------|

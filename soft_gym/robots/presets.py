@@ -97,7 +97,7 @@ ZHAO2021 = ArmSpec(
                                 "fixator, 1.29 g/cm^3)",
            "calibration": "Table III pressures (paper order 0, 0.5, 0.6, 0.8, 0.7, 0 bar) held "
                           "3 s: key points P1..P6 within 1.0, 7.1, 10.1, 8.4, 5.0, 6.6 mm of the "
-                          "paper's (RMS 7.0 mm) (tests/test_zhao2021_arm.py). The paper's "
+                          "paper's (RMS 7.0 mm) (tests/soft_gym/robots/test_zhao2021_arm.py). The paper's "
                           "segment 1 bends 10 mm sideways in a direction ~70 deg off segment 2's, "
                           "which no pressure moment plus gravity reproduces (a segment-2 chamber "
                           "clocking of 30-90 deg fits no better); P2/P3 carry the largest errors",

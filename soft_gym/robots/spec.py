@@ -30,7 +30,7 @@ MAX_LOAD_TO_WEIGHT = {"hanging": 4.0, "horizontal": 4.0, "upright": 2.0}
 
 Tip masses, a filling container, a swaying mass and held pushes together may weigh or push at
 most this much. Up to it the simulated arm stays on its joints' end stops under any actuation
-and from any direction (``tests/test_runaway.py``); at eight times its weight a hanging ho2018
+and from any direction (``tests/soft_gym/engines/test_runaway.py``); at eight times its weight a hanging ho2018
 arm under random pressures no longer does. An upright arm folds over under a load on top: the
 upright ho2018 arm stays on its stops under random pressures with 120 g (2.9 times its weight)
 and not with 150 g, so upright arms bear twice their weight. The papers' loads are well inside

@@ -44,7 +44,7 @@ _MAX_REFINEMENT = 4
 
 _DIVERGED_PAST_LIMIT = 1.5
 """A joint this many times past its limit means the integration diverged (the end stops hold
-every load the arm accepts within 1.1 times, ``tests/test_runaway.py``)."""
+every load the arm accepts within 1.1 times, ``tests/soft_gym/engines/test_runaway.py``)."""
 
 
 class PhysicsDivergedError(RuntimeError):

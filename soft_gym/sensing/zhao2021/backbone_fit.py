@@ -78,7 +78,7 @@ The fitted curve is sampled densely and resampled to ``n_points`` points evenly 
 length from ``P0`` to its end; :func:`mean_backbone_error_m` is the shape error of eq. (21).
 Lengths are in metres; quaternions are scalar-last ``(x, y, z, w)``.
 
-Measured (tests/test_backbone_fit.py, bench/backbone_fit_speed.py; two 150 mm constant-curvature
+Measured (tests/soft_gym/sensing/zhao2021/test_backbone_fit.py, bench/backbone_fit_speed.py; two 150 mm constant-curvature
 segments, key points every 50 mm): eq. (21) error 0.04 / 0.09 / 0.24 mm for single-plane bends of
 30 / 60 / 90 deg per segment, <= 0.6 mm for S-bends and bends of up to 120 deg per segment in any
 planes (``paper_only=True``: 1.0 / 2.9 / 4.5 mm, near the paper's 2.4-3.2 mm of Table II, and
