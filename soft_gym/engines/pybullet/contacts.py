@@ -40,8 +40,9 @@ class ContactSwitch:
 
         Alone, the arm's links get an empty collision filter; otherwise they keep PyBullet's own
         for a dynamic link (group 1, every mask bit), and setting it again puts them back in the
-        broadphase, which then meets every body added meanwhile (tests/soft_gym/engines/test_physics.py checks
-        trajectories against detection kept on all along). The simulator looks at the world whole
+        broadphase, which then meets every body added meanwhile
+        (tests/soft_gym/engines/test_physics.py checks trajectories against detection kept on all
+        along). The simulator looks at the world whole
         at every ``step_physics`` call (PyBullet reuses a removed body's id, so no cheaper key
         tells a visual body from a collidable one that took its place; 1-2 us a body, 48 us in a
         camera env's 34-body world), and again at an actuation update when a load changed the
