@@ -199,9 +199,8 @@ class Simulator(Protocol):
 
 
 SIMULATOR_NAMES: frozenset[str] = frozenset(
-    name for protocol in (Simulator,) for name in (
-        *protocol.__annotations__, *(attribute for attribute in vars(protocol)
-                                     if not attribute.startswith("_"))))
+    [*Simulator.__annotations__, *(attribute for attribute in vars(Simulator)
+                                   if not attribute.startswith("_"))])
 """Every attribute and method of :class:`Simulator` (the architecture test allows these)."""
 
 WORLD_NAMES: frozenset[str] = frozenset(attribute for attribute in vars(World)

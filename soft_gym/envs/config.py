@@ -119,10 +119,6 @@ class EnvConfig:
                              f"task={self.task!r}")
         return list(paths)
 
-    def arguments(self) -> dict[str, Any]:
-        """The constructor's keyword arguments, as given (normalised)."""
-        return {field.name: getattr(self, field.name) for field in fields(self)}
-
     def copied(self) -> "EnvConfig | None":
         """A deep copy to rebuild an env from, or ``None`` if an argument cannot be copied
         (e.g. an object without copy support in ``scenario=``)."""

@@ -121,6 +121,3 @@ for _part in (
 
 STATE_PARTS = ("pose", "target", "pressure")
 """The default observation."""
-
-SENSOR_PARTS = tuple(name for name in OBSERVATION_PARTS if OBSERVATION_PARTS[name].sensor)
-"""The parts that are a sensor's reading (the env simulates that sensor)."""

@@ -209,7 +209,6 @@ class SoftArmEnv(gym.Env):
         self.feedback_source = _make_feedback_source(config.feedback, config.sensing)
         config.check_feedback_needs(self.feedback_source.estimates_shape)
         self.loads = make_scenario(config.scenario)
-        self._fixed_loads = _copied(self.loads)  # unattached copies for private simulators
         paths = config.paths()
         self.start_m = None if config.start_m is None else within_reach(self.arm, "start_m",
                                                                         config.start_m)
@@ -222,6 +221,8 @@ class SoftArmEnv(gym.Env):
         self.obs_format = config.obs_format
         self.feedback = config.feedback
         self.sensors = self._make_sensors()
+        self._shown_sensors = {name for name, sensor in self.sensors.items()
+                               if not getattr(sensor, "privileged", False)}
         randomization = RandomizationConfig.from_any(config.randomization)
         gravity = float(np.linalg.norm(self.arm.gravity_base))
         fixed_load_n = heaviest_total_load_n(self.loads, gravity)
@@ -370,12 +371,14 @@ class SoftArmEnv(gym.Env):
             make_loads=self._copy_fixed_loads)
 
     def _copy_fixed_loads(self) -> list:
-        """Fresh copies of the fixed loads, for a calibration's private simulator."""
-        if self._fixed_loads is None:
-            raise ValueError(f"scenario={self.config.scenario!r} cannot be copied, and feedback "
-                             f"{self.feedback!r} calibrates on a private simulator with copies "
-                             f"of the env's loads: give loads that support copy.deepcopy")
-        return copy.deepcopy(self._fixed_loads)
+        """Fresh copies of the fixed loads (from the config copied before any was attached), for
+        a calibration's private simulator."""
+        if self._config_copy is None:
+            raise ValueError(f"this env's arguments cannot be copied (scenario="
+                             f"{self.config.scenario!r}), and feedback {self.feedback!r} "
+                             f"calibrates on a private simulator with copies of the env's loads: "
+                             f"give arguments that support copy.deepcopy")
+        return make_scenario(copy.deepcopy(self._config_copy.scenario))
 
     def _calibrate(self, use_cache: bool) -> None:
         """Calibrate the feedback source (on a private simulator), or take its cached
@@ -557,7 +560,7 @@ class SoftArmEnv(gym.Env):
             "step": self.step_count,
             "sensors": {name: self._copy(reading)
                         for name, reading in self.measurement.readings.items()
-                        if not getattr(self.sensors.get(name), "privileged", False)},
+                        if name in self._shown_sensors},
             **({"estimates": self._estimate_info()} if self.estimate.details else {}),
             **({"randomization": self._draw.describe()} if self._draw is not None else {}),
         }
@@ -597,14 +600,6 @@ def _is_boolean(value: Any) -> bool:
         return np.asarray(value).dtype == np.bool_
     except (TypeError, ValueError):  # ragged: as_finite_array says what is wrong
         return False
-
-
-def _copied(loads: list) -> list | None:
-    """A deep copy of ``loads``, or ``None`` if one of them cannot be copied."""
-    try:
-        return copy.deepcopy(loads)
-    except Exception:  # noqa: BLE001 - any object without copy support
-        return None
 
 
 def _rebuild_env(cls: type, config: EnvConfig) -> "SoftArmEnv":
