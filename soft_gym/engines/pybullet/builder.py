@@ -1,191 +1,42 @@
-"""Build a soft arm as one PyBullet multibody (no files written).
+"""Build a soft arm as one PyBullet multibody (no files written), from its
+:class:`~soft_gym.robots.chain.Chain`.
 
-Each segment of length ``L`` is cut into ``n`` rigid links of rest length ``ds = L / n``. A link is
-reached from its parent through a *station* of joints at its proximal end:
-
-    revolute about local x -> revolute about local y -> [revolute about z (torsion)] -> prismatic z
-
-(every other station bends about y first, then x: see :func:`_station_joint_kinds`).
-
-The first three carry (almost) no mass; the prismatic sub-link carries the link's mass, collision
-cylinder and visual. The station joints are the discrete elastic beam: bending joint compliance
-``ds / (E I)`` (half of that at a segment's base and end, so the link vertices lie exactly on the
-constant-curvature arc of a pure moment), axial compliance ``ds / (E A)``, torsion ``ds / (G J)``.
-
-The builder only records each joint's compliance, its share of each segment's pressure load,
-stiffening, damping and limits; :class:`soft_gym.engines.pybullet.simulator.ArmSimulator` turns them into joint torques
-every substep with a semi-implicit (stable-PD) update, with the pressure moment entering as the
-rest angle ``q_rest = sum(M_seg * compliance_part)``.
+Every sub-link of the chain becomes a multibody link behind its joint (revolute for the bending
+and torsion joints, prismatic for the axial one); the body sub-links get the segment's collision
+cylinder and visual. The builder sets no springs: :class:`soft_gym.engines.pybullet.simulator.
+ArmSimulator` turns the chain's compliances into joint torques every substep with a
+semi-implicit (stable-PD) update, with the pressure moment entering as the rest angle
+``q_rest = sum(M_seg * compliance_part)``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import NamedTuple
+from dataclasses import dataclass
 
 import numpy as np
 import pybullet
 
+from soft_gym.robots.chain import AXIAL, BEND_X, BEND_Y, JOINT_AXES, TORSION, Chain, build_chain
 from soft_gym.robots.spec import ArmSpec, SegmentSpec
-from soft_gym.robots.stops import THREAD_BAND_FRACTION
 
-BEND_X, BEND_Y, TORSION, AXIAL = 0, 1, 2, 3
-"""Joint kinds inside a station."""
+__all__ = ["AXIAL", "BEND_X", "BEND_Y", "TORSION", "ArmBody", "build_arm",
+           "THREAD_CONSTRAINT_MARGIN"]
 
 THREAD_CONSTRAINT_MARGIN = 50.0
 """PyBullet's limit constraint of a threaded axial joint sits this many thread bands past the
 thread's length (0.1 of the link's rest length): the thread's stiff stop holds the joint long
 before it, and a constraint acting at the stop itself would fight the stop's spring."""
 
-_MASSLESS_FRACTION = 0.02
-"""Share of a link's mass placed on each of the joint-only sub-links (Featherstone needs > 0)."""
-
 
 @dataclass
-class ArmBody:
-    """Handles and per-joint constants of an arm built in a PyBullet client.
+class ArmBody(Chain):
+    """The chain of an arm built in a PyBullet client, with its multibody's id.
 
-    Joint arrays are indexed by the multibody's joint index (0..n_joints-1).
+    Joint arrays are indexed by the multibody's joint index (0..n_joints-1), which is the
+    chain's joint index.
     """
 
-    body_id: int
-    joint_kind: np.ndarray          # (n_joints,) BEND_X / BEND_Y / TORSION / AXIAL
-    joint_station: np.ndarray       # (n_joints,) global station (link) index
-    compliance_parts: np.ndarray    # (n_joints, n_segments) compliance owed to each segment's load
-    compliance: np.ndarray          # (n_joints,) total compliance (rad/(N m) or m/N)
-    local_inertia: np.ndarray       # (n_joints,) inertia seen locally (kg m^2 or kg)
-    stiffening: np.ndarray          # (n_joints,) beta of the secant stiffening
-    strain_scale: np.ndarray        # (n_joints,) q * strain_scale = strain measure for stiffening
-    damping_time_s: np.ndarray      # (n_joints,) stiffness-proportional damping c / k (s)
-    lower_limit: np.ndarray
-    upper_limit: np.ndarray         # (n_joints,) >= 0 for a threaded axial joint, else > 0
-    thread_band: np.ndarray         # (n_joints,) > 0 where the upper stop is a thread (m)
-    station_link: np.ndarray        # (n_stations,) multibody link index carrying each link's mass
-    station_segment: np.ndarray     # (n_stations,) segment owning each link
-    station_rest_length: np.ndarray  # (n_stations,) ds of each link (m)
-    station_bend_joints: np.ndarray  # (n_stations, 2) joint indices of (bend x, bend y)
-    station_y_first: np.ndarray     # (n_stations,) True where the station bends about y first
-    station_axial_joint: np.ndarray  # (n_stations,)
-    station_torsion_joint: np.ndarray  # (n_stations,) -1 where no torsion joint
-
-    @property
-    def n_joints(self) -> int:
-        return len(self.joint_kind)
-
-    @property
-    def tip_link(self) -> int:
-        return int(self.station_link[-1])
-
-
-@dataclass
-class _MultibodyLinks:
-    """``createMultiBody``'s per-link arguments, one entry per multibody link (every sub-link of
-    every station, base to tip), and each link's principal inertia for ``changeDynamics``."""
-
-    masses: list[float] = field(default_factory=list)                   # kg
-    inertias: list[list[float]] = field(default_factory=list)           # kg m^2, principal
-    collision: list[int] = field(default_factory=list)                  # shape id or -1
-    visual: list[int] = field(default_factory=list)                     # shape id or -1
-    positions: list[list[float]] = field(default_factory=list)          # m, in the parent frame
-    inertial_positions: list[list[float]] = field(default_factory=list)  # m, centre of mass
-    parents: list[int] = field(default_factory=list)                    # 0: base, i + 1: link i
-    joint_types: list[int] = field(default_factory=list)
-    axes: list[list[int]] = field(default_factory=list)
-
-    def add(self, joint_kind: int, mass_kg: float, inertia_kg_m2: list[float],
-            centre_of_mass_m: list[float], offset_m: float, shapes: tuple[int, int]) -> int:
-        """Append the sub-link behind a ``joint_kind`` joint, ``offset_m`` (m) along its parent's
-        z axis from the parent's joint, as the child of the link added last; its joint index."""
-        is_body = joint_kind == AXIAL
-        parent = len(self.masses)  # the link added last (0, the base, for the first)
-        self.masses.append(mass_kg)
-        self.inertias.append(inertia_kg_m2)
-        self.collision.append(shapes[0] if is_body else -1)
-        self.visual.append(shapes[1] if is_body else -1)
-        self.positions.append([0, 0, offset_m])
-        self.inertial_positions.append(centre_of_mass_m)
-        self.parents.append(parent)
-        self.joint_types.append(pybullet.JOINT_PRISMATIC if is_body else pybullet.JOINT_REVOLUTE)
-        self.axes.append(_JOINT_AXES[joint_kind])
-        return len(self.masses) - 1
-
-
-class _JointSpring(NamedTuple):
-    """The spring constants of one joint (see :func:`_joint_spring`)."""
-
-    compliance_parts: np.ndarray  # (n_segments,) rad/(N m) or m/N owed to each segment's load
-    local_inertia: float          # kg m^2 or kg
-    strain_scale: float           # strain per unit q: R / ds (1/rad), axial 1 / ds (1/m)
-    lower: float                  # rad or m
-    upper: float                  # rad or m
-    stiffening: float             # beta of the secant stiffening
-
-
-@dataclass
-class _JointTable:
-    """Per-joint constants of :class:`ArmBody`, collected joint by joint."""
-
-    kind: list[int] = field(default_factory=list)
-    station: list[int] = field(default_factory=list)
-    parts: list[np.ndarray] = field(default_factory=list)
-    local_inertia: list[float] = field(default_factory=list)
-    stiffening: list[float] = field(default_factory=list)
-    strain_scale: list[float] = field(default_factory=list)
-    damping_time_s: list[float] = field(default_factory=list)
-    lower: list[float] = field(default_factory=list)
-    upper: list[float] = field(default_factory=list)
-    thread_band: list[float] = field(default_factory=list)
-
-    def add(self, spec: ArmSpec, k: int, j: int, station: int, joint_kind: int) -> None:
-        """Append the ``joint_kind`` joint of link ``j`` of segment ``k`` (global ``station``)."""
-        segment = spec.segments[k]
-        ds = segment.link_length_m
-        spring = _joint_spring(spec, k, j, joint_kind)
-        threaded = joint_kind == AXIAL and segment.thread_length_m is not None
-        self.thread_band.append(THREAD_BAND_FRACTION * ds if threaded else 0.0)
-        self.kind.append(joint_kind)
-        self.station.append(station)
-        self.parts.append(spring.compliance_parts)
-        self.local_inertia.append(spring.local_inertia)
-        self.stiffening.append(spring.stiffening)
-        self.strain_scale.append(spring.strain_scale)
-        self.damping_time_s.append(spec.damping_time_s(segment))
-        self.lower.append(spring.lower)
-        self.upper.append(spring.upper)
-
-
-@dataclass
-class _StationTable:
-    """Per-station (per-link) constants of :class:`ArmBody`, collected station by station."""
-
-    link: list[int] = field(default_factory=list)
-    segment: list[int] = field(default_factory=list)
-    rest_length: list[float] = field(default_factory=list)
-    bend_joints: list[list[int]] = field(default_factory=list)
-    y_first: list[bool] = field(default_factory=list)
-    axial_joint: list[int] = field(default_factory=list)
-    torsion_joint: list[int] = field(default_factory=list)
-
-    def add(self, k: int, ds: float, kinds: list[int], sub_joints: dict[int, int]) -> None:
-        """Append a link of segment ``k`` with rest length ``ds`` (m), whose station has the joint
-        ``kinds`` in order and ``sub_joints`` (kind -> joint index)."""
-        self.link.append(sub_joints[AXIAL])
-        self.segment.append(k)
-        self.rest_length.append(ds)
-        self.bend_joints.append([sub_joints[BEND_X], sub_joints[BEND_Y]])
-        self.y_first.append(kinds[0] == BEND_Y)
-        self.axial_joint.append(sub_joints[AXIAL])
-        self.torsion_joint.append(sub_joints.get(TORSION, -1))
-
-
-_JOINT_AXES = {BEND_X: [1, 0, 0], BEND_Y: [0, 1, 0], TORSION: [0, 0, 1], AXIAL: [0, 0, 1]}
-"""Joint axis of each joint kind, in the sub-link's frame."""
-
-
-def _cylinder_inertia(mass: float, radius: float, length: float) -> list[float]:
-    """Principal inertia of a solid cylinder along z about its centre (kg m^2)."""
-    transverse = mass * (3 * radius**2 + length**2) / 12.0
-    return [transverse, transverse, 0.5 * mass * radius**2]
+    body_id: int = -1
 
 
 def _segment_shapes(client: pybullet, segment: SegmentSpec,
@@ -209,108 +60,6 @@ def _segment_shapes(client: pybullet, segment: SegmentSpec,
     return cyl_col, cyl_vis
 
 
-def _station_joint_kinds(station: int, torsion: bool) -> list[int]:
-    """Joint kinds of a station, proximal first: two bends, a torsion joint if ``torsion``, the
-    axial joint.
-
-    The order of the two bending joints alternates from link to link: Rx(a) Ry(b) twists the link
-    by about +ab/2 about its axis and Ry(b) Rx(a) by -ab/2, so alternating cancels the
-    parametrisation's twist instead of letting it accumulate along the arm.
-    """
-    bend_pair = [BEND_X, BEND_Y] if station % 2 == 0 else [BEND_Y, BEND_X]
-    return bend_pair + ([TORSION] if torsion else []) + [AXIAL]
-
-
-def _sub_link_inertial(segment: SegmentSpec, joint_kind: int, n_sub_links: int,
-                       is_last_link: bool) -> tuple[float, list[float], list[float]]:
-    """Mass (kg), principal inertia (kg m^2) and centre of mass (m, link frame) of the sub-link
-    behind a ``joint_kind`` joint, in a station of ``n_sub_links`` sub-links.
-
-    The axial (body) sub-link carries the link's mass as a solid cylinder, less
-    ``_MASSLESS_FRACTION`` of it for each joint-only sub-link; on the segment's last link it also
-    carries the segment's ``extra_tip_mass_kg`` as a point mass at its distal end (a tip cap).
-    """
-    ds = segment.link_length_m
-    radius = segment.outer_radius_m
-    link_mass = segment.mass_kg / segment.n_links
-    is_body = joint_kind == AXIAL
-    mass = link_mass * (1 - _MASSLESS_FRACTION * (n_sub_links - 1)) if is_body else (
-        link_mass * _MASSLESS_FRACTION)
-    com = [0, 0, ds / 2] if is_body else [0, 0, 0]
-    inertia = _cylinder_inertia(mass, radius, ds) if is_body else [mass * radius**2 / 4] * 3
-    extra = segment.extra_tip_mass_kg if (is_body and is_last_link) else 0.0
-    if extra > 0:
-        # tip cap: a point mass at the link's distal end, lumped with the link
-        total = mass + extra
-        com_z = (mass * ds / 2 + extra * ds) / total
-        shift = mass * (ds / 2 - com_z) ** 2 + extra * (ds - com_z) ** 2
-        inertia = [inertia[0] + shift, inertia[1] + shift, inertia[2]]
-        mass, com = total, [0, 0, com_z]
-    return mass, inertia, com
-
-
-def _joint_spring(spec: ArmSpec, k: int, j: int, joint_kind: int) -> _JointSpring:
-    """Spring constants of the ``joint_kind`` joint at link ``j`` of segment ``k``.
-
-    Compliance: bending ``ds / (E I)`` (rad/(N m); half of it at a segment's first joint, whose
-    other half is owed to the previous segment's load), torsion ``ds / (G J)``, axial
-    ``ds / (E A)`` (m/N). Limits: bending ``max_bend_per_m_rad * ds`` (rad), torsion 0.5 rad,
-    axial from ``-0.4 ds`` (m) to the segment's longest link.
-    """
-    segment = spec.segments[k]
-    ds = segment.link_length_m
-    radius = segment.outer_radius_m
-    ei, ea, gj = (segment.bending_rigidity_nm2, segment.axial_rigidity_n,
-                  segment.torsional_rigidity_nm2)
-    link_mass = segment.mass_kg / segment.n_links
-    part = np.zeros(spec.n_segments)
-    if joint_kind in (BEND_X, BEND_Y):
-        if j == 0:
-            part[k] += ds / (2 * ei)
-            if k > 0:
-                prev = spec.segments[k - 1]
-                part[k - 1] += prev.link_length_m / (2 * prev.bending_rigidity_nm2)
-        else:
-            part[k] += ds / ei
-        local = link_mass * (ds**2 / 3 + radius**2 / 4)
-        scale = radius / ds  # q / ds = curvature; times R = surface strain
-        limit = segment.max_bend_per_m_rad * ds
-        lo, hi, b = -limit, limit, segment.bending_stiffening
-    elif joint_kind == TORSION:
-        part[k] += ds / gj
-        local = link_mass * radius**2 / 2
-        scale, lo, hi, b = radius / ds, -0.5, 0.5, 0.0
-    else:
-        part[k] += ds / ea
-        local = link_mass
-        scale = 1.0 / ds
-        # a thread (SegmentSpec.thread_length_m) stops lengthening at its length;
-        # shortening keeps the material's range
-        lo, hi = -0.4 * ds, segment.max_length_m / segment.n_links - ds
-        b = segment.axial_stiffening
-    return _JointSpring(part, local, scale, lo, hi, b)
-
-
-def _add_station(links: _MultibodyLinks, joints: _JointTable, stations: _StationTable,
-                 spec: ArmSpec, k: int, j: int, shapes: tuple[int, int]) -> None:
-    """Add link ``j`` of segment ``k`` with its station of joints: the sub-links, their joints'
-    spring constants, and the station's record. The first joint sits at the previous link's rest
-    length along its axis (at the base for the first link)."""
-    segment = spec.segments[k]
-    station = len(stations.link)
-    kinds = _station_joint_kinds(station, segment.torsion)
-    sub_joints = {}
-    for sub, joint_kind in enumerate(kinds):
-        offset = 0.0
-        if sub == 0 and station > 0:
-            offset = stations.rest_length[-1]  # previous link's rest length
-        mass, inertia, com = _sub_link_inertial(segment, joint_kind, len(kinds),
-                                                j == segment.n_links - 1)
-        sub_joints[joint_kind] = links.add(joint_kind, mass, inertia, com, offset, shapes)
-        joints.add(spec, k, j, station, joint_kind)
-    stations.add(k, segment.link_length_m, kinds, sub_joints)
-
-
 def _base_mount(client: pybullet, first: SegmentSpec) -> int:
     """Visual of the base mount (id in ``client``): a dark cylinder below the base, 1.3 times the
     first segment's radius, 4 mm deep plus the first link's stretch (m) so that the first link's
@@ -322,22 +71,29 @@ def _base_mount(client: pybullet, first: SegmentSpec) -> int:
                                     rgbaColor=[0.3, 0.3, 0.3, 1])
 
 
-def _create_multibody(client: pybullet, links: _MultibodyLinks, base_visual: int) -> int:
+def _create_multibody(client: pybullet, chain: Chain, shapes: list[tuple[int, int]],
+                      base_visual: int) -> int:
     """The arm's multibody (id in ``client``): a massless fixed base at the origin carrying
-    ``base_visual``, and ``links`` as a chain in reduced coordinates."""
+    ``base_visual``, and the chain's sub-links as a chain in reduced coordinates, the body
+    sub-links with their segment's ``shapes`` (collision, visual)."""
+    links = chain.sub_links
     n = len(links.masses)
+    collision = [shapes[links.segments[i]][0] if links.is_body(i) else -1 for i in range(n)]
+    visual = [shapes[links.segments[i]][1] if links.is_body(i) else -1 for i in range(n)]
+    joint_types = [pybullet.JOINT_PRISMATIC if kind == AXIAL else pybullet.JOINT_REVOLUTE
+                   for kind in links.kinds]
     return client.createMultiBody(
         baseMass=0, baseCollisionShapeIndex=-1, baseVisualShapeIndex=base_visual,
         basePosition=[0, 0, 0], baseOrientation=[0, 0, 0, 1],
-        linkMasses=links.masses, linkCollisionShapeIndices=links.collision,
-        linkVisualShapeIndices=links.visual, linkPositions=links.positions,
+        linkMasses=links.masses, linkCollisionShapeIndices=collision,
+        linkVisualShapeIndices=visual, linkPositions=links.positions,
         linkOrientations=[[0, 0, 0, 1]] * n, linkInertialFramePositions=links.inertial_positions,
         linkInertialFrameOrientations=[[0, 0, 0, 1]] * n, linkParentIndices=links.parents,
-        linkJointTypes=links.joint_types, linkJointAxis=links.axes, useMaximalCoordinates=False)
+        linkJointTypes=joint_types, linkJointAxis=[JOINT_AXES[kind] for kind in links.kinds],
+        useMaximalCoordinates=False)
 
 
-def _set_joint_dynamics(client: pybullet, body: int, inertias: list[list[float]],
-                        joints: _JointTable) -> None:
+def _set_joint_dynamics(client: pybullet, body: int, chain: Chain) -> None:
     """Give every link its principal inertia (kg m^2), no PyBullet damping and its joint limits,
     and free the default velocity motors so only the simulator's spring torques act.
 
@@ -345,36 +101,17 @@ def _set_joint_dynamics(client: pybullet, body: int, inertias: list[list[float]]
     limit (EndStops), so its joint gets that constraint further out
     (``THREAD_CONSTRAINT_MARGIN`` thread bands), where it never acts.
     """
+    inertias = chain.sub_links.inertias
     n = len(inertias)
-    bullet_upper = (np.array(joints.upper)
-                    + THREAD_CONSTRAINT_MARGIN * np.array(joints.thread_band))
+    bullet_upper = chain.upper_limit + THREAD_CONSTRAINT_MARGIN * chain.thread_band
     for i in range(n):
         client.changeDynamics(body, i, localInertiaDiagonal=inertias[i], linearDamping=0.0,
                               angularDamping=0.0, jointDamping=0.0,
-                              jointLowerLimit=joints.lower[i],
+                              jointLowerLimit=float(chain.lower_limit[i]),
                               jointUpperLimit=float(bullet_upper[i]), lateralFriction=0.8)
     client.changeDynamics(body, -1, linearDamping=0.0, angularDamping=0.0)
     client.setJointMotorControlArray(body, list(range(n)), pybullet.VELOCITY_CONTROL,
                                      forces=[0.0] * n)
-
-
-def _arm_body(body: int, joints: _JointTable, stations: _StationTable) -> ArmBody:
-    """The :class:`ArmBody` of the multibody ``body`` from the collected tables."""
-    compliance_parts = np.array(joints.parts)
-    return ArmBody(
-        body_id=body, joint_kind=np.array(joints.kind), joint_station=np.array(joints.station),
-        compliance_parts=compliance_parts, compliance=compliance_parts.sum(axis=1),
-        local_inertia=np.array(joints.local_inertia), stiffening=np.array(joints.stiffening),
-        strain_scale=np.array(joints.strain_scale),
-        damping_time_s=np.array(joints.damping_time_s),
-        lower_limit=np.array(joints.lower), upper_limit=np.array(joints.upper),
-        thread_band=np.array(joints.thread_band),
-        station_link=np.array(stations.link), station_segment=np.array(stations.segment),
-        station_rest_length=np.array(stations.rest_length),
-        station_bend_joints=np.array(stations.bend_joints),
-        station_y_first=np.array(stations.y_first),
-        station_axial_joint=np.array(stations.axial_joint),
-        station_torsion_joint=np.array(stations.torsion_joint))
 
 
 def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, float]
@@ -382,15 +119,12 @@ def build_arm(client: pybullet, spec: ArmSpec, rgba: tuple[float, float, float, 
     """Create the multibody for ``spec`` in ``client`` (a BulletClient) with its base at the origin.
 
     The PyBullet world frame *is* the arm's base frame (docs/architecture.md, "Frames and mounts");
-    gravity is set by the
-    simulator from the mount.
+    gravity is set by the simulator from the mount.
     """
-    links, joints, stations = _MultibodyLinks(), _JointTable(), _StationTable()
-    for k, segment in enumerate(spec.segments):
-        shapes = _segment_shapes(client, segment, rgba)
-        for j in range(segment.n_links):
-            _add_station(links, joints, stations, spec, k, j, shapes)
+    chain = build_chain(spec)
+    shapes = [_segment_shapes(client, segment, rgba) for segment in spec.segments]
     base_visual = _base_mount(client, spec.segments[0])
-    body = _create_multibody(client, links, base_visual)
-    _set_joint_dynamics(client, body, links.inertias, joints)
-    return _arm_body(body, joints, stations)
+    body = _create_multibody(client, chain, shapes, base_visual)
+    _set_joint_dynamics(client, body, chain)
+    return ArmBody(**{name: getattr(chain, name) for name in chain.__dataclass_fields__},
+                   body_id=body)

@@ -13,24 +13,18 @@ import pybullet
 from pybullet_utils import bullet_client
 
 from soft_gym.engines.pybullet.quiet_import import c_stdout_silenced
-from soft_gym._quaternion import axis_rotation, quaternion_multiply, quaternion_to_matrix
+from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
-from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
-from soft_gym.engines.pybullet.builder import AXIAL, BEND_X, BEND_Y, ArmBody, build_arm
+from soft_gym.engines.chain_readout import ChainReadout, PhysicsDivergedError
+from soft_gym.engines.pybullet.builder import AXIAL, ArmBody, build_arm
 from soft_gym.engines.pybullet.contacts import ContactSwitch
 from soft_gym.engines.pybullet.external_loads import HeldForces, TipPayload
 from soft_gym.engines.pybullet.mass_matrix import LinkInertias
-from soft_gym.engines.pybullet.springs import (
-    STIFFNESS_MARGIN,
-    SpringGains,
-    pressure_to_rest_matrix,
-    tangent_stiffness_at,
-    weightless_equilibrium,
-)
+from soft_gym.engines.pybullet.springs import STIFFNESS_MARGIN, SpringGains, tangent_stiffness_at
 from soft_gym.engines.pybullet.world import PyBulletWorld
 from soft_gym.robots.pneumatics import PneumaticSupply, chamber_area_growth, effective_pressure_pa
+from soft_gym.robots.chain import pressure_to_rest_matrix, weightless_equilibrium
 from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
-from soft_gym.robots.stops import STOP_STIFFNESS_FACTOR, THREAD_STIFFNESS_FACTOR, EndStops
 from soft_gym.scenarios.loads import heaviest_total_load_n
 from soft_gym.simulator import Load
 
@@ -42,13 +36,7 @@ strain) per substep has its substeps split (``ArmSimulator._refinement_for``).""
 _MAX_REFINEMENT = 4
 """The most pieces a substep is split into while the arm whips."""
 
-_DIVERGED_PAST_LIMIT = 1.5
-"""A joint this many times past its limit means the integration diverged (the end stops hold
-every load the arm accepts within 1.1 times, ``tests/soft_gym/engines/test_runaway.py``)."""
-
-
-class PhysicsDivergedError(RuntimeError):
-    """The simulation left the physical range (a joint far past its end stop)."""
+__all__ = ["ArmSimulator", "PhysicsDivergedError"]
 
 
 class ArmSimulator:
@@ -99,20 +87,10 @@ class ArmSimulator:
         self._joints = list(range(self.arm.n_joints))
         self._kind = self.arm.joint_kind
         self._stiffening = bool(np.any(self.arm.stiffening > 0))
-        self._chamber_weights = self._segment_bend_weights()
+        self._readout = ChainReadout(spec, self.arm)
         self._stiffness0 = 1.0 / self.arm.compliance
         self._damping = self.arm.damping_time_s * self._stiffness0
-        threaded = self.arm.thread_band > 0
-        # a thread may stop a link at or near its rest length (upper limit 0 or tiny): judge
-        # divergence of such a joint against its shortening range where that is larger
-        self._inverse_upper = 1.0 / np.where(
-            threaded, np.maximum(self.arm.upper_limit, -self.arm.lower_limit),
-            self.arm.upper_limit)
-        self._inverse_lower = 1.0 / self.arm.lower_limit
-        self._stops = EndStops(
-            self.arm.lower_limit, self.arm.upper_limit,
-            stiffness=np.where(threaded, THREAD_STIFFNESS_FACTOR, STOP_STIFFNESS_FACTOR)
-            / self.arm.compliance, thread_band=self.arm.thread_band)
+        self._stops = self.arm.end_stops()
         self._station_links = self.arm.station_link.tolist()
         # read-out caches, per substep
         self._frames_substep = self._positions_substep = self._tip_substep = -1
@@ -237,8 +215,7 @@ class ArmSimulator:
     def backbone(self) -> np.ndarray:
         """Backbone points (m, base frame): the base and every link's distal end, (n_links+1, 3)."""
         positions, _, rotations = self._link_frames()
-        ends = positions + rotations[:, :, 2] * self.arm.station_rest_length[:, None]
-        return np.vstack([np.zeros(3), ends])
+        return self._readout.backbone(positions, rotations)
 
     def tip_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Tip position (m) and orientation quaternion (x, y, z, w) in the base frame.
@@ -250,56 +227,24 @@ class ArmSimulator:
             tip, quaternion = self._tip
             return tip.copy(), quaternion.copy()
         positions, quaternions, rotations = self._link_frames()
-        q = self.joint_positions()
-        bx, by = self.arm.station_bend_joints[-1]
-        half_x, half_y = axis_rotation(0, 0.5 * q[bx]), axis_rotation(1, 0.5 * q[by])
-        half = (quaternion_multiply(half_y, half_x) if self.arm.station_y_first[-1]
-                else quaternion_multiply(half_x, half_y))
-        tip_quaternion = np.array(quaternion_multiply(tuple(quaternions[-1]), half))
-        tip = positions[-1] + rotations[-1][:, 2] * self.arm.station_rest_length[-1]
-        self._tip = (tip, tip_quaternion / np.linalg.norm(tip_quaternion))
+        self._tip = self._readout.tip_pose(positions, quaternions, rotations,
+                                           self.joint_positions())
         self._tip_substep = self._substep
         return self._tip[0].copy(), self._tip[1].copy()
 
     def chamber_lengths(self) -> np.ndarray:
-        """Chamber lengths (m), shape (n_chambers,), from each segment's arc length and bending.
-
-        ``l_i = s + d (theta_x sin(sigma_i) - theta_y cos(sigma_i))`` with ``theta`` the segment's
-        total bending rotation (consistent with :mod:`soft_gym.kinematics`).
-        """
-        q = self.joint_positions()
-        arc, theta_x, theta_y = self._segment_arc_and_bend(q)
-        sigma = CHAMBER_ANGLES_RAD
-        d = self.spec.chamber_offset_m[:, None]
-        lengths = arc[:, None] + d * (theta_x[:, None] * np.sin(sigma) - theta_y[:, None] * np.cos(sigma))
-        return lengths.reshape(-1)
+        """Chamber lengths (m), shape (n_chambers,), from each segment's arc length and bending
+        (:meth:`ChainReadout.chamber_lengths <soft_gym.engines.chain_readout.ChainReadout.chamber_lengths>`)."""
+        return self._readout.chamber_lengths(self.joint_positions())
 
     def curvature_profile(self) -> tuple[np.ndarray, np.ndarray]:
-        """Backbone curvature at every vertex, for sensors that integrate strain along the arm.
-
-        Returns:
-            ``(arc_m, curvature)``: arc position of each backbone vertex from the base (m, current
-            lengths), shape (n_links + 1,), and the curvature vector ``(kx, ky)`` there (1/m),
-            shape (n_links + 1, 2). Each joint's bend ``theta`` is spread over the rest length
-            it stands for (half a link at a segment's ends, a link inside), so a pure moment
-            gives ``kappa = M / (E I)`` at every vertex. The tip vertex repeats the last joint's
-            curvature (the half joint that continues the arc, see :meth:`tip_pose`). Between
-            vertices, linear interpolation is the natural reading.
-        """
-        q = self.joint_positions()
-        arm = self.arm
-        bend = q[arm.station_bend_joints]                       # (n_links, 2): theta_x, theta_y
-        rigidity = np.array([s.bending_rigidity_nm2 for s in self.spec.segments])
-        element = arm.compliance_parts[arm.station_bend_joints[:, 0]] @ rigidity  # (n_links,)
-        curvature = np.stack([bend[:, 1], -bend[:, 0]], axis=1) / element[:, None]
-        link_lengths = arm.station_rest_length + q[arm.station_axial_joint]
-        arc = np.r_[0.0, np.cumsum(link_lengths)]
-        return arc, np.vstack([curvature, curvature[-1:]])
+        """Arc position (m) and curvature vector (1/m) at every backbone vertex
+        (:meth:`ChainReadout.curvature_profile <soft_gym.engines.chain_readout.ChainReadout.curvature_profile>`)."""
+        return self._readout.curvature_profile(self.joint_positions())
 
     def link_axial_strains(self) -> np.ndarray:
         """Axial strain of every link (extension over rest length), shape (n_links,)."""
-        q = self.joint_positions()
-        return q[self.arm.station_axial_joint] / self.arm.station_rest_length
+        return self._readout.link_axial_strains(self.joint_positions())
 
     def link_twist_rates(self) -> np.ndarray:
         """Twist rate of every link (rad/m): its torsion joint angle over the link's rest length."""
@@ -328,9 +273,7 @@ class ArmSimulator:
 
     def link_twists(self) -> np.ndarray:
         """Twist angle of each link's torsion joint (rad), zeros without torsion joints."""
-        q = self.joint_positions()
-        idx = self.arm.station_torsion_joint
-        return np.where(idx >= 0, q[np.maximum(idx, 0)], 0.0)
+        return self._readout.link_twists(self.joint_positions())
 
     @property
     def pressures_pa(self) -> np.ndarray:
@@ -490,28 +433,6 @@ class ArmSimulator:
             pass
 
     # ------------------------------------------------------------------ internals
-    def _segment_bend_weights(self) -> np.ndarray:
-        """Weights (n_segments, n_joints) turning joint angles into each segment's total bending.
-
-        A joint at a segment boundary is shared in proportion to the compliance each side owes it;
-        the last segment also gets the half tip joint (see :meth:`tip_pose`).
-        """
-        parts = self.arm.compliance_parts
-        weights = (parts / parts.sum(axis=1, keepdims=True)).T.copy()
-        bend = np.isin(self._kind, (BEND_X, BEND_Y))
-        weights[:, ~bend] = 0.0
-        weights[-1, self.arm.station_bend_joints[-1]] += 0.5
-        return weights
-
-    def _segment_arc_and_bend(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        n_seg = self.spec.n_segments
-        arc = np.zeros(n_seg)
-        np.add.at(arc, self.arm.station_segment,
-                  self.arm.station_rest_length + q[self.arm.station_axial_joint])
-        qx = np.where(self._kind == BEND_X, q, 0.0)
-        qy = np.where(self._kind == BEND_Y, q, 0.0)
-        return arc, self._chamber_weights @ qx, self._chamber_weights @ qy
-
     def _link_frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Frame origin (m), quaternion and rotation matrix of every link, cached per substep."""
         if self._frames_substep != self._substep:
@@ -584,13 +505,7 @@ class ArmSimulator:
         its states must not reach an observation or a training batch."""
         states = self.client.getJointStates(self.arm.body_id, self._joints)
         q = np.fromiter((state[0] for state in states), dtype=float, count=len(states))
-        past = np.maximum(q * self._inverse_upper, q * self._inverse_lower)
-        worst = int(np.argmax(past))
-        if past[worst] > _DIVERGED_PAST_LIMIT:
-            raise PhysicsDivergedError(
-                f"joint {worst} of the {self.spec.name} arm is at {past[worst]:.1f} times its "
-                f"limit at t = {self.time_s:.3f} s with loads {self.loads!r}: the simulation "
-                "diverged")
+        self._readout.check_within_stops(q, self.time_s, self.loads)
 
     def _update_implicit_gains(self, q: np.ndarray, tangent_stiffness: np.ndarray) -> None:
         """Refresh the semi-implicit spring update's gains at ``q`` with ``tangent_stiffness``

@@ -1,9 +1,10 @@
 """The joint springs of the arm: pressure rest deflections, stiffness and the semi-implicit gains.
 
-Every joint of the discrete beam (:mod:`soft_gym.engines.pybullet.builder`) is a spring with the
+Every joint of the discrete beam (:mod:`soft_gym.robots.chain`) is a spring with the
 secant stiffness ``K(q) = k0 (1 + beta strain^2)`` (``k0`` the inverse of its compliance), its
 end stops (:class:`~soft_gym.robots.stops.EndStops`) and stiffness-proportional damping. The
-chamber pressures enter as a rest deflection ``q_rest`` linear in the effective pressures. The
+chamber pressures enter as a rest deflection ``q_rest`` linear in the effective pressures
+(:func:`~soft_gym.robots.chain.pressure_to_rest_matrix`). The
 simulator (:class:`~soft_gym.engines.pybullet.simulator.ArmSimulator`) turns these into joint
 torques every substep with the gains of :class:`SpringGains` (docs/architecture.md,
 "Semi-implicit joint springs").
@@ -13,9 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from soft_gym.engines.pybullet.builder import ArmBody
-from soft_gym.robots.pneumatics import loads_of_effective_pressure, twist_of_effective_pressure
-from soft_gym.robots.spec import ArmSpec
+from soft_gym.robots.chain import Chain
 from soft_gym.robots.stops import EndStops
 
 _IMPLICIT_FRACTION = 0.25
@@ -25,45 +24,8 @@ STIFFNESS_MARGIN = 1.25
 """Factor on the tangent stiffness used in the implicit term, so it stays ahead of stiffening."""
 
 
-def pressure_to_rest_matrix(spec: ArmSpec, arm: ArmBody) -> np.ndarray:
-    """Matrix (n_joints, n_chambers) from effective chamber pressures (Pa,
-    :func:`~soft_gym.robots.pneumatics.effective_pressure_pa`) to each joint's rest
-    deflection (rad or m) under the small-strain compliance (the effective pressure -> load map
-    is linear): ``q_rest = sum(M_seg * compliance_part)``."""
-    columns = []
-    for chamber in range(spec.n_chambers):
-        unit = np.zeros(spec.n_chambers)
-        unit[chamber] = 1.0
-        axial, moment = loads_of_effective_pressure(spec, unit)
-        twist = twist_of_effective_pressure(spec, unit)
-        per_kind = np.stack([moment[:, 0], moment[:, 1], twist, axial], axis=1)
-        columns.append((arm.compliance_parts * per_kind[:, arm.joint_kind].T).sum(axis=1))
-    return np.stack(columns, axis=1)
-
-
-def weightless_equilibrium(rest: np.ndarray, arm: ArmBody) -> np.ndarray:
-    """Joint positions (rad or m) where the springs balance the pressure load alone: per joint
-    the real root of ``q (1 + beta (s q)^2) = q_rest`` (the secant stiffening, ``s`` the strain
-    scale), kept inside 98 % of the joint's limits.
-
-    Args:
-        rest: the rest deflection ``q_rest`` of every joint (rad or m), shape (n_joints,).
-        arm: the built arm (stiffening, strain scales, limits).
-    """
-    a = arm.stiffening * arm.strain_scale ** 2
-    q = rest.copy()
-    stiff = a > 0
-    if np.any(stiff):
-        # Cardano for q^3 + q / a - rest / a = 0, which has one real root (increasing)
-        p3 = 1.0 / (3.0 * a[stiff])
-        half = 0.5 * rest[stiff] / a[stiff]
-        root = np.sqrt(half ** 2 + p3 ** 3)
-        q[stiff] = np.cbrt(half + root) + np.cbrt(half - root)
-    return np.clip(q, 0.98 * arm.lower_limit, 0.98 * arm.upper_limit)
-
-
 def tangent_stiffness_at(q: np.ndarray, stiffness0: np.ndarray, stiffening: bool,
-                         arm: ArmBody, stops: EndStops) -> np.ndarray:
+                         arm: Chain, stops: EndStops) -> np.ndarray:
     """Tangent stiffness of every joint at ``q`` (N m/rad or N/m): ``k0 (1 + 3 beta strain^2)``
     (only ``k0`` unless ``stiffening``) plus the end stops'
     (:class:`~soft_gym.robots.stops.EndStops`), a thread about to go taut counted as taut
