@@ -4,16 +4,24 @@ from __future__ import annotations
 
 import pytest
 
-from soft_gym.engines.pybullet.simulator import ArmSimulator
+from soft_gym.engines import make_simulator
+from soft_gym.simulator import Simulator
 
 
 @pytest.fixture
-def make_sim():
-    """Factory of simulators (``gravity=False`` switches gravity off), all closed after the test."""
+def engine() -> str:
+    """The engine :func:`make_sim` builds (a module may parametrise it over several)."""
+    return "pybullet"
+
+
+@pytest.fixture
+def make_sim(engine):
+    """Factory of simulators in ``engine`` (``gravity=False`` switches gravity off), all closed
+    after the test."""
     made = []
 
-    def factory(spec, gravity: bool = True) -> ArmSimulator:
-        sim = ArmSimulator(spec)
+    def factory(spec, gravity: bool = True) -> Simulator:
+        sim = make_simulator(spec, engine)
         if not gravity:
             sim.set_gravity([0.0, 0.0, 0.0])
         made.append(sim)

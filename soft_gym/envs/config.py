@@ -15,6 +15,7 @@ from typing import Any
 
 from soft_gym._validation import (require_choice, require_integer, require_names,
                                   require_non_negative)
+from soft_gym.engines import DEFAULT_ENGINE, ENGINES
 from soft_gym.envs.observations import OBSERVATION_PARTS, STATE_PARTS
 from soft_gym.envs.rendering import check_render_size
 from soft_gym.robots.presets import get_preset
@@ -46,6 +47,7 @@ class EnvConfig:
     """
 
     preset: str | ArmSpec = "wang2023"
+    engine: str = DEFAULT_ENGINE
     task: str = "reach"
     path: str | list[str] = "circle"
     cycles: int = 1
@@ -76,6 +78,7 @@ class EnvConfig:
             raise ValueError(f"preset must be a preset name or an ArmSpec, got {self.preset!r} "
                              f"({type(self.preset).__name__})")
         self.arm = self.preset if isinstance(self.preset, ArmSpec) else get_preset(self.preset)
+        require_choice("engine", self.engine, ENGINES)
         require_choice("task", self.task, TASKS)
         if self.task == "reach":
             track_only = [f"{name}={getattr(self, name)!r}" for name, default in _TRACK_ONLY

@@ -109,7 +109,7 @@ import numpy as np
 from gymnasium import spaces
 
 from soft_gym._validation import as_finite_array, require_bool, require_integer
-from soft_gym.engines import make_simulator
+from soft_gym.engines import make_simulator, require_engine_features
 from soft_gym.envs.config import EnvConfig, check_arguments
 from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.envs.rendering import SceneRenderer
@@ -146,6 +146,10 @@ class SoftArmEnv(gym.Env):
 
     Args:
         preset: arm preset name (``wang2023``, ``zhao2021``, ``zou2022``, ``ho2018``) or an ArmSpec.
+        engine: physics engine (:data:`soft_gym.engines.ENGINES`): ``"pybullet"`` (the default,
+            the reference) or ``"mujoco"`` (the same arm, several times faster; no bodies beside
+            the arm and no cameras, so no swaying mass, obstacle rod, camera-based feedback or
+            ``render()``: refused here). Calibrations run on the reference engine.
         task: ``"reach"`` or ``"track"``.
         path: tracking path (``circle``, ``pentagram``, ``rectangle``, ``spiral``, ``star``,
             ``waypoints``), or a list of them to draw one per episode; track only.
@@ -214,9 +218,6 @@ class SoftArmEnv(gym.Env):
                                                                         config.start_m)
         self.tasks: list[Task] = self._make_tasks(paths)
         self.task = self.tasks[0]
-        self.sim = make_simulator(self.arm)
-        for load in self.loads:
-            self.sim.add_load(load)
         self.obs_parts = config.obs
         self.obs_format = config.obs_format
         self.feedback = config.feedback
@@ -224,6 +225,11 @@ class SoftArmEnv(gym.Env):
         self._shown_sensors = {name for name, sensor in self.sensors.items()
                                if not getattr(sensor, "privileged", False)}
         randomization = RandomizationConfig.from_any(config.randomization)
+        require_engine_features(config.engine, self._engine_needs(randomization))
+        self.engine = config.engine
+        self.sim = make_simulator(self.arm, config.engine)
+        for load in self.loads:
+            self.sim.add_load(load)
         gravity = float(np.linalg.norm(self.arm.gravity_base))
         fixed_load_n = heaviest_total_load_n(self.loads, gravity)
         self.randomizer = None if randomization is None else DomainRandomizer(
@@ -253,6 +259,23 @@ class SoftArmEnv(gym.Env):
         self._calibrate(use_cache=True)
 
     # ------------------------------------------------------------------ composition
+    def _engine_needs(self, randomization: RandomizationConfig | None
+                      ) -> list[tuple[str, frozenset[str]]]:
+        """What of this env needs which engine features (:func:`~soft_gym.engines.
+        require_engine_features`): its loads, sensors, drawn loads and ``render()``."""
+        needs = [(f"scenario element {load!r}", getattr(load, "engine_features", frozenset()))
+                 for load in self.loads]
+        needs += [(f"sensor {name!r} (feedback {self.config.feedback!r}, obs "
+                   f"{self.config.obs!r})", sensor.engine_features)
+                  for name, sensor in self.sensors.items()]
+        if randomization is not None and randomization.load_weights.get("swaying_mass", 0) > 0:
+            needs.append(("randomization drawing swaying_mass loads (load_weights"
+                          f"['swaying_mass'] = {randomization.load_weights['swaying_mass']!r}; "
+                          "set it to 0 to draw none)", SwayingMass.engine_features))
+        if self.config.render_mode is not None:
+            needs.append((f"render_mode={self.config.render_mode!r}", frozenset({"rendering"})))
+        return needs
+
     def _make_tasks(self, paths: list[str]) -> list[Task]:
         """One task per path (the reach task has one), sharing the arm's reachable tips."""
         config = self.config

@@ -84,6 +84,13 @@ class EndStops:
         self._zeros = np.zeros_like(self.lower)
         self._zeros.flags.writeable = False
 
+    def bands(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Where each stop starts to act and the band over which its stiffness builds up (rad or
+        m, per joint): ``(start_low, band_low, start_high, band_high)``; the lower stop acts
+        below ``start_low``, the upper above ``start_high``."""
+        return (self._start_low.copy(), self._band_low.copy(), self._start_high.copy(),
+                self._band_high.copy())
+
     def force(self, q: np.ndarray) -> np.ndarray:
         """Restoring force of the stops at ``q`` (N m or N), positive along ``q``'s sign."""
         if not (np.abs(q - self.free_centre) > self.free_half_width).any():

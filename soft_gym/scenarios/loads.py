@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -182,6 +183,9 @@ class FillingLoad(_TipMassBase):
 class SwayingMass(_Timed):
     """A ball (kg) hanging from the tip on a point-to-point constraint of ``length_m`` (m)."""
 
+    engine_features: ClassVar[frozenset[str]] = frozenset({"bodies"})
+    """A ball beside the arm, tethered to its tip (:data:`soft_gym.engines.ENGINE_FEATURES`)."""
+
     mass_kg: float = 0.02
     length_m: float = 0.02
     radius_m: float = 0.006
@@ -324,6 +328,9 @@ class ObstacleRod(_Timed):
 
     wang2023 fixes an aluminium rod in the workspace that limits bending on one side.
     """
+
+    engine_features: ClassVar[frozenset[str]] = frozenset({"bodies"})
+    """A body beside the arm that it touches (:data:`soft_gym.engines.ENGINE_FEATURES`)."""
 
     point_m: tuple[float, float, float] = (-0.02, 0.0, 0.07)
     axis: tuple[float, float, float] = (0.0, 1.0, 0.0)

@@ -29,6 +29,10 @@ class Sensor:
         rate_hz: samples per second; ``None`` samples at every read.
     """
 
+    engine_features: frozenset[str] = frozenset()
+    """What the sensor needs of the physics engine beyond the arm
+    (:data:`soft_gym.engines.ENGINE_FEATURES`); a camera needs ``"rendering"``."""
+
     def __init__(self, name: str, rate_hz: float | None = None) -> None:
         if rate_hz is not None:
             require_positive("rate_hz", rate_hz)

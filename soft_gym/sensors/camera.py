@@ -56,6 +56,8 @@ class EyeInHandCamera(Sensor):
         faults: the active list of :class:`~soft_gym.sensors.faults.VisualFault`.
     """
 
+    engine_features = frozenset({"rendering"})
+
     def __init__(self, intrinsics: CameraIntrinsics | dict | None = None,
                  offset_m: tuple[float, float, float] = (0.0, 0.0, 0.003), faults: Any = None,
                  rate_hz: float | None = None, scene: bool = True, scene_seed: int = 0,

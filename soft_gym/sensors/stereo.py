@@ -94,6 +94,8 @@ class StereoCamera(Sensor):
         last_depth: metric depth (m, (H, W)) of the last reading per side, occluders included.
     """
 
+    engine_features = frozenset({"rendering"})
+
     def __init__(self, intrinsics: CameraIntrinsics | dict | None = None,
                  baseline_m: float = 0.12, distance_m: float | None = None,
                  target_m: tuple[float, float, float] | None = None,

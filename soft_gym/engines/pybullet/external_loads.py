@@ -9,65 +9,27 @@ couple for its weight.
 
 from __future__ import annotations
 
-from typing import Iterator
-
 import numpy as np
 from pybullet_utils import bullet_client
 
 from soft_gym._quaternion import quaternion_to_matrix
+from soft_gym.engines.held_loads import HeldForceTable, update_payload
 from soft_gym.engines.pybullet.builder import ArmBody
 from soft_gym.engines.pybullet.mass_matrix import LinkInertias
 
 
-class HeldForces:
-    """Forces held on the arm's links until replaced or set to zero, by key.
+class HeldForces(HeldForceTable):
+    """Forces held on the arm's links (:class:`~soft_gym.engines.held_loads.HeldForceTable`),
+    turned into joint torques with PyBullet's Jacobians.
 
     Args:
         client: the arm's ``BulletClient``.
         arm: the built arm.
-
-    Attributes:
-        forces: key -> (multibody link, force (N, base frame), point of action (m, link frame)).
-        off_body: keys of the forces on the tip cap rather than on the body's surface.
     """
 
     def __init__(self, client: bullet_client.BulletClient, arm: ArmBody) -> None:
+        super().__init__(arm)
         self.client, self.arm = client, arm
-        self.forces: dict[str, tuple[int, np.ndarray, np.ndarray]] = {}
-        self.off_body: set[str] = set()
-
-    def set(self, key: str, link: int, force_n: np.ndarray,
-            local_point_m: tuple[float, float, float] | None = None,
-            on_body: bool = True) -> None:
-        """Hold ``force_n`` (N, base frame) on the arm's ``link`` (0 at the base, negative
-        counts from the tip) at ``local_point_m`` (m, link frame; default the middle of the
-        link); a zero force removes the key. ``on_body=False`` marks a force on the tip cap."""
-        link = int(self.arm.station_link[link])
-        force = np.asarray(force_n, dtype=float)
-        if not np.any(force):
-            self.forces.pop(key, None)
-            self.off_body.discard(key)
-            return
-        if on_body:
-            self.off_body.discard(key)
-        else:
-            self.off_body.add(key)
-        if local_point_m is None:
-            local_point_m = (0.0, 0.0, 0.5 * self._link_length(link))
-        self.forces[key] = (int(link), force, np.asarray(local_point_m, dtype=float))
-
-    def clear(self) -> None:
-        """Remove every held force."""
-        self.forces.clear()
-        self.off_body.clear()
-
-    def body_forces(self) -> Iterator[tuple[int, np.ndarray]]:
-        """``(multibody link, force (N, base frame))`` of every force pressing on the body's
-        surface (not on the tip cap)."""
-        body_forces = {key for key in self.forces if key not in self.off_body}
-        for key in body_forces:
-            link, force, _ = self.forces[key]
-            yield link, force
 
     def joint_torque(self, q: np.ndarray) -> np.ndarray:
         """Generalised force (N m or N per joint) of the held forces at ``q`` (rad or m).
@@ -98,12 +60,6 @@ class HeldForces:
         state = self.client.getLinkState(self.arm.body_id, link, computeForwardKinematics=1)
         return quaternion_to_matrix(np.asarray(state[5]))
 
-    def _link_length(self, link: int) -> float:
-        """Rest length (m) of the arm link carried by multibody ``link`` (0 for a joint-only
-        sub-link)."""
-        matches = np.nonzero(self.arm.station_link == link)[0]
-        return float(self.arm.station_rest_length[matches[0]]) if len(matches) else 0.0
-
 
 class TipPayload:
     """Point masses (kg) carried at the tip, by key; they add up.
@@ -124,14 +80,8 @@ class TipPayload:
     def set(self, key: str, mass_kg: float, gravity: np.ndarray) -> None:
         """Carry ``mass_kg`` (kg, >= 0; 0 removes the key) under ``key``, with ``gravity``
         (m/s^2, base frame); nothing changes if the key already carries that mass."""
-        if mass_kg == 0.0:
-            if self.masses.pop(key, None) is None:
-                return
-        elif self.masses.get(key) == mass_kg:
-            return
-        else:
-            self.masses[key] = mass_kg
-        self.apply(gravity)
+        if update_payload(self.masses, key, mass_kg):
+            self.apply(gravity)
 
     def apply(self, gravity: np.ndarray) -> None:
         """Put the sum of the payloads on the tip link: mass, inertia and weight at the tip

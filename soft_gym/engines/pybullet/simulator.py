@@ -16,6 +16,7 @@ from soft_gym.engines.pybullet.quiet_import import c_stdout_silenced
 from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 from soft_gym.engines.chain_readout import ChainReadout, PhysicsDivergedError
+from soft_gym.engines.common_arm import CommonArm
 from soft_gym.engines.pybullet.builder import AXIAL, ArmBody, build_arm
 from soft_gym.engines.pybullet.contacts import ContactSwitch
 from soft_gym.engines.pybullet.external_loads import HeldForces, TipPayload
@@ -24,8 +25,7 @@ from soft_gym.engines.pybullet.springs import STIFFNESS_MARGIN, SpringGains, tan
 from soft_gym.engines.pybullet.world import PyBulletWorld
 from soft_gym.robots.pneumatics import PneumaticSupply, chamber_area_growth, effective_pressure_pa
 from soft_gym.robots.chain import pressure_to_rest_matrix, weightless_equilibrium
-from soft_gym.robots.spec import MAX_LOAD_TO_WEIGHT, ArmSpec
-from soft_gym.scenarios.loads import heaviest_total_load_n
+from soft_gym.robots.spec import ArmSpec
 from soft_gym.simulator import Load
 
 
@@ -39,7 +39,7 @@ _MAX_REFINEMENT = 4
 __all__ = ["ArmSimulator", "PhysicsDivergedError"]
 
 
-class ArmSimulator:
+class ArmSimulator(CommonArm):
     """A soft arm in its own PyBullet physics client.
 
     Args:
@@ -53,6 +53,9 @@ class ArmSimulator:
         world: the bodies and cameras around the arm (:class:`PyBulletWorld`).
         time_s: simulated time since the last reset (s).
     """
+
+    features: frozenset[str] = frozenset({"bodies", "rendering"})
+    """Engine features beyond the arm (:data:`soft_gym.engines.ENGINE_FEATURES`): all."""
 
     def __init__(self, spec: ArmSpec, physics_dt_s: float | None = None) -> None:
         self.spec = spec
@@ -68,6 +71,7 @@ class ArmSimulator:
         self._client_id = self.client._client  # for direct ``pybullet`` calls on the hot path
         self._step_simulation = pybullet.stepSimulation  # bench/env_speed.py times it here
         self.arm: ArmBody = build_arm(self.client, spec)
+        self.chain = self.arm  # the arm's chain (an ArmBody is one, with its multibody id)
         self.world = PyBulletWorld(self.client, self.arm.body_id, self.arm.tip_link,
                                    np.array([0.0, 0.0, self.arm.station_rest_length[-1]]))
         # the arm's contact detection, off while nothing can touch it
@@ -117,10 +121,6 @@ class ArmSimulator:
         self.reset()
 
     # ----------------------------------------------------------- public face (docs/architecture.md)
-    def set_pressures(self, pressures_pa: np.ndarray) -> None:
-        """Command chamber pressures (Pa, gauge), shape (n_chambers,), each in [0, p_max]."""
-        self.supply.command(pressures_pa)
-
     def step_physics(self, seconds: float) -> None:
         """Advance the simulation by ``seconds`` (rounded to whole physics substeps)."""
         seconds = float(seconds)
@@ -202,16 +202,6 @@ class ArmSimulator:
         if self._payload.masses:
             self._payload.apply(self.gravity)
 
-    def apply_tip_force(self, force_n: np.ndarray) -> None:
-        """Apply a force (N, base frame) at the tip, held until changed (zeros removes it)."""
-        force = as_finite_array("force_n", force_n, shape=(3,))
-        if np.linalg.norm(force) > self.spec.max_load_n:
-            raise ValueError(f"force_n must be at most {self.spec.max_load_n:.3g} N in magnitude "
-                             f"on the {self.spec.name} arm (max_load_n), got {force.tolist()}")
-        self.set_external_force("tip", -1, force,
-                                local_point_m=(0.0, 0.0, self.arm.station_rest_length[-1]),
-                                on_body=False)
-
     def backbone(self) -> np.ndarray:
         """Backbone points (m, base frame): the base and every link's distal end, (n_links+1, 3)."""
         positions, _, rotations = self._link_frames()
@@ -275,21 +265,6 @@ class ArmSimulator:
         """Twist angle of each link's torsion joint (rad), zeros without torsion joints."""
         return self._readout.link_twists(self.joint_positions())
 
-    @property
-    def pressures_pa(self) -> np.ndarray:
-        """Current chamber pressures (Pa)."""
-        return self.supply.pressure_pa.copy()
-
-    @property
-    def n_links(self) -> int:
-        """Links of the discretised backbone (the arm's links, base to tip)."""
-        return len(self._station_links)
-
-    @property
-    def link_rest_lengths_m(self) -> np.ndarray:
-        """Every link's rest length (m), base to tip, shape (n_links,)."""
-        return self.arm.station_rest_length.copy()
-
     def link_rotations(self, links: np.ndarray) -> np.ndarray:
         """World-from-link rotation matrices of the arm's ``links`` (indices, 0 at the base),
         shape (len(links), 3, 3)."""
@@ -337,17 +312,7 @@ class ArmSimulator:
             self.step_physics(settle_s)
             self.restart_clock()
 
-    def restart_loads(self) -> None:
-        """Put every load back to its state at the start of an episode (time 0)."""
-        for load in self.loads:
-            load.reset(self)
-            load.update(self, 0.0)
-
-    def restart_clock(self) -> None:
-        """Set the simulated time back to 0 where the arm is (after a settle or a set-up
-        motion), so that timed loads and faults count from here."""
-        self.time_s = 0.0
-        self._substep = 0
+    def _forget_reads(self) -> None:
         self._frames_substep = self._positions_substep = self._tip_substep = -1
 
     def set_joint_positions(self, positions: np.ndarray) -> None:
@@ -368,26 +333,6 @@ class ArmSimulator:
         self._stiffness0 = scale / self.arm.compliance
         self._damping = self.arm.damping_time_s * self._stiffness0
         self._gains.invalidate()
-
-    def set_time_constant_scale(self, scale: float) -> None:
-        """Multiply the pneumatic supply's time constants by ``scale`` (domain randomisation)."""
-        self.supply.set_time_constant_scale(scale)
-
-    def add_load(self, load: Load) -> None:
-        """Attach a scenario element; it is updated at the actuation rate.
-
-        Raises:
-            ValueError: if the loads together would weigh or push more than the arm bears
-                (:attr:`~soft_gym.robots.spec.ArmSpec.max_load_n`).
-        """
-        total = heaviest_total_load_n(self.loads + [load], float(np.linalg.norm(self.gravity)))
-        if total > self.spec.max_load_n * (1 + 1e-9):
-            raise ValueError(
-                f"scenario loads must total at most {self.spec.max_load_n:.3g} N on the "
-                f"{self.spec.name} arm (max_load_n: {MAX_LOAD_TO_WEIGHT[self.spec.mount]:g}x its "
-                f"{self.spec.mass_kg * 1e3:.0f} g weight), got {total:.3g} N with {load!r}")
-        load.attach(self)
-        self.loads.append(load)
 
     def clear_loads(self) -> None:
         """Detach every load and restore all they changed: link masses and inertias, held

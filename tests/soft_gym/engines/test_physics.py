@@ -1,4 +1,5 @@
-"""Physics checks of :class:`soft_gym.engines.pybullet.simulator.ArmSimulator` against independent analytic references.
+"""Physics checks of both engines (:data:`soft_gym.engines.ENGINES`: every test that builds its
+simulator with ``make_sim`` runs on each) against independent analytic references.
 
 Every reference is computed here with plain trigonometry and the textbook beam formulas, using
 only the segment properties of the spec (``E I``, ``E A``, ``A_c``, ``d``, ``L``):
@@ -28,11 +29,19 @@ from scipy.spatial.transform import Rotation
 from soft_gym.kinematics import cc_forward
 from soft_gym.robots import get_preset
 from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
+from soft_gym.engines import ENGINES
 from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 from arm_variants import linear, pneumatic_loads_reference, variant  # noqa: F401
 
 SIGMA = CHAMBER_ANGLES_RAD  # chamber angles about the segment axis (rad)
+
+
+@pytest.fixture(params=list(ENGINES))
+def engine(request) -> str:
+    """Every engine: the analytic references hold for each."""
+    return request.param
+
 Z = np.array([0.0, 0.0, 1.0])
 
 
@@ -518,6 +527,7 @@ def _sphere(sim: ArmSimulator, centre_m, radius_m: float = 0.01) -> int:
     return sim.client.createMultiBody(0.0, shape, -1, list(map(float, centre_m)))
 
 
+@pytest.mark.parametrize("engine", ["pybullet"])  # PyBullet's own contact switch
 def test_contact_detection_is_off_only_while_the_arm_is_alone_and_changes_no_motion(make_sim):
     """The simulator skips collision detection while nothing can touch the arm; it must come
     back for a body added later (here next to a resting arm, whose links' bounding boxes do not
@@ -551,6 +561,7 @@ def test_contact_detection_is_off_only_while_the_arm_is_alone_and_changes_no_mot
     np.testing.assert_array_equal(np.array(tips["alone"]), np.array(tips["kept_on"]))
 
 
+@pytest.mark.parametrize("engine", ["pybullet"])  # PyBullet's own contact switch
 def test_contact_detection_sees_a_collidable_body_that_reuses_a_removed_bodys_id(make_sim):
     """PyBullet hands a removed body's id to the next body made: a visual-only marker swapped for
     a sphere against the tip between two steps leaves the body count and ids as they were, and

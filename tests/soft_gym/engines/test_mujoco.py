@@ -1,0 +1,169 @@
+"""The MuJoCo engine as the env uses it: what it refuses (before any work, naming the feature and
+the engine), seeds, episodes that leave nothing behind, the divergence guard, stability without
+a substep split, and domain randomisation.
+
+Its physics against analytic references runs in ``test_physics.py`` (every test there runs on
+both engines) and against the PyBullet arm in ``test_engine_agreement.py``.
+"""
+
+from __future__ import annotations
+
+import copy
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import soft_gym  # noqa: F401  (registers the ids)
+from soft_gym.engines import ENGINES, make_simulator
+from soft_gym.engines.chain_readout import PhysicsDivergedError
+from soft_gym.engines.mujoco import MujocoWorld
+from soft_gym.robots import get_preset
+from soft_gym.scenarios.loads import TipMass
+
+NO_SWAYING = {"load_weights": {"none": 0.3, "tip_mass": 0.35, "filling_load": 0.2,
+                               "push": 0.15}}
+
+
+def _make(env_id: str = "SoftArmReach-v0", **kwargs):
+    return gym.make(env_id, **{"feedback": "ground_truth", "engine": "mujoco", **kwargs})
+
+
+def _rollout(env, seed: int, steps: int = 40) -> np.ndarray:
+    obs, _ = env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
+    out = [obs]
+    for _ in range(steps):
+        obs, *_ = env.step(rng.uniform(-1, 1, env.action_space.shape).astype(np.float32))
+        out.append(obs)
+    return np.array(out)
+
+
+@pytest.mark.smoke
+@pytest.mark.parametrize("kwargs, named", [
+    ({"feedback": "fused"}, "sensor 'image'"),
+    ({"feedback": "camera"}, "sensor 'image'"),
+    ({"feedback": "fbg"}, "sensor 'image'"),
+    ({"preset": "zou2022", "feedback": "stereo"}, "sensor 'stereo'"),
+    ({"sensors": ("stereo",)}, "sensor 'stereo'"),
+    ({"scenario": ["swaying_mass"]}, "SwayingMass"),
+    ({"scenario": ["obstacle_rod"]}, "ObstacleRod"),
+    ({"render_mode": "rgb_array"}, "render_mode='rgb_array'"),
+    ({"randomization": True}, "load_weights['swaying_mass']"),
+])
+def test_what_mujoco_lacks_is_refused_naming_the_feature_and_the_engine(kwargs, named):
+    with pytest.raises(ValueError) as error:
+        _make(**kwargs)
+    message = str(error.value)
+    assert named in message and "mujoco engine" in message and "pybullet" in message
+
+
+@pytest.mark.parametrize("engine", ["bullet", "MuJoCo", 3, None])
+def test_an_unknown_engine_is_refused_listing_the_engines(engine):
+    with pytest.raises(ValueError, match="engine must be one of") as error:
+        _make(engine=engine)
+    assert all(name in str(error.value) for name in ENGINES)
+
+
+def test_the_world_refuses_every_call_by_name():
+    world = MujocoWorld()
+    with pytest.raises(ValueError, match="a body beside the arm.*mujoco engine"):
+        world.add_body("sphere", position_m=(0, 0, 0), radius_m=0.01)
+    with pytest.raises(ValueError, match="rendering.*mujoco engine"):
+        world.render(32, 32, [0.0] * 16, [0.0] * 16, (0, 0, 1))
+
+
+@pytest.mark.parametrize("env_id, preset", [("SoftArmReach-v0", "wang2023"),
+                                            ("SoftArmTrack-v0", "zhao2021"),
+                                            ("SoftArmTrack-v0", "ho2018")])
+def test_mujoco_envs_pass_gymnasiums_checker(env_id, preset):
+    env = _make(env_id, preset=preset)
+    check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+def test_a_seed_fixes_an_episode_and_no_episode_leaks_into_the_next():
+    """Same seed, same trajectory bit for bit, in one env after other episodes (with loads,
+    stiffness and lag drawn by randomisation) and in a fresh env."""
+    kwargs = {"preset": "zhao2021", "randomization": NO_SWAYING,
+              "scenario": [{"name": "push", "start_s": 0.5}]}
+    env = _make(**kwargs)
+    first = _rollout(env, seed=3)
+    _rollout(env, seed=4)
+    again = _rollout(env, seed=3)
+    fresh = _rollout(_make(**kwargs), seed=3)
+    assert np.array_equal(first, again) and np.array_equal(first, fresh)
+    assert not np.array_equal(first, _rollout(env, seed=5))
+
+
+def test_a_rebuilt_env_continues_identically():
+    env = _make(preset="wang2023", scenario=[{"name": "tip_mass", "mass_kg": 0.01}])
+    for clone in (copy.deepcopy(env.unwrapped), pickle.loads(pickle.dumps(env.unwrapped))):
+        assert clone.sim.spec == env.unwrapped.sim.spec and clone.engine == "mujoco"
+        assert np.array_equal(_rollout(clone, seed=1), _rollout(env.unwrapped, seed=1))
+
+
+def test_randomised_stiffness_and_lag_move_both_engines_alike():
+    """The same draws (stiffness x1.4, lag x1.5) shift both engines' tips alike: the MuJoCo arm
+    stays within 0.5 mm of the PyBullet arm after a step of one chamber."""
+    spec = get_preset("wang2023")
+    tips = []
+    for engine in ("pybullet", "mujoco"):
+        sim = make_simulator(spec, engine, physics_dt_s=spec.physics_dt_s / 2)
+        sim.set_stiffness_scale(1.4)
+        sim.set_time_constant_scale(1.5)
+        sim.reset(settle_s=0.5)
+        sim.set_pressures(np.array([1.0, 0.0, 0.0]) * spec.p_max_pa)
+        sim.step_physics(0.3)
+        tips.append(sim.tip_pose()[0])
+        sim.close()
+    nominal = make_simulator(spec, "mujoco")
+    nominal.reset(settle_s=0.5)
+    nominal.set_pressures(np.array([1.0, 0.0, 0.0]) * spec.p_max_pa)
+    nominal.step_physics(0.3)
+    assert np.linalg.norm(tips[0] - tips[1]) < 0.5e-3
+    assert np.linalg.norm(nominal.tip_pose()[0] - tips[1]) > 3e-3  # the draws do change it
+
+
+@pytest.mark.parametrize("preset", ["ho2018", "zou2022"])
+def test_bang_bang_under_the_heaviest_tip_mass_stays_within_the_stops(preset):
+    """The load that made the PyBullet arm whip (bang-bang, ho2018 with its 14.2 g tip) stays
+    bounded with no substep split: the implicit damping holds the fast link modes."""
+    spec = get_preset(preset)
+    sim = make_simulator(spec, "mujoco")
+    sim.add_load(TipMass(mass_kg=min(0.0142, 0.9 * spec.max_load_n / 9.81)))
+    sim.reset(settle_s=0.5)
+    rng = np.random.default_rng(0)
+    reach = spec.max_reach_m
+    for _ in range(200):
+        sim.set_pressures(np.where(rng.random(spec.n_chambers) < 0.5, spec.p_pre_pa,
+                                   spec.p_max_pa))
+        sim.step_physics(spec.control_period_s)  # raises PhysicsDivergedError if it ran away
+        assert np.linalg.norm(sim.tip_pose()[0]) <= reach
+    assert np.all(np.isfinite(sim.joint_positions()))
+
+
+def test_a_joint_far_past_its_stop_raises_diverged():
+    spec = get_preset("wang2023")
+    sim = make_simulator(spec, "mujoco")
+    q = np.zeros(sim.chain.n_joints)
+    q[0] = 5.0 * sim.chain.upper_limit[0]
+    sim.set_joint_positions(q)
+    with pytest.raises(PhysicsDivergedError, match="of the wang2023 arm is at .* times its limit"):
+        sim.step_physics(sim.physics_dt_s)
+
+
+def test_tip_payload_and_clear_loads_restore_the_arm_as_built():
+    spec = get_preset("zou2022")
+    sim = make_simulator(spec, "mujoco")
+    masses, inertias = sim.model.body_mass.copy(), sim.model.body_inertia.copy()
+    sim.add_load(TipMass(mass_kg=0.02))
+    sim.reset(settle_s=0.2)
+    assert sim.tip_payload_kg == pytest.approx(0.02)
+    assert sim.model.body_mass.sum() == pytest.approx(masses.sum() + 0.02)
+    sim.clear_loads()
+    assert sim.tip_payload_kg == 0.0
+    assert np.array_equal(sim.model.body_mass, masses)
+    assert np.array_equal(sim.model.body_inertia, inertias)
