@@ -15,8 +15,9 @@ class CommonArm:
     """What every engine's simulator does the same way: the pneumatic supply's commands and
     pressures, the scenario elements, the clock and the links' rest lengths.
 
-    The engine sets ``spec``, ``chain``, ``supply``, ``gravity``, ``loads``, ``time_s`` and
-    ``_substep``, and defines ``_forget_reads`` (drop its per-substep read-out caches).
+    The engine sets ``spec``, ``chain``, ``supply``, ``gravity``, ``loads`` and ``time_s``, and
+    defines ``_restart_substeps`` (count substeps from 0, drop its per-substep read-out
+    caches).
     """
 
     def set_pressures(self, pressures_pa: np.ndarray) -> None:
@@ -73,8 +74,8 @@ class CommonArm:
         """Set the simulated time back to 0 where the arm is (after a settle or a set-up
         motion), so that timed loads and faults count from here."""
         self.time_s = 0.0
-        self._substep = 0
-        self._forget_reads()
+        self._restart_substeps()
 
-    def _forget_reads(self) -> None:
+    def _restart_substeps(self) -> None:
+        """Count substeps from 0 again and drop the per-substep read-out caches."""
         raise NotImplementedError

@@ -24,6 +24,7 @@ from soft_gym.engines.chain_readout import ChainReadout, PhysicsDivergedError
 from soft_gym.engines.common_arm import CommonArm
 from soft_gym.engines.held_loads import HeldForceTable, update_payload
 from soft_gym.engines.mujoco.model import ArmModel, build_arm_model
+from soft_gym.engines.mujoco.stepping import step_arms
 from soft_gym.engines.mujoco.world import MujocoWorld
 from soft_gym.robots.chain import build_chain, pressure_to_rest_matrix, weightless_equilibrium
 from soft_gym.robots.pneumatics import PneumaticSupply, chamber_area_growth, effective_pressure_pa
@@ -31,45 +32,6 @@ from soft_gym.robots.spec import ArmSpec
 from soft_gym.simulator import Load
 
 __all__ = ["MujocoArmSimulator", "PhysicsDivergedError"]
-
-class _AppliedForces:
-    """The joint forces (pressure moments) and body wrenches (held forces) applied between two
-    actuation updates, and the mean of the previous and the new ones for the update's first
-    substep.
-
-    Why the mean: MuJoCo's semi-implicit Euler step is the leapfrog scheme with the velocities
-    at half steps, so the velocity kick of the substep that starts at an update spans half a
-    substep of the old forces and half of the new. Kicking with the new forces alone makes every
-    10 ms change of the pressure moments a first-order error: with the mean, the tip's deviation
-    from a 4x finer step halves (wang2023 0.29 -> 0.16 mm, zou2022 0.45 -> 0.09 mm).
-    """
-
-    def __init__(self, n_dofs: int, n_bodies: int) -> None:
-        self.joint = np.zeros(n_dofs)
-        self.body = np.zeros((n_bodies, 6))
-        self._previous_joint = self.joint
-        self._previous_body = self.body
-        self.has_previous = False
-
-    def set(self, joint: np.ndarray, body: np.ndarray) -> None:
-        """The forces from this update on (N m or N per dof; body wrenches (force, torque) at
-        each body's centre of mass, N and N m)."""
-        self._previous_joint, self._previous_body = self.joint, self.body
-        self.joint, self.body = joint, body
-
-    def forget(self) -> None:
-        """After a reset: the next forces start from rest, not from a jump."""
-        self.has_previous = False
-
-    def write(self, data: mujoco.MjData) -> None:
-        data.qfrc_applied[:] = self.joint
-        data.xfrc_applied[:] = self.body
-        self.has_previous = True
-
-    def write_midpoint(self, data: mujoco.MjData) -> None:
-        data.qfrc_applied[:] = 0.5 * (self._previous_joint + self.joint)
-        data.xfrc_applied[:] = 0.5 * (self._previous_body + self.body)
-
 
 class MujocoArmSimulator(CommonArm):
     """A soft arm in its own MuJoCo model.
@@ -97,7 +59,7 @@ class MujocoArmSimulator(CommonArm):
                       else spec.mujoco_physics_dt_s)
         self.physics_dt_s = default_dt if physics_dt_s is None else require_positive(
             "physics_dt_s", physics_dt_s)
-        self._per_actuation = max(1, int(round(spec.actuation_update_s / self.physics_dt_s)))
+        self.per_actuation = max(1, int(round(spec.actuation_update_s / self.physics_dt_s)))
         self.chain = build_chain(spec)
         self._arm: ArmModel = build_arm_model(spec, self.chain, self.physics_dt_s)
         self.model = self._arm.model
@@ -107,8 +69,8 @@ class MujocoArmSimulator(CommonArm):
         self._bodies = self._arm.body_ids[0]
         self._station_bodies = self._arm.station_body_ids[0]
         self.supply = PneumaticSupply(spec)
-        self._area_growth = chamber_area_growth(spec)
-        self._area_grows = bool(np.any(self._area_growth))
+        self.area_growth = chamber_area_growth(spec)
+        self.area_grows = bool(np.any(self.area_growth))
         self._nominal_stiffness = self.model.jnt_stiffness.copy()
         self._nominal_cubic = self.model.jnt_stiffnesspoly.copy()
         self._nominal_damping = self.model.dof_damping.copy()
@@ -117,47 +79,28 @@ class MujocoArmSimulator(CommonArm):
         self._stiffness0 = 1.0 / self.chain.compliance
         self._pressure_to_rest_nominal = pressure_to_rest_matrix(spec, self.chain)
         self._pressure_to_rest = self._pressure_to_rest_nominal
+        # joint force per unit effective pressure, (n_chambers, n_dofs): k0 q_rest, which a
+        # stiffness scale leaves unchanged (k0 scales up as q_rest scales down)
+        self.moments = (self._stiffness0[:, None] * self._pressure_to_rest_nominal).T.copy()
         self._held = HeldForceTable(self.chain)
-        self._forces = _AppliedForces(self.model.nv, self.model.nbody)
-        self._no_wrench = np.zeros((self.model.nbody, 6))
-        self._no_wrench.flags.writeable = False
+        self.joint_force = self.joint_force_previous = np.zeros(self.model.nv)
+        self.wrench: np.ndarray | None = None  # body wrenches of the held forces, (n_bodies, 6)
+        self.wrench_previous: np.ndarray | None = None
+        self.forces_started = False  # forces applied since the reset (else no midpoint step)
         self._payload: dict[str, float] = {}
         self.gravity = spec.gravity_base.copy()
         self.model.opt.gravity[:] = self.gravity
         self.loads: list[Load] = []
         self.time_s = 0.0
-        self._substep = 0
+        self.substep = 0
         self._kinematics_substep = self._tip_substep = -1
         self.reset()
 
     # ------------------------------------------------------------------ commands and stepping
     def step_physics(self, seconds: float) -> None:
-        """Advance the simulation by ``seconds`` (rounded to whole physics substeps)."""
-        seconds = float(seconds)
-        if not np.isfinite(seconds) or seconds < 0:
-            raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
-        end = self._substep + int(round(seconds / self.physics_dt_s))
-        model, data, step = self.model, self.data, mujoco.mj_step
-        while self._substep < end:
-            at_update = self._substep % self._per_actuation == 0
-            if at_update:
-                self._update_actuation()
-            block = min(end - self._substep,
-                        self._per_actuation - self._substep % self._per_actuation)
-            pieces = block
-            if at_update and self._forces.has_previous:
-                # the applied forces jump at the update: its first substep gets the mean of the
-                # old and the new ones (see _AppliedForces)
-                self._forces.write_midpoint(data)
-                step(model, data)
-                pieces -= 1
-            if at_update:
-                self._forces.write(data)
-            if pieces:
-                step(model, data, pieces)
-            self._substep += block
-        self.time_s = self._substep * self.physics_dt_s
-        self._readout.check_within_stops(self.data.qpos, self.time_s, self.loads)
+        """Advance the simulation by ``seconds`` (rounded to whole physics substeps;
+        :func:`~soft_gym.engines.mujoco.stepping.step_arms`)."""
+        step_arms([self], seconds)
 
     def reset(self, pressure_pa: np.ndarray | None = None, settle_s: float = 0.0) -> None:
         """Set pressures (Pa; ``None``: the pre-pressure), put the arm at rest (straight without
@@ -171,17 +114,28 @@ class MujocoArmSimulator(CommonArm):
             start = weightless_equilibrium(self._pressure_to_rest @ effective, self.chain)
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = start
-        self._forces.forget()
+        self.forces_started = False
+        self.wrench = self.wrench_previous = None
         self.time_s = 0.0
-        self._substep = 0
+        self.substep = 0
         self._kinematics_substep = self._tip_substep = -1
         self.restart_loads()
         if settle_s > 0:
             self.step_physics(settle_s)
             self.restart_clock()
 
-    def _forget_reads(self) -> None:
+    def _restart_substeps(self) -> None:
+        self.substep = 0
+        self.forget_reads()
+
+    def forget_reads(self) -> None:
+        """Drop the read-out caches (the state changed without a substep count, e.g. a batch
+        stepped the arm)."""
         self._kinematics_substep = self._tip_substep = -1
+
+    def check_within_stops(self) -> None:
+        """Raise :class:`PhysicsDivergedError` if a joint is far past its end stop."""
+        self._readout.check_within_stops(self.data.qpos, self.time_s, self.loads)
 
     def set_joint_positions(self, positions: np.ndarray) -> None:
         """Set every joint's position (rad or m) at rest, e.g. to impose a shape in a test."""
@@ -200,10 +154,10 @@ class MujocoArmSimulator(CommonArm):
     def tip_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Tip position (m) and quaternion (x, y, z, w) in the base frame
         (:meth:`ChainReadout.tip_pose <soft_gym.engines.chain_readout.ChainReadout.tip_pose>`)."""
-        if self._tip_substep != self._substep:
+        if self._tip_substep != self.substep:
             positions, quaternions, rotations = self._link_frames()
             self._tip = self._readout.tip_pose(positions, quaternions, rotations, self.data.qpos)
-            self._tip_substep = self._substep
+            self._tip_substep = self.substep
         return self._tip[0].copy(), self._tip[1].copy()
 
     def backbone(self) -> np.ndarray:
@@ -295,39 +249,32 @@ class MujocoArmSimulator(CommonArm):
         self.model.jnt_stiffnesspoly[:] = self._nominal_cubic * scale
         self.model.dof_damping[:] = self._nominal_damping * scale
 
-    def _update_actuation(self) -> None:
-        """Every ``actuation_update_s``: the loads, the lag, the pressure moments and the held
-        forces for the next interval."""
-        now_s = self._substep * self.physics_dt_s
-        for load in self.loads:
-            load.update(self, now_s)
-        pressure = self.supply.advance(self._per_actuation * self.physics_dt_s)
-        if self._area_grows:
-            pressure = pressure * (1.0 + self._area_growth * pressure / self.spec.p_max_pa)
-        joint = self._stiffness0 * (self._pressure_to_rest @ pressure)
-        body = self._no_wrench
-        if self._held.forces:
-            body = np.zeros_like(self._no_wrench)
-            positions, _, rotations = self._link_frames()
-            centres = self.data.xipos
-            for link, force, point in self._held.resolved():
-                index = self._bodies[link]
-                station = int(np.flatnonzero(self.chain.station_link == link)[0])
-                lever = (positions[station] + rotations[station] @ point) - centres[index]
-                body[index, :3] += force
-                body[index, 3:] += np.cross(lever, force)
-        self._forces.set(joint, body)
+    def held_wrench(self) -> np.ndarray | None:
+        """The held forces as body wrenches at each body's centre of mass (N, N m; (n_bodies,
+        6)), the moment taken about it in the current pose; ``None`` without held forces."""
+        if not self._held.forces:
+            return None
+        wrench = np.zeros((self.model.nbody, 6))
+        positions, _, rotations = self._link_frames()
+        centres = self.data.xipos
+        for link, force, point in self._held.resolved():
+            index = self._bodies[link]
+            station = int(np.flatnonzero(self.chain.station_link == link)[0])
+            lever = (positions[station] + rotations[station] @ point) - centres[index]
+            wrench[index, :3] += force
+            wrench[index, 3:] += np.cross(lever, force)
+        return wrench
 
     def _link_frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Frame origin (m), quaternion (x, y, z, w) and rotation matrix of every link, from the
         current state (MuJoCo's kinematics run once per substep read)."""
-        if self._kinematics_substep != self._substep:
+        if self._kinematics_substep != self.substep:
             mujoco.mj_kinematics(self.model, self.data)
             mujoco.mj_comPos(self.model, self.data)
             bodies = self._station_bodies
             self._frames = (self.data.xpos[bodies], self.data.xquat[bodies][:, [1, 2, 3, 0]],
                             self.data.xmat[bodies].reshape(-1, 3, 3))
-            self._kinematics_substep = self._substep
+            self._kinematics_substep = self.substep
         return self._frames
 
     def _apply_payload(self) -> None:

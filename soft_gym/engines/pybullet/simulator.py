@@ -312,7 +312,8 @@ class ArmSimulator(CommonArm):
             self.step_physics(settle_s)
             self.restart_clock()
 
-    def _forget_reads(self) -> None:
+    def _restart_substeps(self) -> None:
+        self._substep = 0
         self._frames_substep = self._positions_substep = self._tip_substep = -1
 
     def set_joint_positions(self, positions: np.ndarray) -> None:
