@@ -35,7 +35,7 @@ from soft_gym._cli import (HelpFormatter, check_file, check_output_dir, fail, no
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
-from train.config import ALGORITHMS
+from train.config import ALGORITHMS, VEC_KINDS
 from train.sweep import main as sweep_main
 
 
@@ -57,7 +57,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=non_negative_int, default=0,
                         help="seed of envs, networks, evaluation (integer >= 0)")
     parser.add_argument("--n-envs", type=positive_int, default=None,
-                        help="parallel envs in subprocesses, >= 1 (default: the config's n_envs)")
+                        help="parallel envs, >= 1 (default: the config's n_envs)")
+    parser.add_argument("--vec", choices=VEC_KINDS, default="subprocess",
+                        help="how the --n-envs envs run: 'subprocess' (one process each) or "
+                             "'batched' (MuJoCo arms stepped as one batch in this process; "
+                             "needs --env-kwargs engine=mujoco)")
     parser.add_argument("--eval-freq", type=non_negative_int, default=10_000,
                         help="env steps between evaluations (0: none)")
     parser.add_argument("--eval-episodes", type=positive_int, default=2,
@@ -117,7 +121,8 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
     check_output_dir(parser, "--out", args.out)
     request = TrainRequest(
         algo=args.algo, env_id=env_id, env_kwargs=env_kwargs, hyperparameters=hyperparameters,
-        timesteps=args.timesteps, seed=args.seed, n_envs=args.n_envs, config_file=args.conf_file,
+        timesteps=args.timesteps, seed=args.seed, n_envs=args.n_envs, vec=args.vec,
+        config_file=args.conf_file,
         out_dir=args.out, run_name=args.name, resume=None, eval_freq=args.eval_freq,
         eval_episodes=args.eval_episodes, checkpoint_freq=args.checkpoint_freq,
         threads=args.threads, progress=not args.no_progress)
@@ -128,6 +133,9 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
     overrides = {key: ("--randomization-config" if key == "randomization"
                        and args.randomization_config is not None else "--env-kwargs")
                  for key in env_kwargs}
+    if args.vec == "batched" and settings.env_kwargs.get("engine") != "mujoco":
+        parser.error(f"--vec batched steps MuJoCo arms as one batch: add --env-kwargs "
+                     f"engine=mujoco (got engine={settings.env_kwargs.get('engine', 'pybullet')!r})")
     check_env_kwargs(parser, env_id, settings.env_kwargs, overrides)
     name = args.name or f"{args.algo}_{env_id}_seed{args.seed}"
     if name.strip() in ("", ".", ".."):

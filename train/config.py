@@ -40,6 +40,9 @@ import yaml
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
 ALGORITHMS = ("sac", "td3", "ppo", "a2c", "ddpg")
 OFF_POLICY = ("sac", "td3", "ddpg")
+VEC_KINDS = ("subprocess", "batched")
+"""How ``n_envs`` envs run (:func:`train.trainer.make_vec_env`)."""
+
 _SPECIAL = ("n_timesteps", "n_envs", "normalize", "env_kwargs", "noise_type", "noise_std",
             "policy")
 

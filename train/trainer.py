@@ -35,7 +35,8 @@ from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
 import soft_gym  # noqa: F401  (registers the env ids)
-from train.config import (OFF_POLICY, TrainSettings, algorithm_class, build_action_noise,
+from train.batched import Sb3VectorEnv
+from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class, build_action_noise,
                           read_hyperparameters, split_hyperparameters)
 from train.curves import plot_learning_curve
 
@@ -57,7 +58,10 @@ class TrainRequest:
         hyperparameters: overrides of the config's hyperparameters.
         timesteps: total env steps (overrides ``n_timesteps``).
         seed: seed of the envs, the networks and the evaluation.
-        n_envs: parallel envs (``SubprocVecEnv`` when > 1).
+        n_envs: parallel envs (``SubprocVecEnv`` when > 1, or arms of one batch).
+        vec: ``"subprocess"`` (SB3's ``SubprocVecEnv``/``DummyVecEnv``) or ``"batched"``
+            (:class:`train.batched.Sb3VectorEnv`: ``n_envs`` MuJoCo arms in this process,
+            stepped as one batch; needs ``engine="mujoco"`` in the env kwargs).
         config_file: hyperparameter YAML (default ``train/configs/<algo>.yml``).
         out_dir: where run directories are made.
         run_name: the run directory's name (default ``<algo>_<env>_seed<seed>``).
@@ -76,6 +80,7 @@ class TrainRequest:
     timesteps: int | None = None
     seed: int = 0
     n_envs: int | None = None
+    vec: str = "subprocess"
     config_file: str | None = None
     out_dir: str = "results/train"
     run_name: str | None = None
@@ -123,8 +128,18 @@ def versions() -> dict[str, str]:
 
 
 def make_vec_env(env_id: str, env_kwargs: dict, n_envs: int, seed: int,
-                 monitor_dir: str | None = None):
-    """``n_envs`` monitored envs, in subprocesses when there are several."""
+                 monitor_dir: str | None = None, vec: str = "subprocess"):
+    """``n_envs`` monitored envs: in subprocesses when there are several (``vec="subprocess"``),
+    or the arms of one MuJoCo batch (``vec="batched"``)."""
+    if vec == "batched":
+        batched = Sb3VectorEnv(env_id.split(":")[-1], n_envs, monitor_dir=monitor_dir,
+                               **env_kwargs)
+        batched.seed(seed)
+        return batched
+    if vec != "subprocess":
+        raise ValueError(f"vec must be one of {list(VEC_KINDS)}, got {vec!r}")
+    if env_kwargs.get("engine") == "mujoco":  # SB3 asks for rgb_array frames, which it lacks
+        env_kwargs = {"render_mode": None, **env_kwargs}
     vec_cls = SubprocVecEnv if n_envs > 1 else DummyVecEnv
     kwargs = {"start_method": "spawn"} if n_envs > 1 else {}
     if ":" not in env_id:
@@ -168,7 +183,7 @@ def train(request: TrainRequest) -> Path:
     algo_cls = algorithm_class(request.algo)
 
     env = make_vec_env(request.env_id, settings.env_kwargs, settings.n_envs, request.seed,
-                       monitor_dir=str(run_dir / "monitor"))
+                       monitor_dir=str(run_dir / "monitor"), vec=request.vec)
     eval_env = make_vec_env(request.env_id, settings.env_kwargs, 1, request.seed + 10_000)
     if settings.normalize is not None:
         if request.resume is not None and (run_dir / NORMALIZATION_FILE).exists():

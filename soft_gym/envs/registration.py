@@ -15,10 +15,12 @@ from gymnasium.envs.registration import register, registry
 
 from soft_gym.envs.config import check_arguments
 from soft_gym.envs.soft_arm_env import SoftArmEnv
+from soft_gym.envs.vector import SoftArmVectorEnv
 from soft_gym.robots.presets import PRESETS, get_preset
 from soft_gym.robots.spec import ArmSpec
 
 ENTRY_POINT = "soft_gym.envs.registration:make_env"
+VECTOR_ENTRY_POINT = "soft_gym.envs.registration:make_vector_env"
 ALIAS_ENTRY_POINT = "soft_gym.envs.registration:make_alias_env"
 TASK_IDS = {"reach": "SoftArmReach-v0", "track": "SoftArmTrack-v0"}
 
@@ -55,6 +57,15 @@ def make_alias_env(alias_preset: str, **kwargs: Any) -> SoftArmEnv:
         ValueError: ``preset`` names another arm than the alias.
     """
     check_arguments(kwargs)
+    return SoftArmEnv(**_with_alias_preset(alias_preset, kwargs))
+
+
+make_alias_env.metadata = SoftArmEnv.metadata  # what gymnasium.make reads of an entry point
+
+
+def _with_alias_preset(alias_preset: str, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """``kwargs`` with the alias's preset, refusing another arm's."""
+    kwargs = dict(kwargs)
     preset = kwargs.pop("preset", alias_preset)
     if not (isinstance(preset, (str, ArmSpec))
             and (preset == alias_preset or preset == get_preset(alias_preset))):
@@ -65,19 +76,36 @@ def make_alias_env(alias_preset: str, **kwargs: Any) -> SoftArmEnv:
             f"preset must be {alias_preset!r} on {preset_env_id(task, alias_preset)} (the id "
             f"names its arm), got {shown}: use {TASK_IDS.get(task, 'SoftArmReach-v0')} with "
             f"preset= for another arm")
-    return SoftArmEnv(preset=preset, **kwargs)
+    return {"preset": preset, **kwargs}
 
 
-make_alias_env.metadata = SoftArmEnv.metadata  # what gymnasium.make reads of an entry point
+def make_vector_env(num_envs: int, alias_preset: str | None = None, *, threads: int = 1,
+                    autoreset_mode: Any = "NextStep", **kwargs: Any) -> SoftArmVectorEnv:
+    """The vector entry point of every id (``gym.make_vec(id, num_envs=N,
+    vectorization_mode="vector_entry_point", engine="mujoco", ...)``): a
+    :class:`~soft_gym.envs.vector.SoftArmVectorEnv` of ``num_envs`` arms.
+
+    Args:
+        num_envs: arms in the batch.
+        alias_preset: the preset an alias id names (set at registration), or ``None``.
+        threads, autoreset_mode: see :class:`~soft_gym.envs.vector.SoftArmVectorEnv`.
+        **kwargs: the env's keyword arguments.
+    """
+    check_arguments(kwargs)
+    if alias_preset is not None:
+        kwargs = _with_alias_preset(alias_preset, kwargs)
+    return SoftArmVectorEnv(num_envs, threads=threads, autoreset_mode=autoreset_mode, **kwargs)
 
 
 def register_envs() -> None:
     """Register all ids (idempotent)."""
     for task, env_id in TASK_IDS.items():
         if env_id not in registry:
-            register(id=env_id, entry_point=ENTRY_POINT, kwargs={"task": task})
+            register(id=env_id, entry_point=ENTRY_POINT, vector_entry_point=VECTOR_ENTRY_POINT,
+                     kwargs={"task": task})
         for preset in PRESETS:
             alias = preset_env_id(task, preset)
             if alias not in registry:
                 register(id=alias, entry_point=ALIAS_ENTRY_POINT,
+                         vector_entry_point=VECTOR_ENTRY_POINT,
                          kwargs={"task": task, "alias_preset": preset})

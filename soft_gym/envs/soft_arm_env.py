@@ -495,10 +495,23 @@ class SoftArmEnv(gym.Env):
             self.sensors["image"].set_faults(make_faults(self._faults.get("image")) + draw.faults)
 
     def step(self, action):
-        action = self._check_action(action)
+        action = self.begin_step(action)
+        self.sim.step_physics(self.arm.control_period_s)
+        return self.finish_step(action)
+
+    def begin_step(self, action) -> np.ndarray:
+        """The first half of :meth:`step`: check ``action`` and command its pressures; the
+        physics (one ``control_period_s``) comes next, then :meth:`finish_step`. A batch of envs
+        (:class:`~soft_gym.envs.vector.SoftArmVectorEnv`) steps their arms' physics together in
+        between. Returns the checked action."""
+        action = self.check_action(action)
         self._command = self.actuation.pressure(action, self._command)
         self.sim.set_pressures(self._command)
-        self.sim.step_physics(self.arm.control_period_s)
+        return action
+
+    def finish_step(self, action: np.ndarray):
+        """The second half of :meth:`step`, after the physics: sense, reward, observation and
+        info for the checked ``action`` (from :meth:`begin_step`)."""
         self.step_count += 1
         self._sense()
         tip, _ = self.sim.tip_pose()
@@ -555,7 +568,9 @@ class SoftArmEnv(gym.Env):
         return _rebuild_env, (type(self), self._config_copy), state
 
     # ------------------------------------------------------------------ helpers
-    def _check_action(self, action) -> np.ndarray:
+    def check_action(self, action) -> np.ndarray:
+        """``action`` as a float array of the action space's shape in [-1, 1], or a
+        ``ValueError`` naming what is wrong."""
         if _is_boolean(action):
             raise ValueError(f"action must be real numbers (float), got booleans {action!r}")
         array = as_finite_array("action", action)

@@ -15,13 +15,42 @@ from __future__ import annotations
 
 import math
 from concurrent.futures import Executor
-from typing import TYPE_CHECKING, Sequence
+from typing import Protocol, Sequence
 
 import mujoco
 import numpy as np
 
-if TYPE_CHECKING:  # the simulator imports this module
-    from soft_gym.engines.mujoco.simulator import MujocoArmSimulator
+from soft_gym.robots.pneumatics import PneumaticSupply
+from soft_gym.robots.spec import ArmSpec
+
+
+class MujocoArm(Protocol):
+    """What :func:`step_arms` reads and writes of an arm
+    (:class:`~soft_gym.engines.mujoco.simulator.MujocoArmSimulator`)."""
+
+    spec: ArmSpec
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    supply: PneumaticSupply
+    loads: list
+    physics_dt_s: float
+    per_actuation: int      # substeps per actuation update
+    substep: int            # substeps since the reset (or the clock's restart)
+    time_s: float
+    moments: np.ndarray     # (n_chambers, n_dofs) joint force per unit effective pressure
+    area_grows: bool
+    area_growth: np.ndarray
+    joint_force: np.ndarray
+    joint_force_previous: np.ndarray
+    wrench: np.ndarray | None
+    wrench_previous: np.ndarray | None
+    forces_started: bool
+
+    def held_wrench(self) -> np.ndarray | None: ...
+
+    def forget_reads(self) -> None: ...
+
+    def check_within_stops(self) -> None: ...
 
 
 def pressure_moments(moments: np.ndarray, effective_pa: np.ndarray) -> np.ndarray:
@@ -39,7 +68,7 @@ def pressure_moments(moments: np.ndarray, effective_pa: np.ndarray) -> np.ndarra
     return total
 
 
-def write_forces(sim: "MujocoArmSimulator", midpoint: bool) -> None:
+def write_forces(sim: MujocoArm, midpoint: bool) -> None:
     """Write ``sim``'s applied forces into its data: the mean of the previous and the current
     ones (``midpoint``, for the first substep after an update), else the current ones.
 
@@ -65,7 +94,7 @@ def _or_zero(wrench: np.ndarray | None, data: mujoco.MjData) -> np.ndarray:
     return np.zeros_like(data.xfrc_applied) if wrench is None else wrench
 
 
-def _substeps(sims: Sequence["MujocoArmSimulator"], pieces: int, at_update: bool) -> None:
+def _substeps(sims: Sequence[MujocoArm], pieces: int, at_update: bool) -> None:
     """Run ``pieces`` substeps of every arm (one thread's share)."""
     step = mujoco.mj_step
     for sim in sims:
@@ -81,7 +110,7 @@ def _substeps(sims: Sequence["MujocoArmSimulator"], pieces: int, at_update: bool
             step(sim.model, sim.data, remaining)
 
 
-def _advance_actuation(sims: Sequence["MujocoArmSimulator"]) -> None:
+def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
     """One actuation update of every arm: loads, the pneumatic lag (exactly integrated over the
     update, ``p <- p + (p_cmd - p) (1 - exp(-dt / tau))``), the pressure moments and the held
     forces."""
@@ -106,7 +135,7 @@ def _advance_actuation(sims: Sequence["MujocoArmSimulator"]) -> None:
         sim.wrench_previous, sim.wrench = sim.wrench, sim.held_wrench()
 
 
-def _compatible(sims: Sequence["MujocoArmSimulator"]) -> bool:
+def _compatible(sims: Sequence[MujocoArm]) -> bool:
     """Whether the arms can be stepped in lockstep: one arm model, one physics step, their
     clocks at the same phase of the actuation update."""
     first = sims[0]
@@ -116,7 +145,7 @@ def _compatible(sims: Sequence["MujocoArmSimulator"]) -> bool:
         for sim in sims)
 
 
-def step_arms(sims: Sequence["MujocoArmSimulator"], seconds: float,
+def step_arms(sims: Sequence[MujocoArm], seconds: float,
               executor: Executor | None = None, n_threads: int = 1) -> None:
     """Advance every arm of ``sims`` by ``seconds`` (rounded to whole physics substeps).
 

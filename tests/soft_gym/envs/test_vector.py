@@ -1,0 +1,109 @@
+"""The batched MuJoCo vector env: every arm moves bit for bit as the same env stepped alone
+(seeds, loads, randomisation, autoreset), with threads or without; Gymnasium 1.x autoreset in
+both modes; bad arguments refused by name."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import soft_gym  # noqa: F401  (registers the ids)
+from soft_gym.envs.soft_arm_env import SoftArmEnv
+from soft_gym.envs.vector import MAX_NUM_ENVS, SoftArmVectorEnv
+
+KWARGS = {"preset": "zhao2021", "engine": "mujoco", "feedback": "ground_truth",
+          "episode_steps": 6, "scenario": [{"name": "push", "start_s": 0.1, "ramp_s": 0.1}],
+          "randomization": {"load_weights": {"none": 0.4, "tip_mass": 0.4, "push": 0.2}}}
+N_ARMS, STEPS, SEED = 3, 14, 7
+
+
+def _actions(n_arms: int, n_chambers: int) -> np.ndarray:
+    return np.random.default_rng(0).uniform(-1, 1, (STEPS, n_arms, n_chambers)).astype(np.float32)
+
+
+def _batched(threads: int = 1, **extra) -> tuple[np.ndarray, np.ndarray]:
+    env = gym.make_vec("SoftArmReach-v0", num_envs=N_ARMS, vectorization_mode="vector_entry_point",
+                       threads=threads, **KWARGS, **extra)
+    observation, _ = env.reset(seed=SEED)
+    observations, rewards = [observation], []
+    for action in _actions(N_ARMS, env.single_action_space.shape[0]):
+        observation, reward, *_ = env.step(action)
+        observations.append(observation)
+        rewards.append(reward)
+    env.close()
+    return np.array(observations), np.array(rewards)
+
+
+def _alone(arm: int) -> tuple[np.ndarray, np.ndarray]:
+    """Arm ``arm`` as a single env, with NextStep autoreset done by hand."""
+    env = SoftArmEnv(**KWARGS)
+    observation, _ = env.reset(seed=SEED + arm)
+    observations, rewards, done = [observation], [], False
+    for action in _actions(N_ARMS, env.action_space.shape[0])[:, arm]:
+        if done:
+            (observation, _), reward, done = env.reset(), 0.0, False
+        else:
+            observation, reward, terminated, truncated, _ = env.step(action)
+            done = terminated or truncated
+        observations.append(observation)
+        rewards.append(reward)
+    return np.array(observations), np.array(rewards)
+
+
+@pytest.mark.smoke
+def test_every_arm_of_the_batch_moves_as_it_does_alone():
+    observations, rewards = _batched()
+    for arm in range(N_ARMS):
+        alone_observations, alone_rewards = _alone(arm)
+        assert np.array_equal(observations[:, arm], alone_observations)
+        assert np.array_equal(rewards[:, arm], alone_rewards)
+    assert not np.array_equal(observations[:, 0], observations[:, 1])  # own seeds, own draws
+
+
+def test_threads_change_nothing():
+    single, _ = _batched(threads=1)
+    threaded, _ = _batched(threads=2)
+    assert np.array_equal(single, threaded)
+
+
+def test_same_step_autoreset_returns_the_final_observation_in_info():
+    env = gym.make_vec("SoftArmReach-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                       autoreset_mode="SameStep", **{**KWARGS, "episode_steps": 2,
+                                                     "randomization": None})
+    assert env.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    first, _ = env.reset(seed=1)
+    zeros = np.zeros(env.action_space.shape, dtype=np.float32)
+    env.step(zeros)
+    observation, _, _, truncated, info = env.step(zeros)
+    assert truncated.all() and info["_final_obs"].all()
+    assert np.array_equal(observation[:, :7], first[:, :7])  # reset: the settled start pose
+    assert not np.array_equal(info["final_obs"][0], observation[0])
+
+
+@pytest.mark.parametrize("kwargs, named", [
+    ({"num_envs": 0}, "num_envs"), ({"num_envs": MAX_NUM_ENVS + 1}, "num_envs"),
+    ({"num_envs": 2.0}, "num_envs"), ({"num_envs": True}, "num_envs"),
+    ({"num_envs": 2, "threads": 0}, "threads"), ({"num_envs": 2, "threads": 1.5}, "threads"),
+    ({"num_envs": 2, "autoreset_mode": "bogus"}, "autoreset_mode"),
+    ({"num_envs": 2, "autoreset_mode": "Disabled"}, "autoreset_mode"),
+    ({"num_envs": 2, "engine": "pybullet"}, "engine must be 'mujoco'"),
+    ({"num_envs": 2, "bogus": 1}, "bogus"),
+])
+def test_bad_arguments_are_refused_by_name(kwargs, named):
+    kwargs = {"engine": "mujoco", "feedback": "ground_truth", **kwargs}
+    with pytest.raises(ValueError, match=named):
+        gym.make_vec("SoftArmReach-v0", vectorization_mode="vector_entry_point", **kwargs)
+
+
+def test_bad_actions_and_seeds_are_refused_before_any_arm_moves():
+    env = SoftArmVectorEnv(2, engine="mujoco", feedback="ground_truth")
+    env.reset(seed=0)
+    times = [sim.time_s for sim in env._sims]
+    with pytest.raises(ValueError, match="actions must have shape"):
+        env.step(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match=r"action must lie in \[-1, 1\]"):
+        env.step(np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]))
+    assert [sim.time_s for sim in env._sims] == times
+    with pytest.raises(ValueError, match="seed must be an integer or 2 seeds"):
+        env.reset(seed=[1, 2, 3])
