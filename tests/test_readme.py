@@ -32,6 +32,28 @@ def test_the_readme_baseline_loop_runs_and_tracks():
     env.close()
 
 
+def test_the_readme_quick_builds_run_with_progress_bars(monkeypatch, capsys):
+    """The README's quick builds of ``local_ik_asdm`` and ``lwpr_rwr``, built afresh (no
+    cache): both finish with a trained model of the size asked for, and both show their
+    progress bars on stderr."""
+    (block,) = [block for block in _python_blocks(ROOT / "README.md") if ".pretrain()" in block]
+    from soft_gym.sensing import calibration_cache
+
+    monkeypatch.setenv("SOFT_GYM_CACHE", "off")
+    calibration_cache.clear_memory()
+    namespace: dict = {}
+    exec(compile(block, "README.md", "exec"), namespace)
+    err = capsys.readouterr().err
+    assert "zhao2021 exploration" in err and "/600" in err and "local IK training" in err
+    assert "lwpr_rwr pre-training waypoints" in err and "/20" in err
+    assert namespace["ik"].network is not None and namespace["ik"].training
+    lwpr = namespace["lwpr"]
+    assert lwpr.pretraining["samples"] == 20 * lwpr.leg_decisions
+    for name in ("zhao", "ho"):
+        namespace[name].close()
+    calibration_cache.clear_memory()
+
+
 def test_the_package_reports_the_version_of_pyproject_and_the_changelog():
     (version,) = re.findall(r'^version = "([^"]+)"$', (ROOT / "pyproject.toml").read_text(),
                             flags=re.M)

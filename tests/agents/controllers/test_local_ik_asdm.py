@@ -170,3 +170,21 @@ def test_controller_saves_and_loads_back_identically(env, tmp_path):
     path.write_bytes(path.read_bytes()[:-7])
     with pytest.raises(ValueError, match="controller.bin"):
         LocalIKASDMController.load(path, env=env)
+
+
+def test_the_first_build_shows_progress_of_its_exploration_and_training(env, capsys):
+    """The first build (exploration, then training) shows tqdm bars on stderr; with
+    ``progress=False`` it is silent, and the setting does not change the network."""
+    exploration = {"n_free": 60, "n_loaded": 0}
+    shown = LocalIKASDMController(env, exploration=exploration, max_iterations=5, cache=False)
+    shown.pretrain()
+    err = capsys.readouterr().err
+    assert "zhao2021 exploration" in err and "/60" in err
+    assert "local IK training" in err and "/5" in err
+    quiet = LocalIKASDMController(env, exploration=exploration, max_iterations=5, cache=False,
+                                  progress=False)
+    quiet.pretrain()
+    assert capsys.readouterr().err == ""
+    assert quiet.training == shown.training
+    with pytest.raises(ValueError, match="progress must be True or False, got 'yes'"):
+        make_policy("local_ik_asdm", env=env, progress="yes")
