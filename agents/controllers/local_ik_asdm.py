@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 import agents.learners.local_ik
+from agents.controllers.saturation import SaturationWatch
 from agents.learners.local_ik import LocalIKNetwork
 from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_model_state, write_model_state
@@ -127,6 +128,8 @@ class LocalIKASDMController(BaselinePolicy):
         self.hold_steps = max(1, int(round(self.settle_s / spec.control_period_s)))
         self.network: LocalIKNetwork | None = None
         self.training: dict[str, Any] = {}
+        # three decisions (3 s at the paper's settle time) with every chamber beyond its range
+        self.saturation = SaturationWatch(self.name, self.p_low, self.p_high, steps=3)
         self.reset()
 
     # ------------------------------------------------------------------ episode
@@ -138,6 +141,7 @@ class LocalIKASDMController(BaselinePolicy):
         self._previous: tuple[np.ndarray, np.ndarray] | None = None  # (Q_{n-1}, Q_d(n-1))
         self.step_distance_mm = self.step_mm
         self.history: list[dict[str, Any]] = []
+        self.saturation.reset()
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """The action for ``observation``: a new command every ``settle_s``, else the held one
@@ -187,6 +191,7 @@ class LocalIKASDMController(BaselinePolicy):
         else:
             planned = q + self.step_distance_mm * (goal - q) / distance            # eq. (16)
             command = self.network.predict(pressures_pa, q / _MM, planned / _MM, readings)
+            self.saturation.observe(command, goal / _MM)
             command = np.clip(command, self.p_low, self.p_high)  # the regulators' range
         record.update(planned_mm=planned, pressures_pa=command)
         self.history.append(record)

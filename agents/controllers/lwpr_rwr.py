@@ -59,6 +59,7 @@ from tqdm.auto import tqdm
 import agents.learners.lwpr
 import agents.learners.rwr_inverse
 from agents.learners.lwpr import LWPR
+from agents.controllers.saturation import SaturationWatch
 from agents.learners.rwr_inverse import RewardWeightedInverse
 from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_npz, write_npz
@@ -162,6 +163,9 @@ class LWPRRWRController(BaselinePolicy):
         self.forward: LWPR | None = None
         self.inverse: RewardWeightedInverse | None = None
         self.pretraining: dict[str, Any] = {}
+        # one second of decisions with every chamber beyond its range: the target is out of reach
+        self.saturation = SaturationWatch(self.name, self.p_low, self.p_high, steps=max(
+            1, round(1.0 / (self.hold_steps * spec.control_period_s))))
         self.reset()
 
     # ------------------------------------------------------------------ episode
@@ -174,6 +178,7 @@ class LWPRRWRController(BaselinePolicy):
         self._step = 0
         self._last_decision: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.saturation.reset()
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """The action for ``observation`` (SB3's signature); pre-trains first if it has not
@@ -199,6 +204,8 @@ class LWPRRWRController(BaselinePolicy):
             if size > self.max_step_mm:
                 wanted *= self.max_step_mm / size
             du = self.inverse.predict(wanted, p, self._u)
+            self.saturation.observe(self.p_low + (self._u + du) * (self.p_high - self.p_low),
+                                    target_m)
             u_next = np.clip(self._u + du, 0.0, 1.0)
             self._last_decision = (p, self._u.copy(), u_next - self._u)
             self._u = u_next

@@ -13,6 +13,7 @@ import pytest
 
 import soft_gym  # noqa: F401
 from agents.controllers.local_ik_asdm import LocalIKASDMController
+from agents.controllers.saturation import SaturationWatch
 from agents.learners.local_ik import LocalIKNetwork
 from agents.policies import make_policy
 
@@ -46,6 +47,8 @@ def _run_plant(controller, gain: float, start_mm, goal_mm, steps: int = 200):
     controller.network = _LinearPlantInverse(jacobian, gain)
     controller.p_low = np.full(6, -1e9)
     controller.p_high = np.full(6, 1e9)  # an unbounded plant: only the method is under test
+    controller.saturation = SaturationWatch(controller.name, controller.p_low, controller.p_high,
+                                            steps=3)
     pressures = np.linalg.pinv(jacobian) @ (np.asarray(start_mm) / 1000.0)
     goal = np.asarray(goal_mm) / 1000.0
     distances = []
