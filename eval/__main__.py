@@ -3,10 +3,11 @@
     python -m eval estimation --experiments clean occlusion lighting --steps 4000 --out results/estimation
     python -m eval track --policies cc_model hybrid_gpr --kp 0.04 0.1 --path circle --out results/track
 
-``benchmark`` (the README's main job): ``cc_model``, ``hybrid_gpr`` and the shipped SB3 agents on
-the wang2023 circle, 3 cycles, with a 10 g tip load, fused camera/FBG feedback and a partly
-occluding hand moving in front of the camera during the third cycle; prints the table, writes CSV,
-JSON and plots (under 3 minutes on 2 cores, the runs spread over two processes).
+``suite``: the four-arm benchmark grid of a YAML spec; ``python -m eval suite small`` is the
+README's main job (the schema of a spec: docs/suite.md).
+
+``benchmark``: the wang2023 comparison on a loaded circle with fused feedback and a partly
+occluding hand (``python -m eval benchmark --help``).
 
 ``compare``: the SB3 agents against the baselines, nominal and out of distribution (see
 ``eval/compare.py``).
@@ -38,6 +39,7 @@ import argparse
 import itertools
 import os
 import sys
+import textwrap
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -212,9 +214,27 @@ def _add_workers(parser: argparse.ArgumentParser) -> None:
 
 
 # ------------------------------------------------------------------------------------ benchmark
+BENCHMARK_LOAD_KG = 0.010
+"""The tip mass of ``benchmark``'s runs (kg)."""
+
+BENCHMARK_OCCLUDER = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
+                      "start_s": 40.0}
+"""The visual fault of ``benchmark``'s runs: a partly occluding hand from 40 s on."""
+
+BENCHMARK_DESCRIPTION = (
+    "The wang2023 comparison: cc_model, hybrid_gpr and the shipped SB3 agents trained on "
+    "SoftArmTrackWang2023-v0 track the circle for 3 cycles with a "
+    f"{BENCHMARK_LOAD_KG * 1000:g} g tip load, fused camera/FBG feedback, and a partly occluding "
+    f"hand moving in front of the camera from {BENCHMARK_OCCLUDER['start_s']:g} s on. Prints the "
+    "table and writes per-run CSVs, a JSON summary and plots to --out (about 1 minute on 2 idle "
+    "cores, 2 beside another job). The README's main job is 'suite small'.")
+"""``benchmark --help``'s description (its runs are fixed)."""
+
+
 def _benchmark_parser(sub) -> argparse.ArgumentParser:
     """The ``benchmark`` subcommand's parser (its runs are fixed)."""
-    benchmark = sub.add_parser("benchmark", help="the small embedded default comparison",
+    benchmark = sub.add_parser("benchmark", help="the wang2023 comparison: loaded circle, fused "
+                               "feedback, an occluding hand", description=textwrap.fill(BENCHMARK_DESCRIPTION, 96),
                                formatter_class=HelpFormatter)
     benchmark.add_argument("--out", default="results/benchmark",
                            help="output directory (made; must be writable)")
@@ -225,14 +245,12 @@ def _benchmark_parser(sub) -> argparse.ArgumentParser:
 
 def _run_benchmark(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``benchmark``: ``track`` with the README's main job's fixed settings."""
-    occluder = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
-                "start_s": 40.0}
     args = argparse.Namespace(
         policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in
                                                shipped_agents("SoftArmTrackWang2023-v0")],
         kp=[0.06], preset="wang2023", path="circle",
-        cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": 0.01},
-        faults=occluder, seeds=[0], out=args.out, workers=args.workers,
+        cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": BENCHMARK_LOAD_KG},
+        faults=dict(BENCHMARK_OCCLUDER), seeds=[0], out=args.out, workers=args.workers,
         video=args.video)
     # benchmark's settings are fixed: a refusal names the part (a shipped agent, ...)
     _track(args, parser, options={})
@@ -460,12 +478,22 @@ def _run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> N
 
 
 # ---------------------------------------------------------------------------------------- suite
+SUITE_DESCRIPTION = (
+    "Run the benchmark grid a YAML spec declares (presets x paths x conditions x policies x "
+    "seeds): a bundled suite by name ('small' is the README's main job, 'default' every arm "
+    "with its paper's conditions) or a file of your own. The spec is checked before any run; "
+    "each run's record is written as it finishes (--resume continues an interrupted grid); the "
+    "report ranks the policies per arm and condition (leaderboard.md, runs.csv, suite.json, "
+    "plots). The spec's schema is in docs/suite.md.")
+"""``suite --help``'s description (the schema itself is in docs/suite.md)."""
+
+
 def _suite_parser(sub) -> argparse.ArgumentParser:
     """The ``suite`` subcommand's parser."""
     suite = sub.add_parser(
-        "suite", help="the four-arm benchmark suite of a YAML spec: leaderboard, IQM with "
-        "bootstrap CIs, performance profiles", description=suite_module.__doc__,
-        formatter_class=HelpFormatter)
+        "suite", help="the four-arm benchmark suite of a YAML spec (the README's main job: "
+        "suite small): leaderboard, IQM with bootstrap CIs, performance profiles",
+        description=textwrap.fill(SUITE_DESCRIPTION, 96), formatter_class=HelpFormatter)
     suite.add_argument("spec", help="suite YAML file, or a bundled suite: "
                        f"{', '.join(suite_module.bundled_suites())}")
     suite.add_argument("--out", default=None,
