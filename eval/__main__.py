@@ -36,6 +36,8 @@ finishes, so a run failing later keeps the finished ones.
 from __future__ import annotations
 
 import argparse
+import copy
+import inspect
 import itertools
 import os
 import sys
@@ -57,8 +59,11 @@ from eval.papers.estimation import EXPERIMENTS, run_experiments
 from eval.report import (markdown_table, plot_error_time, plot_trajectory, write_records_csv,
                          write_results_json)
 from eval.runner import ConfigError, RunConfig, check_configs
+from eval.suite.spec import POLICY_ENV_DEFAULTS
 from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
-                           json_value, non_negative_int, positive_float, positive_int)
+                           json_or_name, json_value, non_negative_int, positive_float,
+                           positive_int)
+from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
@@ -69,6 +74,7 @@ DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
 TRACK_OPTIONS = {"env_kwargs.preset": "--preset", "env_kwargs.path": "--path",
                  "env_kwargs.cycles": "--cycles", "env_kwargs.feedback": "--feedback",
                  "env_kwargs.scenario": "--scenario", "env_kwargs.faults": "--faults",
+                 "env_kwargs.obs": "--obs",
                  "policy": "--policies", "policy_params": "--kp", "seed": "--seeds"}
 """The part of a run configuration (:class:`eval.runner.ConfigError`) -> the ``track`` option
 that sets it."""
@@ -106,17 +112,26 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     :data:`TRACK_OPTIONS`; ``benchmark`` has its own).
     """
     out = Path(args.out)
-    scenario, faults = args.scenario, args.faults  # parsed JSON (``json_value``)
+    scenario, faults = args.scenario, args.faults  # parsed (``json_value``, ``json_or_name``)
     rows, records = [], {}
-    # an SB3 agent has no K_p: it runs once per seed
+    # a policy without a K_p (an SB3 agent, local_ik_asdm) runs once per seed
     runs = [(kp, seed, policy) for kp, seed, policy in itertools.product(args.kp, args.seeds,
                                                                           args.policies)
-            if not (policy.startswith("sb3:") and kp != args.kp[0])]
+            if _takes_kp(policy) or kp == args.kp[0]]
     video = getattr(args, "video", False)
+    obs = getattr(args, "obs", None)
+
+    def policy_env(policy: str) -> dict[str, Any]:
+        """``--obs`` for every policy, else what the policy needs (POLICY_ENV_DEFAULTS)."""
+        if obs is not None:
+            return {"obs": list(obs)}
+        return copy.deepcopy(POLICY_ENV_DEFAULTS.get(policy, {}))
+
     configs = [RunConfig(
-        policy=policy, policy_params={} if policy.startswith("sb3:") else {"kp": kp}, seed=seed,
+        policy=policy, policy_params={"kp": kp} if _takes_kp(policy) else {}, seed=seed,
         env_kwargs={"preset": args.preset, "path": args.path, "cycles": args.cycles,
-                    "scenario": scenario, "faults": faults, "feedback": args.feedback},
+                    "scenario": scenario, "faults": faults, "feedback": args.feedback,
+                    **policy_env(policy)},
         video_path=str(out / f"{_track_label(policy, kp, seed)}.mp4") if video else None)
         for kp, seed, policy in runs]
     _check_configs(parser, configs, TRACK_OPTIONS if options is None else options)
@@ -153,9 +168,17 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     print(text)
 
 
+def _takes_kp(policy: str) -> bool:
+    """Whether ``policy`` is a baseline with a ``kp`` gain (``--kp``); SB3 agents and
+    ``local_ik_asdm`` have none (a name that is no baseline is refused later, by the checks)."""
+    if policy.startswith("sb3:") or policy not in BASELINES:
+        return False
+    return "kp" in inspect.signature(BASELINES[policy].__init__).parameters
+
+
 def _track_label(policy: str, kp: float, seed: int) -> str:
     """File stem of one track run's CSV, plots and video."""
-    gain = "" if policy.startswith("sb3:") else f"_kp{kp}"
+    gain = f"_kp{kp}" if _takes_kp(policy) else ""
     return f"{compare_module.policy_label(policy)}{gain}_seed{seed}"
 
 
@@ -311,8 +334,16 @@ def _track_parser(sub) -> argparse.ArgumentParser:
                             "source the preset supports)")
     track.add_argument("--scenario", type=json_value, default=None,
                        help='loads as JSON, e.g. \'{"name": "tip_mass", "mass_kg": 0.01}\'')
-    track.add_argument("--faults", type=json_value, default=None,
-                       help='visual faults as JSON, e.g. \'"wang2023_occlusion"\'')
+    track.add_argument("--faults", type=json_or_name, default=None,
+                       help="visual faults: a fault's name (wang2023_occlusion, low_light, ...) "
+                            'or JSON, e.g. \'{"name": "moving_occluder", "mode": "full"}\'')
+    track.add_argument("--obs", nargs="+", default=None, choices=list(OBSERVATION_PARTS),
+                       metavar="PART",
+                       help="observation parts of every run's env, in order (from "
+                            f"{', '.join(OBSERVATION_PARTS)}); default: the env's, or what a "
+                            "baseline needs (local_ik_asdm: "
+                            f"{' '.join(POLICY_ENV_DEFAULTS['local_ik_asdm']['obs'])}); SB3 "
+                            "agents always get the parts they were trained with")
     track.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
                        help="episode seeds (integers >= 0)")
     track.add_argument("--out", default="results/track",
