@@ -46,6 +46,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
 
+import numpy as np
+
 from agents.policies import BASELINES, shipped_agents
 from eval import compare as compare_module
 from eval import runner  # runner.run_many, looked up at each call (tests stand in for it)
@@ -56,6 +58,7 @@ from eval.papers import ho2018 as ho2018_module
 from eval.papers import zhao2021 as zhao2021_module
 from eval.papers import zou2022 as zou2022_module
 from eval.papers.estimation import EXPERIMENTS, run_experiments
+from eval.palette import policy_color, policy_label
 from eval.report import (markdown_table, plot_error_time, plot_trajectory, write_records_csv,
                          write_results_json)
 from eval.runner import ConfigError, RunConfig, check_configs
@@ -158,7 +161,9 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     table = add_improvement(table, baseline={"policy": "cc_model"}, metric="dev_last_cycle_mm",
                             column="dev_improvement_last_%")
     _agents_against_first_gain(table, args.kp[0])
-    plot_error_time(out / "error_time.png", records, f"{args.preset} {args.path}")
+    colors = {_track_label(policy, kp, seed): policy_color(policy) for kp, seed, policy in runs}
+    plot_error_time(out / "error_time.png", records, _track_title(args, records),
+                    colors=colors)
     write_results_json(out / "track.json", table)
     columns = ["policy", "kp", "seed", "track_mean_mm", "track_max_mm", "dev_mean_mm",
                "improvement_%", "track_last_cycle_mm", "dev_last_cycle_mm", "improvement_last_%",
@@ -166,6 +171,17 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     text = markdown_table(table, columns=[c for c in columns if c in table[0]])
     (out / "track.md").write_text(text + "\n")
     print(text)
+
+
+def _track_title(args: argparse.Namespace, records: dict[str, dict]) -> str:
+    """The error plot's title: ``args.title`` where set (``benchmark``'s, whose ``{end_s}`` is
+    the runs' end, s), else the preset and path."""
+    title = getattr(args, "title", None)
+    if not title:
+        return f"{args.preset} {args.path}"
+    end_s = max((float(np.max(record["time_s"])) for record in records.values()
+                 if len(record.get("time_s", ()))), default=float("nan"))
+    return title.format(end_s=end_s)
 
 
 def _takes_kp(policy: str) -> bool:
@@ -179,7 +195,7 @@ def _takes_kp(policy: str) -> bool:
 def _track_label(policy: str, kp: float, seed: int) -> str:
     """File stem of one track run's CSV, plots and video."""
     gain = f"_kp{kp}" if _takes_kp(policy) else ""
-    return f"{compare_module.policy_label(policy)}{gain}_seed{seed}"
+    return f"{policy_label(policy)}{gain}_seed{seed}"
 
 
 def _add_video_flag(parser: argparse.ArgumentParser) -> None:
@@ -254,10 +270,20 @@ BENCHMARK_DESCRIPTION = (
 """``benchmark --help``'s description (its runs are fixed)."""
 
 
+def benchmark_title() -> str:
+    """The title of ``benchmark``'s error plot: the arm, path, load, feedback and the occlusion
+    window (``{end_s}``: the runs' end, filled in once they are done)."""
+    occluder = BENCHMARK_OCCLUDER
+    return (f"wang2023 circle, {BENCHMARK_LOAD_KG * 1000:g} g tip load, fused feedback; "
+            f"{occluder['mode']} occluder (strength {occluder['strength']:g}) "
+            f"from {occluder['start_s']:g} s to {{end_s:.0f}} s (the end)")
+
+
 def _benchmark_parser(sub) -> argparse.ArgumentParser:
     """The ``benchmark`` subcommand's parser (its runs are fixed)."""
     benchmark = sub.add_parser("benchmark", help="the wang2023 comparison: loaded circle, fused "
-                               "feedback, an occluding hand", description=textwrap.fill(BENCHMARK_DESCRIPTION, 96),
+                               "feedback, an occluding hand",
+                               description=textwrap.fill(BENCHMARK_DESCRIPTION, 96),
                                formatter_class=HelpFormatter)
     benchmark.add_argument("--out", default="results/benchmark",
                            help="output directory (made; must be writable)")
@@ -274,7 +300,7 @@ def _run_benchmark(parser: argparse.ArgumentParser, args: argparse.Namespace) ->
         kp=[0.06], preset="wang2023", path="circle",
         cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": BENCHMARK_LOAD_KG},
         faults=dict(BENCHMARK_OCCLUDER), seeds=[0], out=args.out, workers=args.workers,
-        video=args.video)
+        video=args.video, title=benchmark_title())
     # benchmark's settings are fixed: a refusal names the part (a shipped agent, ...)
     _track(args, parser, options={})
     print(f"output directory: {args.out}")

@@ -23,7 +23,7 @@ from typing import Any
 import yaml
 
 from agents.policies import BASELINES
-from eval.compare import policy_label
+from eval.palette import policy_label
 from soft_gym.envs.config import CONFIG_FIELDS
 from soft_gym.robots.presets import PRESETS
 from soft_gym.sensing import FEEDBACK_SOURCES
