@@ -3,10 +3,11 @@
     python -m eval estimation --experiments clean occlusion lighting --steps 4000 --out results/estimation
     python -m eval track --policies cc_model hybrid_gpr --kp 0.04 0.1 --path circle --out results/track
 
-``benchmark`` (the README's main job): ``cc_model``, ``hybrid_gpr`` and the shipped SB3 agents on
-the wang2023 circle, 3 cycles, with a 10 g tip load, fused camera/FBG feedback and a partly
-occluding hand moving in front of the camera during the third cycle; prints the table, writes CSV,
-JSON and plots (under 3 minutes on 2 cores, the runs spread over two processes).
+``suite``: the four-arm benchmark grid of a YAML spec; ``python -m eval suite small`` is the
+README's main job (the schema of a spec: docs/suite.md).
+
+``benchmark``: the wang2023 comparison on a loaded circle with fused feedback and a partly
+occluding hand (``python -m eval benchmark --help``).
 
 ``compare``: the SB3 agents against the baselines, nominal and out of distribution (see
 ``eval/compare.py``).
@@ -35,12 +36,17 @@ finishes, so a run failing later keeps the finished ones.
 from __future__ import annotations
 
 import argparse
+import copy
+import inspect
 import itertools
 import os
 import sys
+import textwrap
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
+
+import numpy as np
 
 from agents.policies import BASELINES, shipped_agents
 from eval import compare as compare_module
@@ -52,11 +58,15 @@ from eval.papers import ho2018 as ho2018_module
 from eval.papers import zhao2021 as zhao2021_module
 from eval.papers import zou2022 as zou2022_module
 from eval.papers.estimation import EXPERIMENTS, run_experiments
+from eval.palette import policy_color, policy_label
 from eval.report import (markdown_table, plot_error_time, plot_trajectory, write_records_csv,
                          write_results_json)
 from eval.runner import ConfigError, RunConfig, check_configs
+from eval.suite.spec import POLICY_ENV_DEFAULTS
 from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
-                           json_value, non_negative_int, positive_float, positive_int)
+                           json_or_name, json_value, non_negative_int, positive_float,
+                           positive_int)
+from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
@@ -67,6 +77,7 @@ DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
 TRACK_OPTIONS = {"env_kwargs.preset": "--preset", "env_kwargs.path": "--path",
                  "env_kwargs.cycles": "--cycles", "env_kwargs.feedback": "--feedback",
                  "env_kwargs.scenario": "--scenario", "env_kwargs.faults": "--faults",
+                 "env_kwargs.obs": "--obs",
                  "policy": "--policies", "policy_params": "--kp", "seed": "--seeds"}
 """The part of a run configuration (:class:`eval.runner.ConfigError`) -> the ``track`` option
 that sets it."""
@@ -104,17 +115,26 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     :data:`TRACK_OPTIONS`; ``benchmark`` has its own).
     """
     out = Path(args.out)
-    scenario, faults = args.scenario, args.faults  # parsed JSON (``json_value``)
+    scenario, faults = args.scenario, args.faults  # parsed (``json_value``, ``json_or_name``)
     rows, records = [], {}
-    # an SB3 agent has no K_p: it runs once per seed
+    # a policy without a K_p (an SB3 agent, local_ik_asdm) runs once per seed
     runs = [(kp, seed, policy) for kp, seed, policy in itertools.product(args.kp, args.seeds,
                                                                           args.policies)
-            if not (policy.startswith("sb3:") and kp != args.kp[0])]
+            if _takes_kp(policy) or kp == args.kp[0]]
     video = getattr(args, "video", False)
+    obs = getattr(args, "obs", None)
+
+    def policy_env(policy: str) -> dict[str, Any]:
+        """``--obs`` for every policy, else what the policy needs (POLICY_ENV_DEFAULTS)."""
+        if obs is not None:
+            return {"obs": list(obs)}
+        return copy.deepcopy(POLICY_ENV_DEFAULTS.get(policy, {}))
+
     configs = [RunConfig(
-        policy=policy, policy_params={} if policy.startswith("sb3:") else {"kp": kp}, seed=seed,
+        policy=policy, policy_params={"kp": kp} if _takes_kp(policy) else {}, seed=seed,
         env_kwargs={"preset": args.preset, "path": args.path, "cycles": args.cycles,
-                    "scenario": scenario, "faults": faults, "feedback": args.feedback},
+                    "scenario": scenario, "faults": faults, "feedback": args.feedback,
+                    **policy_env(policy)},
         video_path=str(out / f"{_track_label(policy, kp, seed)}.mp4") if video else None)
         for kp, seed, policy in runs]
     _check_configs(parser, configs, TRACK_OPTIONS if options is None else options)
@@ -141,7 +161,9 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     table = add_improvement(table, baseline={"policy": "cc_model"}, metric="dev_last_cycle_mm",
                             column="dev_improvement_last_%")
     _agents_against_first_gain(table, args.kp[0])
-    plot_error_time(out / "error_time.png", records, f"{args.preset} {args.path}")
+    colors = {_track_label(policy, kp, seed): policy_color(policy) for kp, seed, policy in runs}
+    plot_error_time(out / "error_time.png", records, _track_title(args, records),
+                    colors=colors)
     write_results_json(out / "track.json", table)
     columns = ["policy", "kp", "seed", "track_mean_mm", "track_max_mm", "dev_mean_mm",
                "improvement_%", "track_last_cycle_mm", "dev_last_cycle_mm", "improvement_last_%",
@@ -151,10 +173,29 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
     print(text)
 
 
+def _track_title(args: argparse.Namespace, records: dict[str, dict]) -> str:
+    """The error plot's title: ``args.title`` where set (``benchmark``'s, whose ``{end_s}`` is
+    the runs' end, s), else the preset and path."""
+    title = getattr(args, "title", None)
+    if not title:
+        return f"{args.preset} {args.path}"
+    end_s = max((float(np.max(record["time_s"])) for record in records.values()
+                 if len(record.get("time_s", ()))), default=float("nan"))
+    return title.format(end_s=end_s)
+
+
+def _takes_kp(policy: str) -> bool:
+    """Whether ``policy`` is a baseline with a ``kp`` gain (``--kp``); SB3 agents and
+    ``local_ik_asdm`` have none (a name that is no baseline is refused later, by the checks)."""
+    if policy.startswith("sb3:") or policy not in BASELINES:
+        return False
+    return "kp" in inspect.signature(BASELINES[policy].__init__).parameters
+
+
 def _track_label(policy: str, kp: float, seed: int) -> str:
     """File stem of one track run's CSV, plots and video."""
-    gain = "" if policy.startswith("sb3:") else f"_kp{kp}"
-    return f"{compare_module.policy_label(policy)}{gain}_seed{seed}"
+    gain = f"_kp{kp}" if _takes_kp(policy) else ""
+    return f"{policy_label(policy)}{gain}_seed{seed}"
 
 
 def _add_video_flag(parser: argparse.ArgumentParser) -> None:
@@ -212,9 +253,37 @@ def _add_workers(parser: argparse.ArgumentParser) -> None:
 
 
 # ------------------------------------------------------------------------------------ benchmark
+BENCHMARK_LOAD_KG = 0.010
+"""The tip mass of ``benchmark``'s runs (kg)."""
+
+BENCHMARK_OCCLUDER = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
+                      "start_s": 40.0}
+"""The visual fault of ``benchmark``'s runs: a partly occluding hand from 40 s on."""
+
+BENCHMARK_DESCRIPTION = (
+    "The wang2023 comparison: cc_model, hybrid_gpr and the shipped SB3 agents trained on "
+    "SoftArmTrackWang2023-v0 track the circle for 3 cycles with a "
+    f"{BENCHMARK_LOAD_KG * 1000:g} g tip load, fused camera/FBG feedback, and a partly occluding "
+    f"hand moving in front of the camera from {BENCHMARK_OCCLUDER['start_s']:g} s on. Prints the "
+    "table and writes per-run CSVs, a JSON summary and plots to --out (about 1 minute on 2 idle "
+    "cores, 2 beside another job). The README's main job is 'suite small'.")
+"""``benchmark --help``'s description (its runs are fixed)."""
+
+
+def benchmark_title() -> str:
+    """The title of ``benchmark``'s error plot: the arm, path, load, feedback and the occlusion
+    window (``{end_s}``: the runs' end, filled in once they are done)."""
+    occluder = BENCHMARK_OCCLUDER
+    return (f"wang2023 circle, {BENCHMARK_LOAD_KG * 1000:g} g tip load, fused feedback; "
+            f"{occluder['mode']} occluder (strength {occluder['strength']:g}) "
+            f"from {occluder['start_s']:g} s to {{end_s:.0f}} s (the end)")
+
+
 def _benchmark_parser(sub) -> argparse.ArgumentParser:
     """The ``benchmark`` subcommand's parser (its runs are fixed)."""
-    benchmark = sub.add_parser("benchmark", help="the small embedded default comparison",
+    benchmark = sub.add_parser("benchmark", help="the wang2023 comparison: loaded circle, fused "
+                               "feedback, an occluding hand",
+                               description=textwrap.fill(BENCHMARK_DESCRIPTION, 96),
                                formatter_class=HelpFormatter)
     benchmark.add_argument("--out", default="results/benchmark",
                            help="output directory (made; must be writable)")
@@ -225,15 +294,13 @@ def _benchmark_parser(sub) -> argparse.ArgumentParser:
 
 def _run_benchmark(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``benchmark``: ``track`` with the README's main job's fixed settings."""
-    occluder = {"name": "moving_occluder", "mode": "partial", "strength": 0.8,
-                "start_s": 40.0}
     args = argparse.Namespace(
         policies=["cc_model", "hybrid_gpr"] + [f"sb3:{name}" for name in
                                                shipped_agents("SoftArmTrackWang2023-v0")],
         kp=[0.06], preset="wang2023", path="circle",
-        cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": 0.01},
-        faults=occluder, seeds=[0], out=args.out, workers=args.workers,
-        video=args.video)
+        cycles=3, feedback="fused", scenario={"name": "tip_mass", "mass_kg": BENCHMARK_LOAD_KG},
+        faults=dict(BENCHMARK_OCCLUDER), seeds=[0], out=args.out, workers=args.workers,
+        video=args.video, title=benchmark_title())
     # benchmark's settings are fixed: a refusal names the part (a shipped agent, ...)
     _track(args, parser, options={})
     print(f"output directory: {args.out}")
@@ -293,8 +360,16 @@ def _track_parser(sub) -> argparse.ArgumentParser:
                             "source the preset supports)")
     track.add_argument("--scenario", type=json_value, default=None,
                        help='loads as JSON, e.g. \'{"name": "tip_mass", "mass_kg": 0.01}\'')
-    track.add_argument("--faults", type=json_value, default=None,
-                       help='visual faults as JSON, e.g. \'"wang2023_occlusion"\'')
+    track.add_argument("--faults", type=json_or_name, default=None,
+                       help="visual faults: a fault's name (wang2023_occlusion, low_light, ...) "
+                            'or JSON, e.g. \'{"name": "moving_occluder", "mode": "full"}\'')
+    track.add_argument("--obs", nargs="+", default=None, choices=list(OBSERVATION_PARTS),
+                       metavar="PART",
+                       help="observation parts of every run's env, in order (from "
+                            f"{', '.join(OBSERVATION_PARTS)}); default: the env's, or what a "
+                            "baseline needs (local_ik_asdm: "
+                            f"{' '.join(POLICY_ENV_DEFAULTS['local_ik_asdm']['obs'])}); SB3 "
+                            "agents always get the parts they were trained with")
     track.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
                        help="episode seeds (integers >= 0)")
     track.add_argument("--out", default="results/track",
@@ -460,12 +535,22 @@ def _run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> N
 
 
 # ---------------------------------------------------------------------------------------- suite
+SUITE_DESCRIPTION = (
+    "Run the benchmark grid a YAML spec declares (presets x paths x conditions x policies x "
+    "seeds): a bundled suite by name ('small' is the README's main job, 'default' every arm "
+    "with its paper's conditions) or a file of your own. The spec is checked before any run; "
+    "each run's record is written as it finishes (--resume continues an interrupted grid); the "
+    "report ranks the policies per arm and condition (leaderboard.md, runs.csv, suite.json, "
+    "plots). The spec's schema is in docs/suite.md.")
+"""``suite --help``'s description (the schema itself is in docs/suite.md)."""
+
+
 def _suite_parser(sub) -> argparse.ArgumentParser:
     """The ``suite`` subcommand's parser."""
     suite = sub.add_parser(
-        "suite", help="the four-arm benchmark suite of a YAML spec: leaderboard, IQM with "
-        "bootstrap CIs, performance profiles", description=suite_module.__doc__,
-        formatter_class=HelpFormatter)
+        "suite", help="the four-arm benchmark suite of a YAML spec (the README's main job: "
+        "suite small): leaderboard, IQM with bootstrap CIs, performance profiles",
+        description=textwrap.fill(SUITE_DESCRIPTION, 96), formatter_class=HelpFormatter)
     suite.add_argument("spec", help="suite YAML file, or a bundled suite: "
                        f"{', '.join(suite_module.bundled_suites())}")
     suite.add_argument("--out", default=None,

@@ -29,8 +29,9 @@ import numpy as np
 
 from eval import runner  # runner.run_many, looked up at each call (tests stand in for it)
 from eval.metrics import add_improvement, aggregate_seeds, summarize, summary_table
-from eval.report import (markdown_table, plot_error_time, with_mean_std, write_records_csv,
-                         write_results_json)
+from eval.palette import policy_color, policy_label
+from eval.report import (error_peaks_mm, markdown_table, plot_error_time, with_mean_std,
+                         write_records_csv, write_results_json)
 from eval.runner import RunConfig, check_configs
 
 CONDITIONS: dict[str, dict[str, Any]] = {
@@ -40,11 +41,6 @@ CONDITIONS: dict[str, dict[str, Any]] = {
                              "cover_s": 2.0, "period_s": 6.0}},
 }
 """Condition name -> env keyword arguments."""
-
-
-def policy_label(policy: str) -> str:
-    """Short table label: the baseline name or the agent directory's name."""
-    return Path(policy[4:]).name if policy.startswith("sb3:") else policy
 
 
 def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Sequence[str],
@@ -105,9 +101,13 @@ def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Se
     write_results_json(out / "compare.json", table)
     _write_csv(out / "compare.csv", table)
     aggregated = aggregate_seeds(table, by=["policy", "path", "condition"])
+    # one y-scale for every error plot (one arm), so the conditions compare by eye
+    peaks = error_peaks_mm([record for records in first_seed_records.values()
+                            for record in records.values()])
     for (path, condition), records in first_seed_records.items():
         plot_error_time(out / f"error_{path}_{condition}.png", records,
-                        f"{preset} {path}, {condition}, {feedback} feedback (seed {seeds[0]})")
+                        f"{preset} {path}, {condition}, {feedback} feedback (seed {seeds[0]})",
+                        ymax_mm=peaks)
     for path in paths:
         _plot_bars(out / f"compare_{path}.png",
                    [row for row in aggregated if row["path"] == path], conditions,
@@ -158,7 +158,7 @@ def _plot_bars(path: Path, rows: list[dict], conditions: Sequence[str], title: s
                 for c in conditions]
         stds = [0.0 if not np.isfinite(s) else s for s in stds]
         ax.bar(x + (k - (len(policies) - 1) / 2) * width, means, width, yerr=stds, capsize=3,
-               label=policy, color=f"C{k % 10}")
+               label=policy, color=policy_color(policy))
     ax.set_xticks(x, conditions)
     ax.set_ylabel("tracking error, last cycle (mm)")
     ax.set_title(title, fontsize=10)

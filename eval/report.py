@@ -42,6 +42,7 @@ from eval.metrics import (
     path_deviation_mm,
     tracking_error_mm,
 )
+from eval.palette import policy_color
 
 __all__ = [
     "csv_columns",
@@ -392,6 +393,26 @@ def _cycle_starts(record: Mapping[str, Any], x: np.ndarray) -> list[float]:
     return [float(x[i]) for i in idx]
 
 
+_LINE_STYLES = ("-", "-.", ":", (0, (5, 1, 1, 1, 1, 1)))
+"""Line styles of runs drawn in one colour (the same policy at several gains or seeds)."""
+
+
+def error_peaks_mm(records: Sequence[Mapping[str, Any]]) -> list[float]:
+    """The peak tracking error and path deviation (mm) over ``records``, padded by 8 %: the
+    ``ymax_mm`` of :func:`plot_error_time` that gives several plots one y-scale (0 for a
+    series with no finite value)."""
+    peaks = [0.0, 0.0]
+    for record in records:
+        series = [tracking_error_mm(record)]
+        if record.get("polyline_m") is not None:
+            series.append(path_deviation_mm(record))
+        for row, values in enumerate(series):
+            finite = values[np.isfinite(values)]
+            if finite.size:
+                peaks[row] = max(peaks[row], float(np.max(finite)) * 1.08)
+    return peaks
+
+
 def _ylim_from_zero(ax: Any, values: Sequence[np.ndarray]) -> None:
     """Set y limits to [0, 1.08 * max] of the finite values (1 if none)."""
     peaks = [float(np.max(v[np.isfinite(v)])) for v in values if np.any(np.isfinite(v))]
@@ -475,6 +496,8 @@ def plot_error_time(
     path_png: PathLike,
     records_by_label: Mapping[str, Mapping[str, Any]],
     title: str,
+    colors: Mapping[str, str] | None = None,
+    ymax_mm: Sequence[float] | None = None,
 ) -> Path:
     """Tracking error (and path deviation) over time for several runs (mm).
 
@@ -487,6 +510,11 @@ def plot_error_time(
         path_png: Output PNG file; its directory is created.
         records_by_label: Legend label -> episode record.
         title: Figure title.
+        colors: Legend label -> colour; default the label's policy colour
+            (:func:`eval.palette.policy_color`), so a policy has one colour in every plot.
+            Runs sharing a colour (one policy at several gains) differ in line style.
+        ymax_mm: The top of each panel's y axis (mm; tracking error, then path deviation),
+            e.g. shared by every plot of one arm; default each panel's own peak.
 
     Returns:
         The path written.
@@ -502,8 +530,11 @@ def plot_error_time(
     boundaries: set[float] = set()
     xlabel = "time (s)"
     plotted: list[list[np.ndarray]] = [[] for _ in range(nrows)]
-    for k, (label, rec) in enumerate(records_by_label.items()):
-        color = f"C{k % 10}"
+    used: dict[str, int] = {}
+    for label, rec in records_by_label.items():
+        color = policy_color(label) if colors is None else colors[label]
+        style = _LINE_STYLES[used.get(color, 0) % len(_LINE_STYLES)]
+        used[color] = used.get(color, 0) + 1
         series = [tracking_error_mm(rec)]
         if with_dev:
             series.append(path_deviation_mm(rec))
@@ -515,14 +546,18 @@ def plot_error_time(
                 continue
             plotted[row].append(err)
             mean = float(np.mean(finite))
-            ax.plot(x, err, "-", color=color, lw=1.0,
+            ax.plot(x, err, linestyle=style, color=color, lw=1.0,
                     label=f"{label} (mean {mean:.3f} mm)")
             ax.axhline(mean, color=color, ls="--", lw=0.8, alpha=0.8)
-    for ax, name, values in zip(axes, ("tracking error (mm)", "path deviation (mm)"), plotted):
+    for row, (ax, name, values) in enumerate(zip(axes, ("tracking error (mm)",
+                                                         "path deviation (mm)"), plotted)):
         for b in sorted(boundaries):
             ax.axvline(b, color="0.4", ls=":", lw=0.9)
         ax.set_ylabel(name)
-        _ylim_from_zero(ax, values)
+        if ymax_mm is not None and row < len(ymax_mm) and ymax_mm[row] > 0.0:
+            ax.set_ylim(0.0, float(ymax_mm[row]))
+        else:
+            _ylim_from_zero(ax, values)
         ax.grid(True, lw=0.4, alpha=0.5)
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="upper right", fontsize="small")

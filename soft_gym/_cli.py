@@ -13,6 +13,7 @@ import argparse
 import json
 import math
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Any, Callable, NoReturn
@@ -105,6 +106,21 @@ def json_value(text: str) -> Any:
 
 
 json_value.__name__ = "JSON"
+
+
+_PLAIN_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def json_or_name(text: str) -> Any:
+    """An ``add_argument`` type: JSON text, or a plain name (``wang2023_occlusion``, as the
+    shell leaves it unquoted) taken as that string; anything else is refused as
+    :func:`json_value` refuses it."""
+    if _PLAIN_NAME.match(text) and text not in ("true", "false", "null"):
+        return text
+    return json_value(text)
+
+
+json_or_name.__name__ = "JSON or name"
 
 
 # ------------------------------------------------------------------ checks before any work

@@ -42,7 +42,7 @@ OLD_CITATIONS = ("DESIGN" + ".md", "papers" + "/README")
 not cite it)."""
 
 SKIPPED_DIRECTORIES = {".git", ".venv", "__pycache__", ".pytest_cache", "build", "dist", "runs",
-                       "results", ".benchmarks"}
+                       "results", ".benchmarks", "videos"}
 """Not the repository's own files: version control, the virtualenv and generated output (the
 ``.gitignore`` entries); ``*.egg-info`` is skipped as well."""
 

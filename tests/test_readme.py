@@ -32,6 +32,28 @@ def test_the_readme_baseline_loop_runs_and_tracks():
     env.close()
 
 
+def test_the_readme_quick_builds_run_with_progress_bars(monkeypatch, capsys):
+    """The README's quick builds of ``local_ik_asdm`` and ``lwpr_rwr``, built afresh (no
+    cache): both finish with a trained model of the size asked for, and both show their
+    progress bars on stderr."""
+    (block,) = [block for block in _python_blocks(ROOT / "README.md") if ".pretrain()" in block]
+    from soft_gym.sensing import calibration_cache
+
+    monkeypatch.setenv("SOFT_GYM_CACHE", "off")
+    calibration_cache.clear_memory()
+    namespace: dict = {}
+    exec(compile(block, "README.md", "exec"), namespace)
+    err = capsys.readouterr().err
+    assert "zhao2021 exploration" in err and "/600" in err and "local IK training" in err
+    assert "lwpr_rwr pre-training waypoints" in err and "/20" in err
+    assert namespace["ik"].network is not None and namespace["ik"].training
+    lwpr = namespace["lwpr"]
+    assert lwpr.pretraining["samples"] == 20 * lwpr.leg_decisions
+    for name in ("zhao", "ho"):
+        namespace[name].close()
+    calibration_cache.clear_memory()
+
+
 def test_the_package_reports_the_version_of_pyproject_and_the_changelog():
     (version,) = re.findall(r'^version = "([^"]+)"$', (ROOT / "pyproject.toml").read_text(),
                             flags=re.M)
@@ -89,3 +111,60 @@ def test_the_tables_of_names_list_every_registered_name():
     for text in (feedback.__doc__, architecture):
         assert _first_column_names(text, "|`ground_truth`|") == list(FEEDBACK_SOURCES)
     assert _first_column_names(sensors.__doc__, "|`fbg`|") == list(SENSORS)
+
+
+def test_what_the_readme_examples_write_is_ignored_by_git():
+    """The folders the README's examples write into (RecordVideo's ``video_folder``, the
+    commands' ``results/``) are in ``.gitignore``."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    ignored = {line.strip().rstrip("/") for line in
+               (ROOT / ".gitignore").read_text().splitlines() if line.strip()}
+    folders = set(re.findall(r'video_folder="([^"/]+)"', readme))
+    assert folders == {"videos"}
+    folders |= {path.split("/")[0] for path in re.findall(r"`(results/[^`]+)`", readme)}
+    assert folders <= ignored, folders - ignored
+
+
+def _training(agent: str) -> dict:
+    import yaml
+
+    (last,) = yaml.safe_load((ROOT / "agents" / "trained" / agent / "training.yaml")
+                             .read_text())[-1:]
+    return last
+
+
+def test_the_readme_training_times_are_the_shipped_agents_measured_ones():
+    """The minutes the README gives for training come from the shipped agents' own
+    ``training.yaml`` (wall time, and steps over the measured env steps/s)."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    sac = _training("sac_wang2023_track")
+    (minutes,) = re.findall(r"the shipped SAC's recipe: 300,000 steps, ~(\d+) min", readme)
+    assert sac["timesteps"] == 300_000 and int(minutes) == round(sac["wall_s"] / 60)
+    td3 = _training("td3_wang2023_track")
+    (minutes,) = re.findall(r"--randomize  # 300,000 steps, ~(\d+) min", readme)
+    assert int(minutes) == round(300_000 / td3["env_steps_per_s"] / 60)
+    assert f"{round(sac['env_steps_per_s'])} env steps/s for the SAC, " \
+           f"{round(td3['env_steps_per_s'])} for the TD3" in " ".join(readme.split())
+    (line,) = re.findall(r"(\d+), (\d+)\s+and (\d+) minutes of wall time for ho2018, zhao2021 "
+                         r"and zou2022", readme)
+    for agent, minutes in zip(("ho2018", "zhao2021", "zou2022"), line):
+        assert int(minutes) == round(_training(f"sac_{agent}_track")["wall_s"] / 60), agent
+
+
+def test_the_contributing_section_gives_the_loop_smoke_before_a_commit_suite_before_a_push():
+    """README's Contributing section: the smoke subset before every commit, then the default
+    suite (CI's command) before every push, in that order, and the marker it selects exists."""
+    import tomllib
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = readme[readme.index("## Contributing"):]
+    blocks = re.findall(r"```bash\n(.*?)```", section, flags=re.S)
+    assert [block.strip() for block in blocks[:2]] == [".venv/bin/python -m pytest -m smoke",
+                                                       ".venv/bin/python -m pytest"]
+    assert section.index("Before every commit") < section.index(blocks[0])
+    assert section.index(blocks[0]) < section.index("Before every push") \
+        < section.rindex(blocks[1])
+    markers = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"][
+        "ini_options"]["markers"]
+    assert any(marker.startswith("smoke:") for marker in markers)
+    assert "pytest" in (ROOT / ".ci" / "run").read_text()

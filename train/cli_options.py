@@ -7,6 +7,7 @@ Every check here runs before any work starts and reports a refusal the argparse 
 from __future__ import annotations
 
 import argparse
+import difflib
 from typing import Any
 
 import gymnasium
@@ -56,7 +57,9 @@ def resolve_env_id(parser: argparse.ArgumentParser, args: argparse.Namespace) ->
         return preset_env_id("track", args.preset)
     if args.env not in gymnasium.registry:
         ids = sorted(name for name in gymnasium.registry if name.startswith("SoftArm"))
-        parser.error(f"--env must be a registered id ({', '.join(ids)}), got {args.env!r}")
+        close = difflib.get_close_matches(args.env, ids, n=1, cutoff=0.8)
+        hint = f": did you mean {close[0]!r}?" if close else ""
+        parser.error(f"--env must be a registered id ({', '.join(ids)}), got {args.env!r}{hint}")
     return args.env
 
 

@@ -13,7 +13,7 @@ import argparse
 import shutil
 from pathlib import Path
 
-from agents.policies import SHIPPED_DIR
+from agents.policies import SHIPPED_DIR, mark_model_file, model_normalization_mark
 from soft_gym._cli import HelpFormatter
 from train.trainer import (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE, MODEL_FILE,
                            NORMALIZATION_FILE)
@@ -32,8 +32,11 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
     target = Path(destination) / name
     target.mkdir(parents=True, exist_ok=True)
     shutil.copy(run_dir / model_file, target / MODEL_FILE)
-    if (run_dir / normalization_file).is_file():
+    normalized = (run_dir / normalization_file).is_file()
+    if normalized:
         shutil.copy(run_dir / normalization_file, target / NORMALIZATION_FILE)
+    if model_normalization_mark(target / MODEL_FILE) is None:  # a model saved before the mark
+        mark_model_file(target / MODEL_FILE, normalized)
     for extra in ("config.yaml", "versions.yaml", "training.yaml", "learning_curve.png"):
         if (run_dir / extra).is_file():
             shutil.copy(run_dir / extra, target / extra)

@@ -35,8 +35,10 @@ from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
 import soft_gym  # noqa: F401  (registers the env ids)
+from agents.policies.sb3 import mark_normalization
 from train.batched import Sb3VectorEnv
-from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class, build_action_noise,
+from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class,
+                          build_action_noise,
                           read_hyperparameters, split_hyperparameters)
 from train.curves import plot_learning_curve
 
@@ -200,6 +202,9 @@ def train(request: TrainRequest) -> Path:
             model.load_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
     else:
         model = new_model(request.algo, settings, env, request.seed)
+    # every save (final, best, checkpoints) carries it: a bare model.zip copied without its
+    # statistics is then refused by sb3:PATH rather than run on raw observations
+    mark_normalization(model, settings.normalize is not None)
     model.set_logger(configure(str(run_dir / "logs"), ["csv", "tensorboard"]))
 
     (run_dir / "config.yaml").write_text(yaml.safe_dump({

@@ -48,6 +48,10 @@ calibrate_modal`); eqs. (25)-(26) are unchanged.
 Pressures cannot go below the pre-pressure or above ``p_max``: the model lengths are kept
 consistent with the saturated pressures (anti-windup), so the integrator of eq. (26) does not
 wind up.
+Where every chamber stays saturated for a second of control steps, the target is out of the
+model's reach and the controller says so once
+(:class:`~agents.controllers.saturation.InfeasibleTargetWarning`, naming the target and the
+bounds).
 
 The pressures become actions through the env's own map (:class:`soft_gym.robots.actuation.
 Actuation`), in either action mode: ``"absolute"`` or ``"delta"`` (there the controller keeps the
@@ -66,6 +70,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from agents.controllers.modal_map import ModalLengthMap
+from agents.controllers.saturation import SaturationWatch
 from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._validation import (require_integer, require_non_negative, require_number,
                                   require_positive)
@@ -134,6 +139,8 @@ class CCModelController(BaselinePolicy):
         self.alpha: np.ndarray | None = None
         self.modal_map: ModalLengthMap | None = None
         self.lengths = self.rest_lengths.copy()
+        self.saturation = SaturationWatch(self.name, self.p_low, self.p_high,
+                                          steps=max(1, round(1.0 / spec.control_period_s)))
 
     # ------------------------------------------------------------------ calibration
     def calibrate(self, seed: int = 0, env=None) -> np.ndarray:
@@ -302,6 +309,7 @@ class CCModelController(BaselinePolicy):
         """Start of an episode (after the env's reset): rest lengths, command at pre-pressure."""
         self.lengths = self.rest_lengths.copy()
         self._command = self.actuation.initial_command_pa.copy()
+        self.saturation.reset()
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """The action for ``observation`` (SB3's signature); calibrates first if it has not
@@ -309,10 +317,12 @@ class CCModelController(BaselinePolicy):
         observation = self.check_observation(observation)  # before any state changes
         if self.alpha is None:
             self.calibrate_on_copy()
-        position = self._pose(observation)
-        command = self.compensate(position, self._next_target(observation) - position)
+        position, target = self._pose(observation), self._next_target(observation)
+        command = self.compensate(position, target - position)
         self.lengths = self.lengths + self.kp * self.length_step(position, position + command)
-        pressures = np.clip(self.model_pressures(self.lengths), self.p_low, self.p_high)
+        wanted = self.model_pressures(self.lengths)
+        self.saturation.observe(wanted, target)
+        pressures = np.clip(wanted, self.p_low, self.p_high)
         # anti-windup: the model lengths follow what the saturated pressures can produce
         self.lengths = self.model_lengths(pressures)
         return self._action_for(pressures), state

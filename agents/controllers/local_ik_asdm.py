@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 import agents.learners.local_ik
+from agents.controllers.saturation import SaturationWatch
 from agents.learners.local_ik import LocalIKNetwork
 from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_model_state, write_model_state
@@ -84,6 +85,9 @@ class LocalIKASDMController(BaselinePolicy):
             ``{"n_free": 400, "n_loaded": 200}`` for a quick model); default the paper's 6000.
         seed: seeds the network's training.
         cache: keep the trained network on disk and reuse it.
+        progress: show tqdm bars while the first build explores and trains (about 9 minutes
+            for the paper's exploration on zhao2021 on 2 busy cores, seconds with a quick
+            ``exploration``; nothing when the network comes from the cache). Not saved.
     """
 
     name = "local_ik_asdm"
@@ -91,13 +95,16 @@ class LocalIKASDMController(BaselinePolicy):
     def __init__(self, env, step_mm: float = 8.0, adaptive: bool = True, gain: float = 0.12,
                  tolerance_mm: float = 4.0, settle_s: float = 1.0, max_iterations: int = 1000,
                  batch_size: int = 64, learning_rate: float = 1e-2, skip: bool = True,
-                 exploration: dict | None = None, seed: int = 0, cache: bool = True) -> None:
+                 exploration: dict | None = None, seed: int = 0, cache: bool = True,
+                 progress: bool = True) -> None:
         unwrapped = require_soft_arm_env(env, self.name)
         self.step_mm = require_in_range("step_mm", step_mm, MIN_STEP_MM, MAX_STEP_MM)
-        for name, value in (("adaptive", adaptive), ("skip", skip), ("cache", cache)):
+        for name, value in (("adaptive", adaptive), ("skip", skip), ("cache", cache),
+                            ("progress", progress)):
             if not isinstance(value, (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {value!r}")
         self.adaptive, self.skip, self.cache = bool(adaptive), bool(skip), bool(cache)
+        self.progress = bool(progress)
         self.gain = require_positive("gain", gain)
         self.tolerance_mm = require_positive("tolerance_mm", tolerance_mm)
         self.settle_s = require_positive("settle_s", settle_s)
@@ -121,6 +128,8 @@ class LocalIKASDMController(BaselinePolicy):
         self.hold_steps = max(1, int(round(self.settle_s / spec.control_period_s)))
         self.network: LocalIKNetwork | None = None
         self.training: dict[str, Any] = {}
+        # three decisions (3 s at the paper's settle time) with every chamber beyond its range
+        self.saturation = SaturationWatch(self.name, self.p_low, self.p_high, steps=3)
         self.reset()
 
     # ------------------------------------------------------------------ episode
@@ -132,6 +141,7 @@ class LocalIKASDMController(BaselinePolicy):
         self._previous: tuple[np.ndarray, np.ndarray] | None = None  # (Q_{n-1}, Q_d(n-1))
         self.step_distance_mm = self.step_mm
         self.history: list[dict[str, Any]] = []
+        self.saturation.reset()
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """The action for ``observation``: a new command every ``settle_s``, else the held one
@@ -181,6 +191,7 @@ class LocalIKASDMController(BaselinePolicy):
         else:
             planned = q + self.step_distance_mm * (goal - q) / distance            # eq. (16)
             command = self.network.predict(pressures_pa, q / _MM, planned / _MM, readings)
+            self.saturation.observe(command, goal / _MM)
             command = np.clip(command, self.p_low, self.p_high)  # the regulators' range
         record.update(planned_mm=planned, pressures_pa=command)
         self.history.append(record)
@@ -195,13 +206,15 @@ class LocalIKASDMController(BaselinePolicy):
         gauges = self._gauges()
 
         def compute() -> dict[str, Any]:
-            data = exploration_of(spec, gauges, self._config, self.cache, progress=False)
+            data = exploration_of(spec, gauges, self._config, self.cache,
+                                  progress=self.progress)
             network = LocalIKNetwork(spec.n_chambers, data.readings.shape[1], spec.p_max_pa,
                                      skip=self.skip, seed=self.seed)
             training = network.fit(data.pressures_pa, data.key_points_m[:, -1], data.readings,
                                    max_iterations=self.max_iterations,
                                    batch_size=self.batch_size,
-                                   learning_rate=self.learning_rate, progress=False)
+                                   learning_rate=self.learning_rate,
+                                   progress=self.progress)
             return {"network": network.state(), "training": training}
 
         parts = {"kind": f"{self.name} network", "arm": repr(spec),

@@ -54,10 +54,12 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from tqdm.auto import tqdm
 
 import agents.learners.lwpr
 import agents.learners.rwr_inverse
 from agents.learners.lwpr import LWPR
+from agents.controllers.saturation import SaturationWatch
 from agents.learners.rwr_inverse import RewardWeightedInverse
 from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_npz, write_npz
@@ -108,6 +110,9 @@ class LWPRRWRController(BaselinePolicy):
             they are mostly tracker noise.
         seed: seed of the waypoints and of the pre-training env's reset.
         cache: keep the pre-trained model on disk and reuse it.
+        progress: show tqdm bars while pre-training drives the waypoints and trains the LWPR
+            epochs (about 30 s for 80 waypoints; nothing when the model comes from the cache).
+            Not saved.
     """
 
     name = "lwpr_rwr"
@@ -117,11 +122,12 @@ class LWPRRWRController(BaselinePolicy):
                  rest_actuation: float = 0.2, ridge: float = 20.0, pretrain_waypoints: int = 80,
                  leg_decisions: int = 30, max_epochs: int = 15, init_d: float = 0.25,
                  w_gen: float = 0.2, waypoint_range: float = 0.6, min_step_mm: float = 1.0,
-                 seed: int = 0, cache: bool = True) -> None:
+                 seed: int = 0, cache: bool = True, progress: bool = True) -> None:
         unwrapped = require_soft_arm_env(env, self.name)
-        if not isinstance(online, (bool, np.bool_)):
-            raise ValueError(f"online must be True or False, got {online!r}")
-        self.online = bool(online)
+        for name, value in (("online", online), ("progress", progress)):
+            if not isinstance(value, (bool, np.bool_)):
+                raise ValueError(f"{name} must be True or False, got {value!r}")
+        self.online, self.progress = bool(online), bool(progress)
         self.window = require_integer("window", window, 1)
         self.kp = require_positive("kp", kp)
         self.max_step_mm = require_positive("max_step_mm", max_step_mm)
@@ -157,6 +163,9 @@ class LWPRRWRController(BaselinePolicy):
         self.forward: LWPR | None = None
         self.inverse: RewardWeightedInverse | None = None
         self.pretraining: dict[str, Any] = {}
+        # one second of decisions with every chamber beyond its range: the target is out of reach
+        self.saturation = SaturationWatch(self.name, self.p_low, self.p_high, steps=max(
+            1, round(1.0 / (self.hold_steps * spec.control_period_s))))
         self.reset()
 
     # ------------------------------------------------------------------ episode
@@ -169,6 +178,7 @@ class LWPRRWRController(BaselinePolicy):
         self._step = 0
         self._last_decision: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._pending: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.saturation.reset()
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """The action for ``observation`` (SB3's signature); pre-trains first if it has not
@@ -194,6 +204,8 @@ class LWPRRWRController(BaselinePolicy):
             if size > self.max_step_mm:
                 wanted *= self.max_step_mm / size
             du = self.inverse.predict(wanted, p, self._u)
+            self.saturation.observe(self.p_low + (self._u + du) * (self.p_high - self.p_low),
+                                    target_m)
             u_next = np.clip(self._u + du, 0.0, 1.0)
             self._last_decision = (p, self._u.copy(), u_next - self._u)
             self._u = u_next
@@ -275,7 +287,8 @@ class LWPRRWRController(BaselinePolicy):
                                                                               - self.p_low)))
             samples = []
             p = env.unwrapped.observation_part(observation, "pose")[:3] * _MM
-            for waypoint in waypoints:
+            for waypoint in tqdm(waypoints, desc=f"{self.name} pre-training waypoints",
+                                 disable=not self.progress, leave=False):
                 start = u.copy()
                 for j in range(1, self.leg_decisions + 1):
                     u_next = start + (waypoint - start) * j / self.leg_decisions
@@ -310,7 +323,8 @@ class LWPRRWRController(BaselinePolicy):
         model = LWPR(inputs.shape[1], 3, init_d=init_d, w_gen=self.w_gen,
                      norm_in=norm_in, norm_out=np.full(3, max(float(np.std(dp)), 1e-3)))
         best, best_rmse, history = None, np.inf, []
-        for epoch in range(self.max_epochs):
+        for epoch in tqdm(range(self.max_epochs), desc=f"{self.name} LWPR epochs",
+                          disable=not self.progress, leave=False):
             for index in rng.permutation(train):
                 model.update(inputs[index], dp[index])
             predicted = model.predict_batch(inputs[test])

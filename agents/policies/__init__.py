@@ -13,8 +13,10 @@ in :mod:`agents.controllers` (docs/architecture.md, "Baselines").
 
 from agents.policies.base import BaselinePolicy, check_observation, require_soft_arm_env
 from agents.policies.registry import BASELINES, make_policy
-from agents.policies.sb3 import (SB3_ALGORITHMS, SB3_INTERFACE_KEYS, SHIPPED_DIR, SB3Policy,
-                                 normalization_file, resolve_sb3_path, shipped_agents)
+from agents.policies.sb3 import (NORMALIZATION_MARK, SB3_ALGORITHMS, SB3_INTERFACE_KEYS,
+                                 SHIPPED_DIR, SB3Policy, mark_model_file, mark_normalization,
+                                 model_normalization_mark, normalization_file, resolve_sb3_path,
+                                 shipped_agents)
 
 # Every baseline is lazy ("module:Class", imported when make_policy first builds it), for two
 # reasons. The controllers subclass BaselinePolicy, so importing one runs this package first: an
@@ -28,6 +30,7 @@ BASELINES.register("lwpr_rwr", "agents.controllers.lwpr_rwr:LWPRRWRController", 
 BASELINES.register("local_ik_asdm", "agents.controllers.local_ik_asdm:LocalIKASDMController",
                    lazy=True)
 
-__all__ = ["BASELINES", "BaselinePolicy", "SB3Policy", "SB3_ALGORITHMS", "SB3_INTERFACE_KEYS",
-           "SHIPPED_DIR", "check_observation", "make_policy", "normalization_file",
-           "require_soft_arm_env", "resolve_sb3_path", "shipped_agents"]
+__all__ = ["BASELINES", "BaselinePolicy", "NORMALIZATION_MARK", "SB3Policy", "SB3_ALGORITHMS",
+           "SB3_INTERFACE_KEYS", "SHIPPED_DIR", "check_observation", "make_policy",
+           "mark_model_file", "mark_normalization", "model_normalization_mark",
+           "normalization_file", "require_soft_arm_env", "resolve_sb3_path", "shipped_agents"]

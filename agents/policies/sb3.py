@@ -3,7 +3,10 @@
 :class:`SB3Policy` loads a model ``.zip`` with the VecNormalize statistics that belong to it
 (:func:`normalization_file`) and the env interface of its run's ``config.yaml``
 (:data:`SB3_INTERFACE_KEYS`), and refuses a damaged or mismatched file with one ``ValueError``
-naming the file. :data:`SHIPPED_DIR` holds the agents kept in the repository
+naming the file. A model carries whether it was trained with VecNormalize (its
+:data:`NORMALIZATION_MARK` attribute, saved in the zip's ``data`` entry; :func:`mark_normalization`
+sets it on a model, :func:`mark_model_file` on a saved one), so a bare ``model.zip`` copied without
+its statistics is refused rather than run on raw observations. :data:`SHIPPED_DIR` holds the agents kept in the repository
 (:func:`shipped_agents`; ``sb3:<name>`` loads one, :func:`resolve_sb3_path`).
 """
 
@@ -83,10 +86,54 @@ def _run_config_file(model_path: Path) -> Path | None:
     return next((path for path in candidates if path.is_file()), None)
 
 
-def _trained_with_normalization(model_path: Path, config: dict) -> bool:
-    """Whether the model was trained on normalised observations: its config's ``normalize``
-    hyperparameter is set (as ``train.config`` reads it), or, without a config, statistics of
-    other models lie beside it or in its run directory."""
+NORMALIZATION_MARK = "trained_with_vecnormalize"
+"""The model attribute that says whether it was trained in a VecNormalize wrapper (``True``: its
+statistics, :func:`normalization_file`, belong with it). stable-baselines3 saves every plain
+attribute of a model in the zip's ``data`` entry and restores it on load, so the mark travels with
+the file wherever it is copied."""
+
+
+def _check_mark(normalized: Any) -> bool:
+    """``normalized`` if it is a bool; ``TypeError`` naming it otherwise."""
+    if not isinstance(normalized, bool):
+        raise TypeError(f"normalized must be a bool, got {describe_value(normalized)}")
+    return normalized
+
+
+def mark_normalization(model, normalized: bool) -> None:
+    """Set :data:`NORMALIZATION_MARK` on an SB3 ``model`` (before it is saved)."""
+    setattr(model, NORMALIZATION_MARK, _check_mark(normalized))
+
+
+def mark_model_file(model_path: str | Path, normalized: bool) -> None:
+    """Write :data:`NORMALIZATION_MARK` into a saved model ``.zip``'s ``data`` entry, leaving its
+    other entries (the network weights) as they are; ``ValueError`` naming the file where it is
+    no stable-baselines3 model."""
+    model_path = Path(model_path)
+    data = _check_model_archive(model_path)
+    data[NORMALIZATION_MARK] = _check_mark(normalized)
+    with zipfile.ZipFile(model_path) as archive:
+        entries = [(info, archive.read(info.filename)) for info in archive.infolist()]
+    with zipfile.ZipFile(model_path, "w") as archive:
+        for info, content in entries:
+            if info.filename == "data":
+                content = json.dumps(data, indent=4).encode()
+            archive.writestr(info, content)
+
+
+def model_normalization_mark(model_path: str | Path) -> bool | None:
+    """A saved model's :data:`NORMALIZATION_MARK` (``None`` for a model saved without one)."""
+    mark = _check_model_archive(Path(model_path)).get(NORMALIZATION_MARK)
+    return mark if isinstance(mark, bool) else None
+
+
+def _trained_with_normalization(model_path: Path, config: dict, data: dict) -> bool:
+    """Whether the model was trained on normalised observations: its own
+    :data:`NORMALIZATION_MARK` where it carries one; else (a model saved before the mark) its
+    config's ``normalize`` hyperparameter (as ``train.config`` reads it), or, without a config,
+    whether statistics of other models lie beside it or in its run directory."""
+    if isinstance(data.get(NORMALIZATION_MARK), bool):
+        return data[NORMALIZATION_MARK]
     hyperparameters = config.get("hyperparameters")
     if isinstance(hyperparameters, dict):
         return hyperparameters.get("normalize", False) not in (False, None, "False", "false")
@@ -292,12 +339,14 @@ class SB3Policy(BaselinePolicy):
                              "run directory of python -m train, a model .zip or a shipped agent "
                              f"{sorted(shipped_agents())}")
         config = _read_run_config(_run_config_file(model_path))
+        data = _check_model_archive(model_path)
         normalization_path = normalization_file(model_path)
-        if not normalization_path.is_file() and _trained_with_normalization(model_path, config):
+        normalized = _trained_with_normalization(model_path, config, data)
+        if normalized and not normalization_path.is_file():
             raise ValueError(
                 f"sb3 path {str(path)!r}: the model was trained on normalised observations but "
-                f"its VecNormalize statistics {str(normalization_path)!r} are missing")
-        data = _check_model_archive(model_path)
+                f"its VecNormalize statistics {str(normalization_path)!r} are missing: copy them "
+                f"beside {model_path.name} (without them it would act on raw observations)")
         algorithm = _algorithm(model_path, config, data)
         # lazy: stable-baselines3 costs 1.2 s (-X importtime) that the baselines never need
         import stable_baselines3
@@ -309,8 +358,9 @@ class SB3Policy(BaselinePolicy):
                              f"stable-baselines3 {algorithm} model "
                              f"({type(error).__name__}: {error})") from None
         normalization = None
-        if normalization_path.is_file():
+        if normalized:
             normalization = _load_normalization(normalization_path, model)
+        mark_normalization(model, normalization is not None)  # kept by save()
         policy = cls(model, normalization, config, model_path=model_path)
         if env is not None:
             policy.check_env(env)

@@ -19,11 +19,13 @@ Outputs (under the suite's output directory)
 * ``suite.json``: provenance (suite name, file, its text and SHA-256, seeds, cycles, the
   versions and git revisions of the records, the report's bootstrap settings), counts, the
   leaderboards, the aggregates and the performance profiles.
-* ``aggregate_iqm.png``: per arm and policy, the IQM of ``e`` with its 95 % CI and the mean.
+* ``aggregate_iqm.png``: per arm and policy, the IQM of ``e`` with its 95 % CI and the mean
+  (with one seed there is no interval: the plot and tables say "1 seed: no interval").
 * ``performance_profiles.png``: per arm, the fraction of runs with ``e <= tau`` over a grid of
   ``tau`` (mm), with 95 % CI bands.
 * ``plots/error_<arm>_<path>_<condition>.png``: tracking error and path deviation against time
-  of every policy, first seed; ``plots/trajectory_<arm>_<path>_<condition>.png``: their tips over
+  of every policy, first seed, on one y-scale per arm;
+  ``plots/trajectory_<arm>_<path>_<condition>.png``: their tips over
   the path in the x-y plane (mm).
 
 Aggregates (per arm)
@@ -36,7 +38,9 @@ the task means and the median of the task means, each with a 95 % percentile con
 interval from the stratified bootstrap (runs resampled with replacement within each task,
 ``reps`` resamples); performance profiles ``P(e <= tau)`` over all runs and tasks, their CIs
 from the same bootstrap. With one seed every resample is the data and the CIs collapse to the
-point. The bootstrap draws from numpy's global generator (as ``rliable`` does), seeded with
+point, so the tables and the plot say "1 seed: no interval" instead. Every plot draws a policy in
+its own colour, keyed by its name (:mod:`eval.palette`). The bootstrap draws from numpy's
+global generator (as ``rliable`` does), seeded with
 ``seed`` and restored afterwards, so a report is reproducible.
 
 ``rliable`` is needed for the report (``pip install rliable``); without it :func:`write_report`
@@ -59,8 +63,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from eval.metrics import MM_PER_M
-from eval.report import (markdown_table, package_version, plot_error_time, save_figure,
-                         write_json)
+from eval.palette import policy_color
+from eval.report import (error_peaks_mm, markdown_table, package_version, plot_error_time,
+                         save_figure, write_json)
 from eval.suite.grid import Cell, expand
 from eval.suite.spec import SuiteSpec
 from eval.suite.store import git_revision, library_versions, read_record, read_steps
@@ -410,9 +415,9 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
             aggregate_rows.append({
                 "policy": policy,
                 "IQM (mm)": _fmt(stats["iqm_mm"]),
-                "IQM 95% CI": "[" + ", ".join(_fmt(v) for v in stats["iqm_ci_mm"]) + "]",
+                "IQM 95% CI": _interval_text(stats, "iqm"),
                 "mean (mm)": _fmt(stats["mean_mm"]),
-                "mean 95% CI": "[" + ", ".join(_fmt(v) for v in stats["mean_ci_mm"]) + "]",
+                "mean 95% CI": _interval_text(stats, "mean"),
                 "median (mm)": _fmt(stats["median_mm"]),
                 "runs x tasks": f"{stats['n_runs']} x {stats['n_tasks']}",
             })
@@ -476,8 +481,26 @@ def _figure(width_in: float, height_in: float, nrows: int, ncols: int = 1):
 
 
 def _colors(policies: Mapping[str, Any]) -> dict[str, str]:
-    """One colour per policy of an arm, in the suite's order (the same in every plot)."""
-    return {policy: f"C{i % 10}" for i, policy in enumerate(policies)}
+    """Each policy's colour, keyed by its name (:func:`eval.palette.policy_color`: the same in
+    every plot and panel)."""
+    return {policy: policy_color(policy) for policy in policies}
+
+
+NO_INTERVAL = "1 seed: no interval"
+"""What the tables and the aggregate plot say instead of a confidence interval when a policy
+has one run per task: every bootstrap resample is the data, so the interval is the point."""
+
+
+def _has_interval(stats: Mapping[str, Any]) -> bool:
+    """Whether an aggregate has a confidence interval (more than one run per task)."""
+    return int(stats.get("n_runs", 0)) > 1
+
+
+def _interval_text(stats: Mapping[str, Any], name: str) -> str:
+    """``[low, high]`` of ``stats[name + "_ci_mm"]``, or :data:`NO_INTERVAL`."""
+    if not _has_interval(stats):
+        return NO_INTERVAL
+    return "[" + ", ".join(_fmt(v) for v in stats[f"{name}_ci_mm"]) + "]"
 
 
 def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> None:
@@ -491,15 +514,19 @@ def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> No
         colors = _colors(per_arm[preset]["aggregates"])
         stats = sorted(per_arm[preset]["aggregates"].items(), key=lambda item: item[1]["iqm_mm"])
         for y, (policy, values) in enumerate(stats):
-            low, high = values["iqm_ci_mm"]
-            ax.plot([low, high], [y, y], "-", color=colors[policy], lw=5, alpha=0.45,
-                    solid_capstyle="butt")
+            if _has_interval(values):
+                low, high = values["iqm_ci_mm"]
+                ax.plot([low, high], [y, y], "-", color=colors[policy], lw=5, alpha=0.45,
+                        solid_capstyle="butt")
             ax.plot(values["iqm_mm"], y, "o", color=colors[policy], ms=6)
             ax.plot(values["mean_mm"], y, "x", color="k", ms=6)
         ax.set_yticks(range(len(stats)), [policy for policy, _ in stats])
         ax.set_ylim(len(stats) - 0.3, -0.7)  # the best on top
         ax.set_xlim(left=0.0)
-        ax.set_title(f"{preset}: IQM of the last-cycle error, 95% CI (bar); mean (x)",
+        intervals = [_has_interval(values) for _, values in stats]
+        interval = ("95% CI (bar)" if all(intervals) else NO_INTERVAL if not any(intervals)
+                    else f"95% CI (bar; {NO_INTERVAL} where none)")
+        ax.set_title(f"{preset}: IQM of the last-cycle error, {interval}; mean (x)",
                      fontsize=9)
         ax.grid(axis="x", alpha=0.3)
     axes[-1, 0].set_xlabel("last-cycle tracking error (mm), lower is better")
@@ -550,14 +577,22 @@ def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapp
         if labels["seed"] == seed and status.get(cell.key) == "done":
             groups.setdefault((labels["preset"], labels["path"], labels["condition"]),
                               {})[labels["policy"]] = cell.key
-    for (preset, path, condition), keys in groups.items():
+    loaded: dict[tuple[str, str, str], dict[str, Mapping[str, np.ndarray]]] = {}
+    for group, keys in groups.items():
         records = {policy: read_steps(out, key) for policy, key in keys.items()}
         records = {policy: record for policy, record in records.items() if record is not None}
-        if not records:
-            continue
+        if records:
+            loaded[group] = records
+    # one y-scale for every error plot of an arm, so its conditions and paths compare by eye
+    peaks: dict[str, list[float]] = {}
+    for (preset, _, _), records in loaded.items():
+        arm = peaks.setdefault(preset, [0.0, 0.0])
+        arm[:] = np.maximum(arm, error_peaks_mm(list(records.values()))).tolist()
+    for (preset, path, condition), records in loaded.items():
         stem = f"{_file_part(preset)}_{_file_part(path)}_{_file_part(condition)}"
         title = f"{preset} {path}, {condition} (seed {seed})"
-        plot_error_time(directory / f"error_{stem}.png", records, title)
+        plot_error_time(directory / f"error_{stem}.png", records, title,
+                        ymax_mm=peaks[preset])
         _plot_trajectories(directory / f"trajectory_{stem}.png", records, title)
 
 
@@ -571,9 +606,9 @@ def _plot_trajectories(path: Path, records: Mapping[str, Mapping[str, np.ndarray
         line = np.asarray(first["polyline_m"], dtype=float) * MM_PER_M
         closed = np.vstack((line, line[:1]))
         ax.plot(closed[:, 0], closed[:, 1], color="0.6", lw=3, alpha=0.6, label="path")
-    for i, (policy, record) in enumerate(records.items()):
+    for policy, record in records.items():
         tip = np.asarray(record["tip_m"], dtype=float) * MM_PER_M
-        ax.plot(tip[:, 0], tip[:, 1], "-", color=f"C{i % 10}", lw=1.1, label=policy)
+        ax.plot(tip[:, 0], tip[:, 1], "-", color=policy_color(policy), lw=1.1, label=policy)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")

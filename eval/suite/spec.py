@@ -10,6 +10,7 @@ envs.
 from __future__ import annotations
 
 import copy
+import difflib
 import hashlib
 import inspect
 import os
@@ -22,7 +23,7 @@ from typing import Any
 import yaml
 
 from agents.policies import BASELINES
-from eval.compare import policy_label
+from eval.palette import policy_label
 from soft_gym.envs.config import CONFIG_FIELDS
 from soft_gym.robots.presets import PRESETS
 from soft_gym.sensing import FEEDBACK_SOURCES
@@ -131,8 +132,17 @@ def resolve_suite_path(spec: str | os.PathLike) -> Path:
     bundled = bundled_suites()
     if str(spec) in bundled:
         return bundled[str(spec)]
-    raise ValueError(f"suite must be a YAML file or a bundled suite name from "
-                     f"{sorted(bundled)}, got {str(spec)!r}")
+    names = sorted(bundled)
+    if path.is_dir():
+        raise ValueError(f"suite {str(spec)!r} is a directory, not a YAML file or a bundled "
+                         f"suite name from {names}")
+    close = difflib.get_close_matches(path.stem, names, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    if path.suffix in (".yaml", ".yml") or len(path.parts) > 1:
+        raise ValueError(f"suite file {str(spec)!r} not found (no such file); the bundled "
+                         f"suites are {names}{hint}")
+    raise ValueError(f"suite {str(spec)!r} not found: no such file and no bundled suite of that "
+                     f"name (the bundled ones are {names}){hint}")
 
 
 class _UniqueKeyLoader(yaml.SafeLoader):

@@ -4,12 +4,15 @@ The robot's sensing (:class:`~soft_gym.sensing.wang2023.pipeline.SensingPipeline
 watches: :func:`calibrate_pipeline` drives a simulator through the predefined spiral actuation
 (wang2023 Section IV-B; :func:`~soft_gym.sensing.wang2023.exploration.spiral_fractions`), reads the
 pipeline's camera and fiber every control step and hands each step to the pipeline, which keeps
-the camera-labelled FBG samples and initialises F-emp from them (eqs. 9-17).
+the camera-labelled FBG samples and initialises F-emp from them (eqs. 9-17). It takes about 7 s
+on an idle core (longer on a loaded one; then cached on disk), so a tqdm bar shows its progress
+once it has run for :data:`PROGRESS_DELAY_S`.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.sensing.wang2023.exploration import spiral_fractions
@@ -18,8 +21,12 @@ from soft_gym.sensors.reading import measure
 from soft_gym.simulator import Simulator
 
 
+PROGRESS_DELAY_S = 2.0
+"""Seconds a calibration runs before its progress bar appears (a quick one shows none)."""
+
+
 def calibrate_pipeline(pipeline: SensingPipeline, sim: Simulator,
-                       rng: np.random.Generator) -> int:
+                       rng: np.random.Generator, progress: bool = True) -> int:
     """Vision map at the current (rest) pose, then F-emp from the spiral exploration
     (``map_steps`` steps for the map alone, then ``n_init`` labelled steps).
 
@@ -27,6 +34,8 @@ def calibrate_pipeline(pipeline: SensingPipeline, sim: Simulator,
         pipeline: the pipeline to calibrate (its camera and fiber are read on ``sim``).
         sim: the arm at rest; the exploration leaves it wherever it ends.
         rng: the sensors' noise generator.
+        progress: show a tqdm bar (on stderr) once the calibration has run for
+            :data:`PROGRESS_DELAY_S`.
 
     Returns:
         The number of camera-labelled samples F-emp was initialised with.
@@ -39,7 +48,8 @@ def calibrate_pipeline(pipeline: SensingPipeline, sim: Simulator,
     spec = sim.spec
     sensors = {"image": camera, "fbg": fiber}
     samples = []
-    for step in range(pipeline.calibration_steps):
+    for step in tqdm(range(pipeline.calibration_steps), desc="wang2023 sensing calibration",
+                     disable=not progress, leave=False, delay=PROGRESS_DELAY_S):
         fraction = spiral_fractions(step * spec.control_period_s, spec.n_segments,
                                     **pipeline.exploration)
         sim.set_pressures(pressure_at_fraction(spec, fraction))

@@ -210,6 +210,11 @@ EVAL_BAD = [
     (["zou2022", "--epochs", "0"], "--epochs", ">= 1"),
     (["zou2022", "--poses", "0"], "--poses", ">= 1"),
     (["suite", "small", "--out", NOT_A_DIR], "--out", None),
+    (EVAL_TRACK + ["--faults", "not a name!"], "--faults", "JSON"),
+    (EVAL_TRACK + ["--faults", "nonsense"], "--faults", "wang2023_occlusion"),
+    (EVAL_TRACK + ["--obs", "pose", "nonsense"], "--obs", "strain"),
+    (["suite", "nowhere/missing.yaml"], "spec", "not found"),
+    (["suite", "smal"], "spec", "did you mean 'small'"),
 ]
 
 
@@ -279,6 +284,51 @@ def test_eval_track_keeps_the_runs_finished_before_a_later_run_fails(tmp_path, m
     assert not (out / "hybrid_gpr_kp0.06_seed0.csv").exists()
 
 
+def test_eval_track_takes_a_plain_fault_name_and_runs_local_ik_asdm_with_the_obs_it_needs(
+        tmp_path, monkeypatch):
+    """``--faults wang2023_occlusion`` is the fault of that name (no JSON quoting);
+    ``local_ik_asdm`` (no K_p) runs once per seed on an env with the parts it reads, which
+    ``--obs`` replaces for every policy; SB3 agents keep their own interface."""
+    import eval.runner as runner
+    from eval.suite.spec import POLICY_ENV_DEFAULTS
+
+    seen = []
+
+    def run_many(configs, workers=1, progress=False, on_result=None):
+        seen.extend(configs)
+        records = [_fake_record() for _ in configs]
+        for index, record in enumerate(records):
+            on_result(index, record)
+        return records
+
+    monkeypatch.setattr(runner, "run_many", run_many)
+    out = tmp_path / "track"
+    eval_main.main(["track", "--preset", "zhao2021", "--policies", "local_ik_asdm", "lwpr_rwr",
+                    "--kp", "0.3", "0.5", "--cycles", "1", "--feedback", "ground_truth",
+                    "--workers", "1", "--out", str(out)])
+    by_policy = {}
+    for config in seen:
+        by_policy.setdefault(config.policy, []).append(config)
+    (ik,) = by_policy["local_ik_asdm"]
+    assert ik.policy_params == {}
+    assert ik.env_kwargs["obs"] == POLICY_ENV_DEFAULTS["local_ik_asdm"]["obs"]
+    assert [c.policy_params for c in by_policy["lwpr_rwr"]] == [{"kp": 0.3}, {"kp": 0.5}]
+    assert all("obs" not in c.env_kwargs for c in by_policy["lwpr_rwr"])
+    assert (out / "local_ik_asdm_seed0.csv").is_file()
+    seen.clear()
+    eval_main.main(["track", "--policies", "cc_model", "--cycles", "1", "--feedback",
+                    "ground_truth", "--obs", "pose", "target", "pressure", "strain",
+                    "--workers", "1", "--out", str(tmp_path / "obs")])
+    (config,) = seen
+    assert config.env_kwargs["obs"] == ["pose", "target", "pressure", "strain"]
+    seen.clear()
+    eval_main.main(["track", "--policies", "cc_model", "--cycles", "1", "--feedback", "camera",
+                    "--faults", "wang2023_occlusion", "--workers", "1",
+                    "--out", str(tmp_path / "faults")])
+    (config,) = seen
+    assert config.env_kwargs["faults"] == "wang2023_occlusion"
+
+
 def test_run_many_hands_each_record_over_as_it_finishes_and_stops_at_a_failure(monkeypatch):
     import eval.runner as runner
 
@@ -310,6 +360,7 @@ TRAIN_BAD = [
     (["--algo", "ppo", "-hp", "n_steps=0"], "--hyperparams", "n_steps"),
     (["--algo", "ppo", "-hp", "buffer_size=10"], "--hyperparams", "n_epochs"),
     (["--eval-freq", "-1"], "--eval-freq", ">= 0"),
+    (["--env", "SoftArmTrackWang2023"], "--env", "did you mean 'SoftArmTrackWang2023-v0'?"),
     (["--eval-episodes", "0"], "--eval-episodes", ">= 1"),
     (["--checkpoint-freq", "-1"], "--checkpoint-freq", ">= 0"),
     (["--threads", "0"], "--threads", ">= 1"),

@@ -3,6 +3,8 @@ resume, and rl-baselines3-zoo training the registered ids."""
 
 from __future__ import annotations
 
+import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -14,7 +16,7 @@ import torch.nn as nn
 import yaml
 
 import soft_gym  # noqa: F401
-from agents.policies import make_policy
+from agents.policies import SHIPPED_DIR, make_policy, model_normalization_mark
 from train.__main__ import main as train_main
 from train.config import (ALGORITHMS, check_hyperparameters, parse_key_values,
                           parse_python_value, read_hyperparameters, split_hyperparameters)
@@ -118,6 +120,8 @@ def test_smoke_training_saves_a_model_that_loads_back_identically(tmp_path, algo
     assert versions["git_revision"] != "" and versions["torch"].startswith("2.13")
     config = yaml.safe_load((run_dir / "config.yaml").read_text())
     assert config["env_kwargs"]["feedback"] == "ground_truth" and config["algo"] == algo
+    assert model_normalization_mark(run_dir / "model.zip") is True
+    assert model_normalization_mark(run_dir / "best_model.zip") is True
 
     env = gym.make("SoftArmTrackWang2023-v0", **FAST_ENV)
     loaded = make_policy(f"sb3:{run_dir}", env=env)
@@ -164,12 +168,33 @@ def test_checkpoints_load_with_their_own_normalization_or_are_refused(tmp_path):
     np.testing.assert_array_equal(policy.normalization.obs_rms.mean, saved.obs_rms.mean)
     assert not np.array_equal(policy.normalization.obs_rms.mean, final.obs_rms.mean)
     assert policy.config["algo"] == "sac"  # the run's config.yaml, above checkpoints/
+    assert model_normalization_mark(checkpoint) is True
+    bare = tmp_path / "bare" / "model.zip"  # the final model copied alone, without a config
+    bare.parent.mkdir()
+    bare.write_bytes((run_dir / "model.zip").read_bytes())
+    with pytest.raises(ValueError, match=re.escape(str(bare.parent / "vecnormalize.pkl"))):
+        make_policy(f"sb3:{bare}", env=env)
     statistics.unlink()
     with pytest.raises(ValueError, match="sac_vecnormalize_200_steps.pkl"):
         make_policy(f"sb3:{checkpoint}", env=env)
     (run_dir / "vecnormalize.pkl").unlink()
     with pytest.raises(ValueError, match="vecnormalize.pkl"):
         make_policy(f"sb3:{run_dir}", env=env)
+    env.close()
+
+
+def test_a_model_trained_without_normalization_is_marked_so_and_ignores_stray_statistics(
+        tmp_path):
+    run_dir = train(TrainRequest(algo="ppo", env_kwargs=FAST_ENV, timesteps=128,
+                                 hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1,
+                                                  "normalize": False},
+                                 out_dir=str(tmp_path), eval_freq=0, checkpoint_freq=0,
+                                 progress=False))
+    assert not (run_dir / "vecnormalize.pkl").exists()
+    assert model_normalization_mark(run_dir / "model.zip") is False
+    shutil.copy(SHIPPED_DIR / "sac_wang2023_track" / "vecnormalize.pkl", run_dir)
+    env = gym.make("SoftArmTrackWang2023-v0", **FAST_ENV)
+    assert make_policy(f"sb3:{run_dir}", env=env).normalization is None
     env.close()
 
 

@@ -13,6 +13,7 @@ import pytest
 
 import soft_gym  # noqa: F401
 from agents.controllers.local_ik_asdm import LocalIKASDMController
+from agents.controllers.saturation import SaturationWatch
 from agents.learners.local_ik import LocalIKNetwork
 from agents.policies import make_policy
 
@@ -46,6 +47,8 @@ def _run_plant(controller, gain: float, start_mm, goal_mm, steps: int = 200):
     controller.network = _LinearPlantInverse(jacobian, gain)
     controller.p_low = np.full(6, -1e9)
     controller.p_high = np.full(6, 1e9)  # an unbounded plant: only the method is under test
+    controller.saturation = SaturationWatch(controller.name, controller.p_low, controller.p_high,
+                                            steps=3)
     pressures = np.linalg.pinv(jacobian) @ (np.asarray(start_mm) / 1000.0)
     goal = np.asarray(goal_mm) / 1000.0
     distances = []
@@ -170,3 +173,21 @@ def test_controller_saves_and_loads_back_identically(env, tmp_path):
     path.write_bytes(path.read_bytes()[:-7])
     with pytest.raises(ValueError, match="controller.bin"):
         LocalIKASDMController.load(path, env=env)
+
+
+def test_the_first_build_shows_progress_of_its_exploration_and_training(env, capsys):
+    """The first build (exploration, then training) shows tqdm bars on stderr; with
+    ``progress=False`` it is silent, and the setting does not change the network."""
+    exploration = {"n_free": 60, "n_loaded": 0}
+    shown = LocalIKASDMController(env, exploration=exploration, max_iterations=5, cache=False)
+    shown.pretrain()
+    err = capsys.readouterr().err
+    assert "zhao2021 exploration" in err and "/60" in err
+    assert "local IK training" in err and "/5" in err
+    quiet = LocalIKASDMController(env, exploration=exploration, max_iterations=5, cache=False,
+                                  progress=False)
+    quiet.pretrain()
+    assert capsys.readouterr().err == ""
+    assert quiet.training == shown.training
+    with pytest.raises(ValueError, match="progress must be True or False, got 'yes'"):
+        make_policy("local_ik_asdm", env=env, progress="yes")

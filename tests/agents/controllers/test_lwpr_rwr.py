@@ -234,3 +234,21 @@ def test_pretraining_is_cached_on_disk_and_a_corrupt_file_is_rebuilt(tmp_path, m
     env.close()
 
 
+
+
+def test_pretraining_shows_progress_of_its_waypoints_and_epochs(capsys):
+    """Pre-training shows tqdm bars on stderr (the waypoints driven, the LWPR epochs); with
+    ``progress=False`` it is silent, and the setting does not change the model."""
+    env = _env()
+    shown = make_policy("lwpr_rwr", env, cache=False, **TINY)
+    shown.pretrain()
+    err = capsys.readouterr().err
+    assert "lwpr_rwr pre-training waypoints" in err and "/6" in err
+    assert "lwpr_rwr LWPR epochs" in err
+    quiet = make_policy("lwpr_rwr", env, cache=False, progress=False, **TINY)
+    quiet.pretrain()
+    assert capsys.readouterr().err == ""
+    assert np.array_equal(quiet.inverse.betas, shown.inverse.betas)
+    with pytest.raises(ValueError, match="progress must be True or False, got 1"):
+        make_policy("lwpr_rwr", env, progress=1)
+    env.close()

@@ -28,7 +28,9 @@ from agents.learners.local_ik import LocalIKNetwork
 from agents.learners.lwpr import LWPR
 from agents.learners.rwr_inverse import RewardWeightedInverse
 from agents.learners.sliding_gp import SlidingWindowGP
-from agents.policies import BASELINES, SB3Policy, SHIPPED_DIR, check_observation, make_policy
+from agents.policies import (BASELINES, NORMALIZATION_MARK, SB3Policy, SHIPPED_DIR,
+                             check_observation, make_policy, mark_model_file,
+                             model_normalization_mark)
 from eval.runner import RunConfig, run, run_episode
 from soft_gym._model_files import write_model_state
 from soft_gym.envs import SoftArmEnv
@@ -433,6 +435,56 @@ def test_an_sb3_agent_saves_and_loads_back_identically(tmp_path, track):
         np.testing.assert_array_equal(getattr(policy.normalization.obs_rms, name),
                                       getattr(again.normalization.obs_rms, name))
     assert again.config == policy.config and again.env_interface == policy.env_interface
+
+
+@pytest.mark.smoke
+@pytest.mark.parametrize("agent", sorted(path.name for path in SHIPPED_DIR.iterdir()
+                                         if (path / "model.zip").is_file()))
+def test_a_bare_shipped_model_zip_without_its_statistics_is_refused_naming_them(tmp_path, agent):
+    """A shipped model.zip copied alone (no config.yaml, no vecnormalize.pkl) carries its own
+    mark that it was trained with VecNormalize, so loading it names the missing file instead of
+    running it on raw observations."""
+    assert model_normalization_mark(SHIPPED_DIR / agent / "model.zip") is True
+    bare = tmp_path / "model.zip"
+    shutil.copy(SHIPPED_DIR / agent / "model.zip", bare)
+    message = _refused(rf"normalised observations but its VecNormalize statistics "
+                       rf"'{_named(tmp_path / 'vecnormalize.pkl')}' are missing",
+                       lambda: SB3Policy.load(bare))
+    assert "copy them beside model.zip" in message
+
+
+def test_the_mark_is_written_into_the_data_entry_alone_and_decides_the_statistics(tmp_path,
+                                                                                    track):
+    """mark_model_file changes the mark and nothing else of the archive; a model marked as
+    trained without VecNormalize ignores statistics lying beside it, one marked with them
+    applies them, and a saved policy keeps its mark."""
+    directory = tmp_path / "agent"
+    shutil.copytree(SHIPPED, directory)
+    model = directory / "model.zip"
+    mark_model_file(model, False)
+    with zipfile.ZipFile(SHIPPED / "model.zip") as before, zipfile.ZipFile(model) as after:
+        assert before.namelist() == after.namelist()
+        for name in before.namelist():
+            if name != "data":
+                assert before.read(name) == after.read(name), name
+        data_before = json.loads(before.read("data"))
+        data_after = json.loads(after.read("data"))
+    assert data_before.pop(NORMALIZATION_MARK) is True and data_after.pop(NORMALIZATION_MARK) is False
+    assert data_before == data_after
+    observation, _ = track.reset(seed=0)
+    raw = SB3Policy.load(model, env=track)
+    assert raw.normalization is None and getattr(raw.model, NORMALIZATION_MARK) is False
+    normalised = SB3Policy.load(SHIPPED, env=track)
+    from stable_baselines3 import SAC
+
+    np.testing.assert_array_equal(raw.predict(observation)[0],
+                                  SAC.load(model, device="cpu").predict(observation,
+                                                                        deterministic=True)[0])
+    assert not np.array_equal(raw.predict(observation)[0], normalised.predict(observation)[0])
+    normalised.save(tmp_path / "saved")
+    assert model_normalization_mark(tmp_path / "saved" / "model.zip") is True
+    with pytest.raises(TypeError, match="normalized must be a bool, got"):
+        mark_model_file(model, 1)
 
 
 def _zip_with(entries: dict[str, bytes]) -> bytes:

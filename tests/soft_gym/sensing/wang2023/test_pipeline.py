@@ -273,6 +273,24 @@ def test_calibration_needs_ten_labelled_samples(fake_vision) -> None:
     assert calibrate_pipeline(pipeline, FakeSim(), np.random.default_rng(0)) == 10
 
 
+def test_a_calibration_longer_than_its_delay_shows_a_progress_bar(fake_vision, monkeypatch,
+                                                                  capsys) -> None:
+    """The spiral calibration shows a tqdm bar on stderr once it has run longer than
+    PROGRESS_DELAY_S (here 0 s, so at once); progress=False keeps it silent; the result is the
+    same either way."""
+    import soft_gym.procedures.wang2023_calibration as calibration
+
+    def calibrated(**kwargs) -> int:
+        pipeline = SensingPipeline(FakeCamera(), FakeFiber(), n_init=30, femp={"n_hidden": 5})
+        return calibrate_pipeline(pipeline, FakeSim(), np.random.default_rng(0), **kwargs)
+
+    monkeypatch.setattr(calibration, "PROGRESS_DELAY_S", 0.0)
+    count = calibrated()
+    err = capsys.readouterr().err
+    assert "wang2023 sensing calibration" in err
+    assert calibrated(progress=False) == count and capsys.readouterr().err == ""
+
+
 # ------------------------------------------------------------------ one step
 def _calibrated(fake_vision, **options) -> SensingPipeline:
     pipeline = SensingPipeline(FakeCamera(), FakeFiber(), n_init=40, femp={"n_hidden": 15},
