@@ -38,8 +38,7 @@ import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies.sb3 import mark_normalization
 from train.batched import Sb3VectorEnv
 from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class,
-                          build_action_noise,
-                          read_hyperparameters, split_hyperparameters)
+                          build_action_noise, read_hyperparameters, split_hyperparameters)
 from train.curves import plot_learning_curve
 
 MODEL_FILE = "model.zip"
