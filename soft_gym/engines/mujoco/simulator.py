@@ -62,8 +62,14 @@ class MujocoArmSimulator(CommonArm):
         self.per_actuation = max(1, int(round(spec.actuation_update_s / self.physics_dt_s)))
         self.chain = build_chain(spec)
         self._arm: ArmModel = build_arm_model(spec, self.chain, self.physics_dt_s)
-        self.model = self._arm.model
-        self.data = mujoco.MjData(self.model)
+        # the same arm without the end stops' tendons, for while no joint is near a stop
+        free = build_arm_model(spec, self.chain, self.physics_dt_s, stops=False).model
+        self._models = {True: self._arm.model, False: free}
+        self._datas = {True: mujoco.MjData(self._arm.model), False: mujoco.MjData(free)}
+        self.with_stops = True
+        self.model, self.data = self._models[True], self._datas[True]
+        stops = self.chain.end_stops()
+        self._free_centre, self._free_half_width = stops.free_centre, stops.free_half_width
         self.world = MujocoWorld()
         self._readout = ChainReadout(spec, self.chain)
         self._bodies = self._arm.body_ids[0]
@@ -89,7 +95,8 @@ class MujocoArmSimulator(CommonArm):
         self.forces_started = False  # forces applied since the reset (else no midpoint step)
         self._payload: dict[str, float] = {}
         self.gravity = spec.gravity_base.copy()
-        self.model.opt.gravity[:] = self.gravity
+        for model in self._models.values():
+            model.opt.gravity[:] = self.gravity
         self.loads: list[Load] = []
         self.time_s = 0.0
         self.substep = 0
@@ -114,6 +121,7 @@ class MujocoArmSimulator(CommonArm):
             start = weightless_equilibrium(self._pressure_to_rest @ effective, self.chain)
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = start
+        self.choose_model()
         self.forces_started = False
         self.wrench = self.wrench_previous = None
         self.time_s = 0.0
@@ -141,6 +149,7 @@ class MujocoArmSimulator(CommonArm):
         """Set every joint's position (rad or m) at rest, e.g. to impose a shape in a test."""
         self.data.qpos[:] = as_finite_array("positions", positions, shape=(self.chain.n_joints,))
         self.data.qvel[:] = 0.0
+        self.choose_model()
         self._kinematics_substep = self._tip_substep = -1
 
     def close(self) -> None:
@@ -199,7 +208,8 @@ class MujocoArmSimulator(CommonArm):
     def set_gravity(self, vector_m_s2: np.ndarray) -> None:
         """Set gravity in the base frame (m/s^2)."""
         self.gravity = as_finite_array("vector_m_s2", vector_m_s2, shape=(3,))
-        self.model.opt.gravity[:] = self.gravity
+        for model in self._models.values():
+            model.opt.gravity[:] = self.gravity
         if self._payload:
             self._apply_payload()
 
@@ -234,8 +244,9 @@ class MujocoArmSimulator(CommonArm):
             load.detach(self)
         self.loads.clear()
         self._payload.clear()
-        self.model.body_mass[:] = self._nominal_mass
-        self.model.body_inertia[:] = self._nominal_inertia
+        for model in self._models.values():
+            model.body_mass[:] = self._nominal_mass
+            model.body_inertia[:] = self._nominal_inertia
         self._held.clear()
 
     def set_stiffness_scale(self, scale: float) -> None:
@@ -245,9 +256,47 @@ class MujocoArmSimulator(CommonArm):
         scale = require_positive("scale", scale)
         self._pressure_to_rest = self._pressure_to_rest_nominal / scale
         self._stiffness0 = scale / self.chain.compliance
-        self.model.jnt_stiffness[:] = self._nominal_stiffness * scale
-        self.model.jnt_stiffnesspoly[:] = self._nominal_cubic * scale
-        self.model.dof_damping[:] = self._nominal_damping * scale
+        for model in self._models.values():
+            model.jnt_stiffness[:] = self._nominal_stiffness * scale
+            model.jnt_stiffnesspoly[:] = self._nominal_cubic * scale
+            model.dof_damping[:] = self._nominal_damping * scale
+
+    @property
+    def model_with_stops(self) -> mujoco.MjModel:
+        """The arm's full model, with the end stops' tendons (``model`` is the one carrying the
+        arm now, which lacks them while every joint is far from its stops)."""
+        return self._models[True]
+
+    def near_stops(self, lookahead_s: float = 0.0) -> bool:
+        """Whether a joint is in (or, moving at its present speed, could within
+        ``lookahead_s`` reach) the band where a stop acts."""
+        reach = np.abs(self.data.qpos - self._free_centre)
+        if lookahead_s:
+            reach += np.abs(self.data.qvel) * lookahead_s
+        return bool((reach >= self._free_half_width).any())
+
+    def save_state(self) -> tuple:
+        """The state a block of substeps starts from (time, positions, velocities)."""
+        return self.data.time, self.data.qpos.copy(), self.data.qvel.copy()
+
+    def restore_state(self, state: tuple) -> None:
+        """Put back a state from :meth:`save_state`."""
+        self.data.time, self.data.qpos[:], self.data.qvel[:] = state[0], state[1], state[2]
+
+    def choose_model(self, lookahead_s: float = 0.0, force_stops: bool = False) -> None:
+        """Carry the arm on the model with the end stops' tendons if it is near a stop
+        (:meth:`near_stops`, or ``force_stops``), else on the model without them; the state
+        moves across when the choice changes."""
+        near = force_stops or self.near_stops(lookahead_s)
+        if near == self.with_stops:
+            return
+        old, new = self.data, self._datas[near]
+        new.time = old.time
+        new.qpos[:], new.qvel[:] = old.qpos, old.qvel
+        new.qfrc_applied[:], new.xfrc_applied[:] = old.qfrc_applied, old.xfrc_applied
+        self.with_stops = near
+        self.model, self.data = self._models[near], new
+        self.forget_reads()
 
     def held_wrench(self) -> np.ndarray | None:
         """The held forces as body wrenches at each body's centre of mass (N, N m; (n_bodies,
@@ -286,9 +335,10 @@ class MujocoArmSimulator(CommonArm):
         com = np.asarray(self.chain.sub_links.inertial_positions[self.chain.tip_link], float)
         tip_point = np.array([0.0, 0.0, self.chain.station_rest_length[-1]])
         lever_m = np.linalg.norm(tip_point - com)
-        self.model.body_mass[body] = self._nominal_mass[body] + payload
-        self.model.body_inertia[body] = (self._nominal_inertia[body]
-                                         + payload * lever_m**2 * np.array([1.0, 1.0, 0.0]))
+        for model in self._models.values():
+            model.body_mass[body] = self._nominal_mass[body] + payload
+            model.body_inertia[body] = (self._nominal_inertia[body]
+                                        + payload * lever_m**2 * np.array([1.0, 1.0, 0.0]))
         weight = payload * self.gravity
         self._held.set("payload_tip", -1, weight, tuple(tip_point), on_body=False)
         self._held.set("payload_com", -1, -weight, tuple(com), on_body=False)

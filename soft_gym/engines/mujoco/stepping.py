@@ -45,12 +45,27 @@ class MujocoArm(Protocol):
     wrench: np.ndarray | None
     wrench_previous: np.ndarray | None
     forces_started: bool
+    with_stops: bool
+
+    def choose_model(self, lookahead_s: float = 0.0, force_stops: bool = False) -> None: ...
+
+    def near_stops(self, lookahead_s: float = 0.0) -> bool: ...
+
+    def save_state(self) -> tuple: ...
+
+    def restore_state(self, state: tuple) -> None: ...
 
     def held_wrench(self) -> np.ndarray | None: ...
 
     def forget_reads(self) -> None: ...
 
     def check_within_stops(self) -> None: ...
+
+
+STOP_LOOKAHEAD_UPDATES = 4
+"""An arm moves to its model with the end stops once a joint, at its present speed, could reach
+a stop's band within this many actuation updates (see :meth:`MujocoArmSimulator.choose_model
+<soft_gym.engines.mujoco.simulator.MujocoArmSimulator.choose_model>`)."""
 
 
 def pressure_moments(moments: np.ndarray, effective_pa: np.ndarray) -> np.ndarray:
@@ -94,20 +109,36 @@ def _or_zero(wrench: np.ndarray | None, data: mujoco.MjData) -> np.ndarray:
     return np.zeros_like(data.xfrc_applied) if wrench is None else wrench
 
 
-def _substeps(sims: Sequence[MujocoArm], pieces: int, at_update: bool) -> None:
-    """Run ``pieces`` substeps of every arm (one thread's share)."""
+def _arm_block(sim: MujocoArm, pieces: int, at_update: bool) -> None:
+    """Run ``pieces`` substeps of one arm; the forces are written first at an update."""
     step = mujoco.mj_step
+    remaining = pieces
+    if at_update and sim.forces_started:
+        write_forces(sim, midpoint=True)
+        step(sim.model, sim.data)
+        remaining -= 1
+    if at_update:
+        write_forces(sim, midpoint=False)
+        sim.forces_started = True
+    if remaining:
+        step(sim.model, sim.data, remaining)
+
+
+def _substeps(sims: Sequence[MujocoArm], pieces: int, at_update: bool) -> None:
+    """Run ``pieces`` substeps of every arm (one thread's share). An arm on the model without
+    the stops' tendons that ends the block near a stop runs the block again on the full model,
+    from the state it started from."""
     for sim in sims:
-        remaining = pieces
-        if at_update and sim.forces_started:
-            write_forces(sim, midpoint=True)
-            step(sim.model, sim.data)
-            remaining -= 1
-        if at_update:
-            write_forces(sim, midpoint=False)
-            sim.forces_started = True
-        if remaining:
-            step(sim.model, sim.data, remaining)
+        if sim.with_stops:
+            _arm_block(sim, pieces, at_update)
+            continue
+        start, started = sim.save_state(), sim.forces_started
+        _arm_block(sim, pieces, at_update)
+        if sim.near_stops():
+            sim.restore_state(start)
+            sim.forces_started = started
+            sim.choose_model(force_stops=True)
+            _arm_block(sim, pieces, at_update)
 
 
 def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
@@ -129,7 +160,9 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
     if first.area_grows:
         effective = pressure * (1.0 + first.area_growth * pressure / first.spec.p_max_pa)
     joint = pressure_moments(first.moments, effective)
+    lookahead_s = STOP_LOOKAHEAD_UPDATES * interval_s
     for i, sim in enumerate(sims):
+        sim.choose_model(lookahead_s)
         sim.supply.pressure_pa = pressure[i]
         sim.joint_force_previous, sim.joint_force = sim.joint_force, joint[i]
         sim.wrench_previous, sim.wrench = sim.wrench, sim.held_wrench()

@@ -83,7 +83,7 @@ def test_both_engines_build_the_same_bodies_and_mass_matrix(preset):
     pybullet_sim, mujoco_sim = _pair(spec)
     try:
         client, body = pybullet_sim.client, pybullet_sim.arm.body_id
-        model = mujoco_sim.model
+        model = mujoco_sim.model_with_stops
         bodies = mujoco_sim._arm.body_ids[0]
         for link, mj_body in enumerate(bodies):
             info = client.getDynamicsInfo(body, link)
@@ -120,11 +120,12 @@ def test_mujoco_springs_and_end_stops_are_the_chain_springs(preset):
     sim = make_simulator(spec, "mujoco")
     stops = chain.end_stops()
     rng = np.random.default_rng(2)
-    data = mujoco.MjData(sim.model)
+    model = sim.model_with_stops
+    data = mujoco.MjData(model)
     for _ in range(20):
         q = rng.uniform(1.2 * chain.lower_limit, 1.2 * chain.upper_limit)
         data.qpos[:] = q
-        mujoco.mj_forward(sim.model, data)
+        mujoco.mj_forward(model, data)
         k0 = 1.0 / chain.compliance
         reference = -(k0 * q * (1 + chain.stiffening * (chain.strain_scale * q) ** 2)
                       + stops.force(q))

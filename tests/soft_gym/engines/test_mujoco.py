@@ -167,3 +167,37 @@ def test_tip_payload_and_clear_loads_restore_the_arm_as_built():
     assert sim.tip_payload_kg == 0.0
     assert np.array_equal(sim.model.body_mass, masses)
     assert np.array_equal(sim.model.body_inertia, inertias)
+
+
+@pytest.mark.parametrize("tip_mass_kg", [0.0, 0.0142])
+def test_leaving_the_stop_tendons_out_far_from_the_stops_changes_no_motion(tip_mass_kg,
+                                                                          monkeypatch):
+    """The arm rides a model without the stops' tendons while every joint is far from its
+    stops; bang-bang drives ho2018's joints into the stops and out again (the other presets'
+    pressures alone never reach a stop), and the tip stays within 0.01 mm of an arm that keeps
+    the full model all along."""
+    spec = get_preset("ho2018")
+    rng = np.random.default_rng(3)
+    commands = [np.where(rng.random(spec.n_chambers) < 0.5, spec.p_pre_pa, spec.p_max_pa)
+                for _ in range(60)]
+
+    def tips(switching: bool) -> tuple[np.ndarray, int]:
+        sim = make_simulator(spec, "mujoco")
+        if tip_mass_kg:
+            sim.add_load(TipMass(mass_kg=tip_mass_kg))
+        if not switching:
+            monkeypatch.setattr(sim, "near_stops", lambda lookahead_s=0.0: True)
+        sim.reset(settle_s=0.3)
+        out, free = [], 0
+        for pressure in commands:
+            sim.set_pressures(pressure)
+            sim.step_physics(spec.control_period_s)
+            out.append(sim.tip_pose()[0])
+            free += not sim.with_stops
+        monkeypatch.undo()
+        return np.array(out), free
+
+    switched, free_steps = tips(True)
+    full, _ = tips(False)
+    assert 0 < free_steps < len(commands)  # both models carried the arm
+    assert np.abs(switched - full).max() < 1e-5
