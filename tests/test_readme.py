@@ -66,7 +66,7 @@ def test_the_package_reports_the_version_of_pyproject_and_the_changelog():
 def test_the_readme_gymnasium_and_sb3_recipes_run(tmp_path, monkeypatch):
     """The recipes block: async vector envs step, both env checkers pass, RecordVideo writes an
     MP4 of the episode, and the shipped SAC agent tracks the circle in a plain loop."""
-    (block,) = [block for block in _python_blocks(ROOT / "README.md") if "make_vec(" in block]
+    (block,) = [block for block in _python_blocks(ROOT / "README.md") if "RecordVideo" in block]
     monkeypatch.chdir(tmp_path)
     namespace: dict = {}
     with contextlib.redirect_stdout(io.StringIO()):
@@ -75,6 +75,17 @@ def test_the_readme_gymnasium_and_sb3_recipes_run(tmp_path, monkeypatch):
     videos = list((tmp_path / "videos").glob("*.mp4"))
     assert videos and videos[0].stat().st_size > 1000
     assert namespace["info"]["error_mm"] < 3.0
+
+
+def test_the_readme_batched_mujoco_block_runs():
+    """The "Two engines" block: a batch of 64 MuJoCo arms as one vector env resets and steps."""
+    (block,) = [block for block in _python_blocks(ROOT / "README.md")
+                if "vector_entry_point" in block]
+    namespace: dict = {}
+    with contextlib.redirect_stdout(io.StringIO()):
+        exec(compile(block, "README.md", "exec"), namespace)
+    assert namespace["observations"].shape == (64, 16)
+    assert namespace["envs"].metadata["autoreset_mode"].value == "NextStep"
 
 
 def _first_column_names(text: str, first_row: str) -> list[str]:
