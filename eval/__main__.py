@@ -519,13 +519,20 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
         spec = suite_module.load_suite(args.spec)
         if args.seeds is not None:
             spec = spec.with_seeds(args.seeds)
-        cells = (suite_module.expand(spec) if args.report_only
-                 else suite_module.check_suite(spec, progress=True))
     except ValueError as error:
         parser.error(f"spec: {error}")
     out = Path(args.out or f"results/suite_{spec.name}")
     if args.out is None:
         check_output_dir(parser, "--out", out)
+    try:
+        suite_module.check_records_dir(out)
+    except ValueError as error:
+        fail(parser, "--out", str(error))
+    try:
+        cells = (suite_module.expand(spec) if args.report_only
+                 else suite_module.check_suite(spec, progress=True))
+    except ValueError as error:
+        parser.error(f"spec: {error}")
     if args.report_only and not suite_module.records_dir(out).is_dir():
         parser.error(f"--report-only: no records under {out} (give the --out of a suite run)")
     failure = None
@@ -538,8 +545,15 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
             suite_module.run_suite(spec, out, workers=args.workers, resume=args.resume,
                                    progress=True, check=False, backend=backend)
         except suite_module.SuiteRunError as error:
-            failure = error
+            failure = str(error)
     print(suite_module.write_report(spec, out, cells=cells))
+    bad = [problem for cell in cells
+           if (problem := suite_module.record_problem(out, cell.key)) is not None]
+    if bad and failure is None:
+        shown = "; ".join(str(problem) for problem in bad[:5])
+        more = f" and {len(bad) - 5} more" if len(bad) > 5 else ""
+        failure = (f"{len(bad)} bad record(s) left out of the report: {shown}{more}; run "
+                   f"again with --resume to redo them")
     if failure is not None:
         print(f"error: {failure}", file=sys.stderr)
     print(f"output directory: {out}")
