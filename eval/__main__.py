@@ -56,7 +56,9 @@ from eval.report import (markdown_table, plot_error_time, plot_trajectory, write
                          write_results_json)
 from eval.runner import ConfigError, RunConfig, check_configs
 from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
-                           json_value, non_negative_int, positive_float, positive_int)
+                           json_value, non_negative_int, positive_float, positive_int,
+                           seed_int)
+from soft_gym._validation import SEED_MAX
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
@@ -201,8 +203,8 @@ def _paper_parser(sub, name: str, module, help_text: str,
                            formatter_class=HelpFormatter)
     paper.add_argument("--experiments", nargs="+", default=list(module.EXPERIMENTS),
                        choices=list(module.EXPERIMENTS), help="which experiments")
-    paper.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
-                       help=f"{seeds_help}; integers >= 0")
+    paper.add_argument("--seeds", type=seed_int, nargs="+", default=[0],
+                       help=f"{seeds_help}; integers in [0, {SEED_MAX}]")
     return paper
 
 
@@ -250,7 +252,7 @@ def _estimation_parser(sub) -> argparse.ArgumentParser:
                             help="which runs ('all' for every one)")
     estimation.add_argument("--steps", type=int, default=4000,
                             help="control steps of 0.05 s per run, >= 600 (paper: ~4000)")
-    estimation.add_argument("--seed", type=non_negative_int, default=0,
+    estimation.add_argument("--seed", type=seed_int, default=0,
                             help="episode seed (integer >= 0)")
     estimation.add_argument("--out", default="results/estimation",
                             help="output directory (made; must be writable)")
@@ -295,8 +297,8 @@ def _track_parser(sub) -> argparse.ArgumentParser:
                        help='loads as JSON, e.g. \'{"name": "tip_mass", "mass_kg": 0.01}\'')
     track.add_argument("--faults", type=json_value, default=None,
                        help='visual faults as JSON, e.g. \'"wang2023_occlusion"\'')
-    track.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
-                       help="episode seeds (integers >= 0)")
+    track.add_argument("--seeds", type=seed_int, nargs="+", default=[0],
+                       help=f"episode seeds (integers in [0, {SEED_MAX}])")
     track.add_argument("--out", default="results/track",
                        help="output directory (made; must be writable)")
     _add_workers(track)
@@ -412,8 +414,8 @@ def _compare_parser(sub) -> argparse.ArgumentParser:
                          help="paths to track (circle, pentagram, rectangle, spiral, star)")
     compare.add_argument("--conditions", nargs="+", default=list(compare_module.CONDITIONS),
                          choices=list(compare_module.CONDITIONS), help="test conditions")
-    compare.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0, 1],
-                         help="episode seeds (integers >= 0)")
+    compare.add_argument("--seeds", type=seed_int, nargs="+", default=[0, 1],
+                         help=f"episode seeds (integers in [0, {SEED_MAX}])")
     compare.add_argument("--cycles", type=positive_int, default=2,
                          help="path cycles per run (>= 1)")
     compare.add_argument("--feedback", default="fused",
@@ -474,8 +476,9 @@ def _suite_parser(sub) -> argparse.ArgumentParser:
     _add_workers(suite)
     suite.add_argument("--resume", action="store_true",
                        help="skip the runs whose record is already in the output directory")
-    suite.add_argument("--seeds", type=non_negative_int, nargs="+", default=None,
-                       help="episode seeds replacing the suite's own (distinct integers >= 0)")
+    suite.add_argument("--seeds", type=seed_int, nargs="+", default=None,
+                       help="episode seeds replacing the suite's own (distinct integers in "
+                            f"[0, {SEED_MAX}])")
     suite.add_argument("--report-only", action="store_true",
                        help="run nothing: write the report from the records there")
     suite.add_argument("--backend", default="process", choices=["process", "serial", "ray"],
@@ -506,9 +509,10 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
         except ImportError as error:
             parser.error(f"--backend ray: {error}")
         backend = ray_backend.make_ray_map(args.address)
-    if args.seeds is not None and (any(seed < 0 for seed in args.seeds)
+    if args.seeds is not None and (any(not 0 <= seed <= SEED_MAX for seed in args.seeds)
                                    or len(set(args.seeds)) != len(args.seeds)):
-        parser.error(f"--seeds must be distinct integers >= 0, got {args.seeds}")
+        parser.error(f"--seeds must be distinct integers >= 0 and <= {SEED_MAX}, got "
+                     f"{args.seeds}")
     if args.report_only and args.resume:
         parser.error("--resume runs the missing runs; --report-only runs none: give one")
     try:

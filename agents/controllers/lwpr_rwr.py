@@ -62,7 +62,7 @@ from agents.learners.rwr_inverse import RewardWeightedInverse
 from agents.policies.base import BaselinePolicy, require_soft_arm_env
 from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import (as_finite_array, require_in_range, require_integer,
-                                  require_non_negative, require_positive)
+                                  require_non_negative, require_positive, require_seed)
 from soft_gym.robots.actuation import Actuation
 from soft_gym.sensing.calibration_cache import cached
 
@@ -138,7 +138,7 @@ class LWPRRWRController(BaselinePolicy):
         self.min_step_mm = require_non_negative("min_step_mm", min_step_mm)
         if self.waypoint_range == 0.0:
             raise ValueError("waypoint_range must be in (0, 1], got 0.0")
-        self.seed = require_integer("seed", seed, 0)
+        self.seed = require_seed("seed", seed)
         if not isinstance(cache, (bool, np.bool_)):
             raise ValueError(f"cache must be True or False, got {cache!r}")
         self.cache = bool(cache)

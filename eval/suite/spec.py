@@ -23,6 +23,7 @@ import yaml
 
 from agents.policies import BASELINES
 from eval.compare import policy_label
+from soft_gym._validation import SEED_MAX
 from soft_gym.envs.config import CONFIG_FIELDS
 from soft_gym.robots.presets import PRESETS
 from soft_gym.sensing import FEEDBACK_SOURCES
@@ -110,7 +111,7 @@ class SuiteSpec:
     sha256: str
 
     def with_seeds(self, seeds: Sequence[int]) -> "SuiteSpec":
-        """The same suite with other seeds (distinct integers >= 0)."""
+        """The same suite with other seeds (distinct integers in ``[0, SEED_MAX]``)."""
         return replace(self, seeds=_check_seeds(self.source, "seeds", list(seeds)))
 
 
@@ -260,10 +261,11 @@ def _mapping(source: str, key: str, value: Any, allowed: Sequence[str],
 
 def _check_seeds(source: str, key: str, seeds: Any) -> tuple[int, ...]:
     if (not isinstance(seeds, (list, tuple)) or not seeds
-            or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in seeds)
+            or not all(isinstance(s, int) and not isinstance(s, bool) and 0 <= s <= SEED_MAX
+                       for s in seeds)
             or len(set(seeds)) != len(seeds)):
-        raise SuiteError(source, key, f"must be a non-empty list of distinct integers >= 0, "
-                                      f"got {seeds!r}")
+        raise SuiteError(source, key, f"must be a non-empty list of distinct integers >= 0 and "
+                                      f"<= {SEED_MAX}, got {seeds!r}")
     return tuple(int(s) for s in seeds)
 
 

@@ -44,7 +44,7 @@ from tqdm.auto import tqdm
 
 from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import (fields_from_options, require_in_range, require_integer,
-                                  require_non_negative, require_positive)
+                                  require_non_negative, require_positive, require_seed)
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
 from soft_gym.sensors.stereo import StereoCamera
@@ -116,7 +116,7 @@ class ShapeDNNConfig:
             raise ValueError(f"hidden_widths must be a non-empty sequence of integers >= 1, got "
                              f"{widths!r}")
         object.__setattr__(self, "hidden_widths", tuple(int(w) for w in widths))
-        require_integer("seed", self.seed, 0)
+        require_seed("seed", self.seed)
 
     @classmethod
     def from_options(cls, options: dict[str, Any]) -> "ShapeDNNConfig":
@@ -230,7 +230,7 @@ class ShapeDNN:
 
         self.n_inputs = require_integer("n_inputs", n_inputs, 1)
         self.hidden_widths = ShapeDNNConfig(hidden_widths=hidden_widths).hidden_widths
-        self.seed = require_integer("seed", seed, 0)
+        self.seed = require_seed("seed", seed)
         torch.manual_seed(self.seed)
         self.network = build_network(self.hidden_widths, self.n_inputs)
         self.input_mean: np.ndarray | None = None
