@@ -41,7 +41,7 @@ import numpy as np
 
 import agents.learners.local_ik
 from agents.learners.local_ik import LocalIKNetwork
-from agents.policies.base import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, PolicyRefusal, require_soft_arm_env
 from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_in_range, require_integer, require_positive, require_seed
 from soft_gym.robots.actuation import Actuation
@@ -113,8 +113,8 @@ class LocalIKASDMController(BaselinePolicy):
         self.env = unwrapped
         missing = [part for part in _REQUIRED_PARTS if part not in self.env.obs_parts]
         if missing:
-            raise ValueError(f"the env's obs must include {list(_REQUIRED_PARTS)} for "
-                             f"{self.name}; missing {missing} in {self.env.obs_parts!r}")
+            raise PolicyRefusal(f"the env's obs must include {list(_REQUIRED_PARTS)} for "
+                                f"{self.name}; missing {missing} in {self.env.obs_parts!r}")
         spec = self.env.arm
         self.actuation = Actuation.of_env(self.env)
         self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa

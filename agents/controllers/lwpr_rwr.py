@@ -59,7 +59,7 @@ import agents.learners.lwpr
 import agents.learners.rwr_inverse
 from agents.learners.lwpr import LWPR
 from agents.learners.rwr_inverse import RewardWeightedInverse
-from agents.policies.base import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, PolicyRefusal, require_soft_arm_env
 from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import (as_finite_array, require_in_range, require_integer,
                                   require_non_negative, require_positive, require_seed)
@@ -145,12 +145,12 @@ class LWPRRWRController(BaselinePolicy):
         self.env = unwrapped
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:
-                raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
-                                 f"{self.env.obs_parts!r}")
+                raise PolicyRefusal(f"the env's obs must include {part!r} for {self.name}, got "
+                                    f"{self.env.obs_parts!r}")
         spec = self.env.arm
         if spec.n_chambers != 3 * spec.n_segments:
-            raise ValueError(f"{self.name} drives three chambers per segment; the env's arm has "
-                             f"{spec.n_chambers} chambers on {spec.n_segments} segments")
+            raise PolicyRefusal(f"{self.name} drives three chambers per segment; the env's arm has "
+                                f"{spec.n_chambers} chambers on {spec.n_segments} segments")
         self.actuation = Actuation.of_env(self.env)
         self.n_chambers = spec.n_chambers
         self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa

@@ -11,7 +11,8 @@ Every baseline is registered here, by name, in :data:`BASELINES`; the controller
 in :mod:`agents.controllers` (docs/architecture.md, "Baselines").
 """
 
-from agents.policies.base import BaselinePolicy, check_observation, require_soft_arm_env
+from agents.policies.base import (BaselinePolicy, PolicyRefusal, check_observation,
+                                  require_soft_arm_env)
 from agents.policies.registry import BASELINES, make_policy
 from agents.policies.sb3 import (SB3_ALGORITHMS, SB3_INTERFACE_KEYS, SHIPPED_DIR, SB3Policy,
                                  normalization_file, resolve_sb3_path, shipped_agents)
@@ -28,6 +29,6 @@ BASELINES.register("lwpr_rwr", "agents.controllers.lwpr_rwr:LWPRRWRController", 
 BASELINES.register("local_ik_asdm", "agents.controllers.local_ik_asdm:LocalIKASDMController",
                    lazy=True)
 
-__all__ = ["BASELINES", "BaselinePolicy", "SB3Policy", "SB3_ALGORITHMS", "SB3_INTERFACE_KEYS",
+__all__ = ["BASELINES", "BaselinePolicy", "PolicyRefusal", "SB3Policy", "SB3_ALGORITHMS", "SB3_INTERFACE_KEYS",
            "SHIPPED_DIR", "check_observation", "make_policy", "normalization_file",
            "require_soft_arm_env", "resolve_sb3_path", "shipped_agents"]

@@ -78,8 +78,9 @@ refuses. Each distinct env configuration is built once through the env's own che
 faults, feedback options, the arm's maximum load, ...) without calibrating its feedback source,
 which is the expensive part (seconds to minutes, cached on disk) and is left to the runs; each
 baseline is then made on it, once with the entry's parameters and once with its defaults: a
-baseline refusing the arm with its defaults too is not a suite error but an ``n/a`` cell (below);
-one refusing only the given parameters is. SB3 agents are loaded once each.
+baseline declining the arm (:class:`agents.policies.PolicyRefusal`) with its defaults too is not
+a suite error but an ``n/a`` cell (below); one refusing only the given parameters, or failing
+with any other error, is. SB3 agents are loaded once each.
 
 Running
 -------
@@ -112,11 +113,15 @@ to it. A claim whose process has died is taken over by the next run. The JSON re
      "wall_s", "versions": {soft_arm_gym, gymnasium, stable_baselines3, torch, numpy,
      pybullet, python}, "git_revision", "steps_file", "steps_sha256"}
 
-``n/a``: the policy could not be set up on the cell's env (a ``ValueError`` while the env and
-policy are made and calibrated, e.g. ``cc_model`` and ``hybrid_gpr`` on a two-segment arm, an
-agent on an arm whose observation it cannot read); the reason is the error's text. Any other
-error leaves no record: the other runs go on, and :class:`SuiteRunError` lists the failed cells
-at the end (their tracebacks in ``out/errors/<key>.txt``); ``resume`` retries them.
+``n/a``: the policy declined the cell's env while it was made and calibrated, with the specific
+refusal :class:`agents.policies.PolicyRefusal` (an arm of another layout, e.g. ``lwpr_rwr`` on
+an arm without three chambers per segment; an observation without the parts it reads; an
+agent on an arm whose observation it cannot read); the reason is the refusal's text. Any other
+error, a ``ValueError`` of the env or the policy too (a bad ``sensing`` option, a feedback pose
+that does not respond to a calibration's probes), is an error, never ``n/a``: it leaves no
+record, the other runs go on, and :class:`SuiteRunError` lists the failed cells at the end
+(their tracebacks in ``out/errors/<key>.txt``; the command line exits with status 1);
+``resume`` retries them.
 
 Backends. A backend is a function ``map(fn, items, workers)`` that applies ``fn`` to every item
 and yields the results as they complete (:data:`MapFunction`). ``"process"`` (default) runs them

@@ -10,7 +10,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from agents.policies import SB3Policy, make_policy
+from agents.policies import PolicyRefusal, SB3Policy, make_policy
 from eval.runner import uncalibrated_env_class
 from eval.suite.grid import Cell, arm_env, canonical_json, expand
 from eval.suite.spec import PolicyEntry, SuiteError, SuiteSpec
@@ -36,6 +36,8 @@ class _EnvChecker:
                 env = self.make(kwargs)
             except (ValueError, TypeError) as error:
                 self.errors[text] = str(error)
+            except Exception as error:  # noqa: BLE001 - reported naming the suite's key
+                self.errors[text] = f"{type(error).__name__}: {error}"
             else:
                 env.close()
                 self.errors[text] = None
@@ -111,17 +113,22 @@ def _agent_error(name: str) -> str | None:
 
 def _policy_error(env, entry: PolicyEntry, seed: int) -> str | None:
     """A baseline's refusal of the entry's parameters on ``env``; ``None`` when it accepts them
-    or refuses the arm itself (with its defaults too: an ``n/a`` run, not a suite error)."""
+    or declines the arm itself (a :class:`~agents.policies.PolicyRefusal` with its defaults too:
+    an ``n/a`` run, not a suite error). Any other error is the entry's."""
     params = {**entry.params, **{name: seed for name in entry.seed_params}}
     try:
         make_policy(entry.name, env=env, **params)
-    except ValueError as error:
+    except (ValueError, TypeError) as error:
+        if not isinstance(error, PolicyRefusal):
+            return str(error)
         given = str(error)
     else:
         return None
     try:
         make_policy(entry.name, env=env)
-    except ValueError:
+    except PolicyRefusal:
         return None
+    except (ValueError, TypeError):
+        pass
     return given
 

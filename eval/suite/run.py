@@ -19,6 +19,7 @@ from typing import Any
 from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
+from agents.policies import PolicyRefusal
 from eval.runner import RunConfig, build, run_episode
 from eval.suite.check import check_suite
 from eval.suite.locks import LOCKS_DIR, claim, release
@@ -65,8 +66,9 @@ def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
     ``config``, ``versions`` and ``git_revision``.
 
     Returns the JSON record (see the module docstring) with the per-step arrays under
-    ``"steps"`` (``None`` when n/a), or, for an error other than a refusal, ``status`` ``"error"``
-    with the ``error`` and its ``traceback``.
+    ``"steps"`` (``None`` when n/a: the policy raised :class:`~agents.policies.PolicyRefusal`),
+    or, for any other error (a ``ValueError`` of the env or the policy too), ``status``
+    ``"error"`` with the ``error`` and its ``traceback``.
     """
     start = time.perf_counter()
     config = task["config"]
@@ -81,7 +83,7 @@ def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
         with one_compute_thread():
             try:
                 env, policy = build(run_config)
-            except ValueError as error:  # the policy cannot drive this arm or env
+            except PolicyRefusal as error:  # the policy declines this arm or env: n/a
                 result.update(status="n/a", reason=" ".join(str(error).split()))
             else:
                 try:
