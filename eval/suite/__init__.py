@@ -102,7 +102,9 @@ is refused before any work.
 Before running a cell the process claims it with the lock file ``out/locks/<key>.lock``
 (:mod:`eval.suite.locks`: made atomically, holding the owner's pid and host), so two processes
 on one output directory never run the same cell: the second leaves the cells the first holds
-to it. A claim whose process has died is taken over by the next run. The JSON record::
+to it. A claim whose process has died is taken over by the next run. Pool workers end with the
+process that started them (:func:`exit_with_parent`), so a killed suite leaves no process
+behind. The JSON record::
 
     {"key", "suite", "labels": {"preset", "path", "condition", "policy", "seed"},
      "config": resolved config, "status": "done" | "n/a", "reason": why n/a (else null),
@@ -152,8 +154,8 @@ from eval.suite.report import (DEFAULT_REPS, PROFILE_REPS, SCORE, aggregate_scor
                                leaderboards, performance_profiles, profile_taus,
                                require_rliable, score_matrices, write_report)
 from eval.suite.run import (BACKENDS, MapFunction, SuiteRunError, cell_metrics,
-                            one_compute_thread, order_cells, process_map, register_backend,
-                            run_cell, run_suite, serial_map)
+                            exit_with_parent, one_compute_thread, order_cells, process_map,
+                            register_backend, run_cell, run_suite, serial_map)
 from eval.suite.spec import (ARM_KEYS, DEFAULT_CYCLES, ENV_KEYS, POLICY_ENV_DEFAULTS,
                              POLICY_KEYS, SUITE_ENV_KEYS, SUITES_DIR, TOP_KEYS, ArmEntry,
                              PolicyEntry, SuiteError, SuiteSpec, bundled_suites, load_suite,
@@ -169,7 +171,7 @@ __all__ = ["ARM_KEYS", "BACKENDS", "DEFAULT_CYCLES", "DEFAULT_REPS", "ENV_ID", "
            "Cell", "MapFunction", "PolicyEntry", "RecordError", "SuiteError", "SuiteRunError",
            "SuiteSpec", "aggregate_scores", "bundled_suites", "canonical_json", "cell_key",
            "cell_metrics", "check_records_dir", "check_suite", "claim", "collect_rows",
-           "expand", "fraction_within", "git_revision", "is_finished",
+           "exit_with_parent", "expand", "fraction_within", "git_revision", "is_finished",
            "leaderboard_markdown", "leaderboards", "library_versions", "load_suite",
            "lock_path", "one_compute_thread", "order_cells", "parse_suite",
            "performance_profiles", "process_map", "profile_taus", "read_record", "read_steps",

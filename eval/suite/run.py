@@ -9,6 +9,7 @@ import copy
 import multiprocessing
 import os
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -109,20 +110,41 @@ def serial_map(fn: Callable[[Any], Any], items: Sequence[Any], workers: int = 1)
         yield fn(item)
 
 
+PARENT_POLL_S = 0.5
+"""How often a pool worker checks that the process that started it is alive (s)."""
+
+
+def exit_with_parent(parent_pid: int, poll_s: float = PARENT_POLL_S) -> None:
+    """A pool worker's initializer: a daemon thread that ends this process (exit status 1) as
+    soon as its parent ``parent_pid`` is gone (this process handed to another parent).
+
+    Without it a ``kill -9`` of the suite leaves its workers blocked on the pool's pipe for
+    good: each worker holds the pipe's writing end too, so it never reads end-of-file.
+    """
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(poll_s)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
+
+
 def process_map(fn: Callable[[Any], Any], items: Sequence[Any],
                 workers: int = 1) -> Iterator[Any]:
     """Run ``fn`` on every item in ``workers`` spawned processes (in this process when
     ``workers == 1`` or there is one item), yielding results as they complete.
 
     At most ``2 * workers`` items are submitted ahead, so a stopped iteration leaves little
-    work behind, which is cancelled.
+    work behind, which is cancelled. Each worker ends itself when this process dies (killed
+    too: :func:`exit_with_parent`), and the pool's resource tracker with them.
     """
     if workers == 1 or len(items) <= 1:
         yield from serial_map(fn, items)
         return
     context = multiprocessing.get_context("spawn")
     pending_items = iter(items)
-    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=context) as pool:
+    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=context,
+                             initializer=exit_with_parent, initargs=(os.getpid(),)) as pool:
         running = set()
         try:
             for item in pending_items:
