@@ -71,10 +71,15 @@ tables) are not part of the key; two cells with equal configs are refused.
 
 Validation
 ----------
+:func:`load_suite` reads the file as UTF-8 with YAML's safe loader, refusing more than
+:data:`eval.suite.spec.MAX_ALIASES` aliases (before they are expanded), nesting deeper than
+:data:`eval.suite.spec.MAX_DEPTH`, and, before anything is hashed, every value JSON has no type
+for (dates, ``!!binary``, ``!!set``, keys that are not text, ``.nan``/``.inf``); condition names,
+like labels, are letters, digits and ``_.-``. Values quoted in messages are cut short.
 :func:`check_suite` refuses, before any run, with a ``ValueError`` naming the file, the key
-(``arms.wang2023.conditions.load_10g``) and what is allowed: an unknown key at any level, an
-unknown preset, path, feedback source, policy or policy parameter, and every value the env
-refuses. Each distinct env configuration is built once through the env's own checks (loads,
+(``arms.wang2023.conditions.load_10g.scenario``: the keyword argument whose addition the env
+refuses) and what is allowed: an unknown key at any level, an unknown preset, path, feedback
+source, policy or policy parameter, and every value the env refuses. Each distinct env configuration is built once through the env's own checks (loads,
 faults, feedback options, the arm's maximum load, ...) without calibrating its feedback source,
 which is the expensive part (seconds to minutes, cached on disk) and is left to the runs; each
 baseline is then made on it, once with the entry's parameters and once with its defaults: a

@@ -5,9 +5,12 @@ command line, one line naming the option with exit status 2), checked before any
 
 from __future__ import annotations
 
+import datetime
+import time
 from pathlib import Path
 
 import pytest
+import yaml
 
 import eval.__main__ as eval_main
 from agents.policies import make_policy
@@ -17,6 +20,7 @@ from soft_gym._validation import SEED_MAX
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 from soft_gym.sensing.zou2022.stereo_shape import ASESConfig
+from suite_specs import tiny_suite
 from train import sweep
 from train.__main__ import main as train_main
 
@@ -90,3 +94,87 @@ def test_the_sweep_request_bounds_its_seed_by_the_evaluation_offset():
                                  steps=2000, out=str(Path("unused")))
     with pytest.raises(ValueError, match=r"seed must be an integer in \[0, "):
         sweep.base_entry(request)
+
+
+# ----------------------------------------------------------------------------- suite YAML
+TINY = tiny_suite("yaml")
+
+BOMB = "a: &a [x, x, x, x, x, x, x, x, x]\n" + "".join(
+    f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 9)}]\n" for i in range(8))
+"""A billion-laughs alias bomb, under 600 bytes: 9**9 strings once expanded."""
+
+def _speed(value: str) -> str:
+    """The tiny suite with the first arm's ``speed_m_s`` written as ``value``."""
+    return TINY.replace("speed_m_s: 0.05", f"speed_m_s: {value}", 1)
+
+
+SPEED = "arms.wang2023.env.speed_m_s"
+YAML_CASES = {  # case -> (the file's text, the key named, words of the message)
+    "a date": (_speed("2024-01-01"), SPEED, "got a date"),
+    "binary": (_speed("!!binary aGVsbG8="), SPEED, "got a bytes"),
+    "a set": (TINY.replace("nominal: {}", "nominal: !!set {a, b}", 1),
+              "arms.wang2023.conditions.nominal", "got a set"),
+    "a number as key": (TINY.replace("nominal: {}", "1: {}", 1),
+                        "arms.wang2023.conditions", "keys must be text"),
+    "nan": (_speed(".nan"), SPEED, "finite number"),
+    "inf": (_speed("-.inf"), SPEED, "finite number"),
+    "deep nesting": (TINY.replace("description", "d") + "description: " + "[" * 3000
+                     + "]" * 3000 + "\n", "", "nesting deeper than"),
+    "an alias bomb": (BOMB, "", "aliases"),
+    "a pipe in a condition": (TINY.replace("nominal: {}", "a|b: {}", 1),
+                              "arms.wang2023.conditions.a|b", "letters, digits"),
+    "a long value": (TINY.replace("cycles: 1", "cycles: [" + ", ".join(["7"] * 5000) + "]", 1),
+                     "cycles", "..."),
+}
+
+
+@pytest.mark.smoke
+@pytest.mark.parametrize("case", sorted(YAML_CASES))
+def test_suite_yaml_refuses_non_json_values_aliases_and_depth_naming_the_key(case, tmp_path):
+    text, key, words = YAML_CASES[case]
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    start = time.perf_counter()
+    with pytest.raises(ValueError) as error:
+        suite.load_suite(path)
+    assert time.perf_counter() - start < 5.0
+    message = str(error.value)
+    assert type(error.value) is suite.SuiteError and message.startswith(f"{path}: {key}")
+    assert words in message and "\n" not in message, message
+    assert len(message) <= suite.spec.MESSAGE_CHARS
+
+
+def test_suite_yaml_aliases_within_the_budget_load(tmp_path):
+    text = TINY.replace("env: {speed_m_s: 0.05}", "env: &slow {speed_m_s: 0.05}", 1).replace(
+        "env: {speed_m_s: 0.05}", "env: *slow", 1)
+    assert "*slow" in text
+    path = tmp_path / "aliases.yaml"
+    path.write_text(text)
+    spec = suite.load_suite(path)
+    assert [arm.env for arm in spec.arms] == [{"speed_m_s": 0.05}, {"speed_m_s": 0.05}]
+
+
+def test_suite_file_that_is_not_utf8_names_the_file_and_the_byte(tmp_path):
+    path = tmp_path / "latin1.yaml"
+    path.write_bytes(TINY.replace("name: yaml", "name: caf\xe9").encode("latin-1"))
+    with pytest.raises(ValueError, match=rf"^{path}: not UTF-8 text: byte 0xe9 at line 1"):
+        suite.load_suite(path)
+
+
+def test_parsed_suites_are_validated_before_anything_is_hashed():
+    data = yaml.safe_load(TINY)
+    data["arms"]["wang2023"]["conditions"]["nominal"] = {"speed_m_s": datetime.date(2024, 1, 1)}
+    with pytest.raises(suite.SuiteError, match="conditions.nominal.speed_m_s: .* got a date"):
+        suite.parse_suite(data, source="<data>")
+
+
+def test_an_env_refusal_blames_the_key_that_set_the_value(tmp_path):
+    """``cycles: 1000000`` makes too long an episode: the check names ``cycles``, not the arm's
+    feedback; a condition's refused keyword is named within the condition."""
+    path = tmp_path / "cycles.yaml"
+    path.write_text(TINY.replace("cycles: 1", "cycles: 1000000", 1))
+    with pytest.raises(ValueError, match=rf"^{path}: cycles: cycles=1000000"):
+        suite.check_suite(suite.load_suite(path))
+    path.write_text(TINY.replace("nominal: {}", "nominal: {faults: low_light}", 1))
+    with pytest.raises(ValueError, match=rf"^{path}: arms.wang2023.conditions.nominal.faults: "):
+        suite.check_suite(suite.load_suite(path))
