@@ -55,9 +55,9 @@ from eval.papers.estimation import EXPERIMENTS, run_experiments
 from eval.report import (markdown_table, plot_error_time, plot_trajectory, write_records_csv,
                          write_results_json)
 from eval.runner import ConfigError, RunConfig, check_configs
-from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
-                           json_value, non_negative_int, positive_float, positive_int,
-                           seed_int)
+from soft_gym._cli import (HelpFormatter, check_environment, check_output_dir, fail,
+                           finite_float, int_at_least, json_value, non_negative_int,
+                           positive_float, positive_int, seed_int)
 from soft_gym._validation import SEED_MAX
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
@@ -607,6 +607,7 @@ def main(argv: list[str] | None = None) -> None:
     parsers = {name: command.add_parser(sub) for name, command in COMMANDS.items()}
     args = parser.parse_args(argv)
     command_parser = parsers[args.command]
+    check_environment(command_parser)
     _check_distinct(command_parser, args)
     if args.out is not None:  # suite's default output directory is checked once the spec is read
         check_output_dir(command_parser, "--out", args.out)

@@ -163,6 +163,17 @@ def check_file(parser: argparse.ArgumentParser, option: str, path: str | os.Path
         parser.error(f"{option} {str(path)!r} is not readable: give {what}")
 
 
+def check_environment(parser: argparse.ArgumentParser) -> None:
+    """Refuse (one line, exit 2) a bad setting of the environment variables the package reads
+    (``SOFT_GYM_CACHE``), before any work rather than mid-run."""
+    from soft_gym.sensing.calibration_cache import CACHE_ENV_VARIABLE, disk_cache_enabled
+
+    try:
+        disk_cache_enabled()
+    except ValueError as error:
+        parser.error(f"environment variable {CACHE_ENV_VARIABLE}: {error}")
+
+
 def fail(parser: argparse.ArgumentParser, option: str, message: Any) -> NoReturn:
     """``parser.error`` naming ``option``, with ``message`` (an exception's text) on one line."""
     text = " ".join(str(message).split())

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import yaml
 
-from soft_gym._cli import (HelpFormatter, check_file, check_output_dir, fail, non_negative_int,
-                           positive_int, seed_int)
+from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_output_dir, fail,
+                           non_negative_int, positive_int, seed_int)
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
@@ -146,6 +146,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     parser = build_parser()
     args = parser.parse_args(argv)
+    check_environment(parser)
     # lazy: train.trainer (stable-baselines3, PyTorch) costs 1.3 s (-X importtime); --help skips it
     from train.trainer import TrainRequest, train
 

@@ -76,7 +76,7 @@ import yaml
 from tqdm import tqdm
 
 import soft_gym  # noqa: F401  (registers the env ids)
-from soft_gym._cli import HelpFormatter, check_output_dir, seed_int
+from soft_gym._cli import HelpFormatter, check_environment, check_output_dir, seed_int
 from soft_gym._validation import SEED_MAX
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
@@ -541,6 +541,7 @@ def main(argv: list[str] | None = None) -> None:
     storage directories)."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    check_environment(parser)
     env_kwargs, hyperparameters = parse_env_and_hyperparameters(parser, args)
     args.env = resolve_env_id(parser, args)
     check_conf_file(parser, args.conf_file)
@@ -555,8 +556,7 @@ def main(argv: list[str] | None = None) -> None:
         progress=not args.no_progress)
     options = {"trials": "--trials", "steps": "--steps", "eval_episodes": "--eval-episodes",
                "workers": "--workers", "seed": "--seed", "address": "--address",
-               "hyperparameters": "--hyperparams", "env_id": "--env",
-               "learning_starts": "--steps", "config": "--conf-file"}
+               "hyperparameters": "--hyperparams", "env_id": "--env", "config": "--conf-file"}
     try:
         base_entry(request)  # the request's own fields first: they name their option
     except ValueError as error:

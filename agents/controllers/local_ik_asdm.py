@@ -43,7 +43,8 @@ import agents.learners.local_ik
 from agents.learners.local_ik import LocalIKNetwork
 from agents.policies.base import BaselinePolicy, PolicyRefusal, require_soft_arm_env
 from soft_gym._model_files import read_model_state, write_model_state
-from soft_gym._validation import require_in_range, require_integer, require_positive, require_seed
+from soft_gym._validation import (require_in_range, require_integer, require_learning_rate,
+                                  require_positive, require_seed)
 from soft_gym.robots.actuation import Actuation
 from soft_gym.sensing.calibration_cache import cached, sensor_description
 from soft_gym.sensing.zhao2021.shape_exploration import GAUGE_SETTINGS
@@ -103,7 +104,7 @@ class LocalIKASDMController(BaselinePolicy):
         self.settle_s = require_positive("settle_s", settle_s)
         self.max_iterations = require_integer("max_iterations", max_iterations, 1)
         self.batch_size = require_integer("batch_size", batch_size, 1)
-        self.learning_rate = require_positive("learning_rate", learning_rate)
+        self.learning_rate = require_learning_rate("learning_rate", learning_rate)
         self.seed = require_seed("seed", seed)
         if exploration is not None and not isinstance(exploration, dict):
             raise ValueError(f"exploration must be None or a dict of options, got "

@@ -67,6 +67,11 @@ from soft_gym.robots.actuation import Actuation
 from soft_gym.sensing.calibration_cache import cached
 
 _MM = 1000.0
+MIN_RIDGE, MAX_RIDGE = 1e-3, 1e6
+"""The range of ``ridge`` (weighted samples): below it a field's normal equations go singular
+online (1e-30 failed at step 12), above it no field learns."""
+MIN_PRETRAIN_SAMPLES = 5
+"""Fewest pre-training transitions: the epochs need a test set (20 %) of at least one."""
 _FORMAT = "lwpr-rwr/1"
 _PRETRAINING_SETTINGS = ("pretrain_waypoints", "leg_decisions", "max_epochs", "init_d", "w_gen",
                          "waypoint_range", "seed", "hold_steps", "attractor_gain", "rest_actuation",
@@ -126,14 +131,22 @@ class LWPRRWRController(BaselinePolicy):
         self.kp = require_positive("kp", kp)
         self.max_step_mm = require_positive("max_step_mm", max_step_mm)
         self.hold_steps = require_integer("hold_steps", hold_steps, 1)
-        self.attractor_gain = require_non_negative("attractor_gain", attractor_gain)
+        self.attractor_gain = require_in_range("attractor_gain", attractor_gain, 0.0, 1.0)
         self.rest_actuation = require_in_range("rest_actuation", rest_actuation, 0.0, 1.0)
-        self.ridge = require_positive("ridge", ridge)
+        self.ridge = require_in_range("ridge", ridge, MIN_RIDGE, MAX_RIDGE)
         self.pretrain_waypoints = require_integer("pretrain_waypoints", pretrain_waypoints, 2)
         self.leg_decisions = require_integer("leg_decisions", leg_decisions, 1)
+        if self.pretrain_waypoints * self.leg_decisions < MIN_PRETRAIN_SAMPLES:
+            raise ValueError(f"pretrain_waypoints * leg_decisions (the pre-training's "
+                             f"transitions) must be >= {MIN_PRETRAIN_SAMPLES} for its 80/20 "
+                             f"train/test split, got {self.pretrain_waypoints} * "
+                             f"{self.leg_decisions}")
         self.max_epochs = require_integer("max_epochs", max_epochs, 1)
         self.init_d = require_positive("init_d", init_d)
         self.w_gen = require_in_range("w_gen", w_gen, 0.0, 1.0)
+        if self.w_gen in (0.0, 1.0):  # LWPR's own range, checked here rather than pre-training
+            raise ValueError(f"w_gen must be in (0, 1) (LWPR's field-creation threshold), got "
+                             f"{w_gen!r}")
         self.waypoint_range = require_in_range("waypoint_range", waypoint_range, 0.0, 1.0)
         self.min_step_mm = require_non_negative("min_step_mm", min_step_mm)
         if self.waypoint_range == 0.0:

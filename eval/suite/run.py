@@ -28,6 +28,7 @@ from eval.suite.grid import Cell, expand, label_text
 from eval.suite.spec import SuiteSpec, load_suite
 from eval.suite.store import (cell_metrics, check_records_dir, git_revision, is_finished,
                               library_versions, record_problem, records_dir, write_record)
+from soft_gym.sensing.calibration_cache import disk_cache_enabled
 
 
 class SuiteRunError(RuntimeError):
@@ -228,6 +229,7 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
         raise ValueError(f"backend must be one of {sorted(BACKENDS)} or a map function, got "
                          f"{backend!r}")
     check_records_dir(out)
+    disk_cache_enabled()  # SOFT_GYM_CACHE refused now, not in every run
     if not isinstance(spec, SuiteSpec):
         spec = load_suite(spec)
     cells = check_suite(spec, progress=progress) if check else expand(spec)

@@ -178,3 +178,100 @@ def test_an_env_refusal_blames_the_key_that_set_the_value(tmp_path):
     path.write_text(TINY.replace("nominal: {}", "nominal: {faults: low_light}", 1))
     with pytest.raises(ValueError, match=rf"^{path}: arms.wang2023.conditions.nominal.faults: "):
         suite.check_suite(suite.load_suite(path))
+
+
+# ------------------------------------------------------------------ learning parameters
+LWPR_RWR_BAD = {  # parameters -> the name the message must hold
+    "w_gen 0": ({"w_gen": 0.0}, "w_gen"),
+    "w_gen 1": ({"w_gen": 1.0}, "w_gen"),
+    "attractor_gain 1e160": ({"attractor_gain": 1e160}, "attractor_gain"),
+    "ridge 1e-30": ({"ridge": 1e-30}, "ridge"),
+    "ridge 1e30": ({"ridge": 1e30}, "ridge"),
+    "too few pre-training transitions": ({"pretrain_waypoints": 2, "leg_decisions": 1},
+                                         "pretrain_waypoints * leg_decisions"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(LWPR_RWR_BAD))
+def test_lwpr_rwr_learning_parameters_are_bounded_at_construction(case, zhao_env):
+    params, name = LWPR_RWR_BAD[case]
+    with pytest.raises(ValueError, match=name.replace("*", r"\*")):
+        make_policy("lwpr_rwr", env=zhao_env, cache=False, **params)
+
+
+LEARNING_RATES = {
+    "strain_sr (shape reconstruction)": lambda lr: ReconstructionConfig.from_options(
+        {"learning_rate": lr}),
+    "encoder_dnn (shape DNN)": lambda lr: ShapeDNNConfig.from_options({"learning_rate": lr}),
+}
+
+
+@pytest.mark.parametrize("case", sorted(LEARNING_RATES))
+@pytest.mark.parametrize("rate", [1e12, 1.5, 0.0, -1e-3])
+def test_learning_rates_above_one_or_not_positive_are_refused(case, rate):
+    with pytest.raises(ValueError, match=r"learning_rate must be a finite number > 0 and <= 1"):
+        LEARNING_RATES[case](rate)
+    LEARNING_RATES[case](1.0)
+
+
+def test_local_ik_asdm_learning_rate_is_bounded(zhao_env):
+    with pytest.raises(ValueError, match="learning_rate .* <= 1"):
+        make_policy("local_ik_asdm", env=zhao_env, learning_rate=1e12)
+
+
+# -------------------------------------------------------------------- env arguments
+@pytest.mark.smoke
+@pytest.mark.parametrize("mode", ["human", "rgb_array_list", "ansi"])
+def test_render_modes_the_env_lacks_are_refused_at_construction(mode):
+    import gymnasium as gym
+
+    with pytest.raises(ValueError, match=rf"render_mode must be None or 'rgb_array', got '{mode}'"):
+        gym.make("SoftArmTrack-v0", preset="wang2023", feedback="ground_truth", render_mode=mode)
+    env = gym.make("SoftArmTrack-v0", preset="wang2023", feedback="ground_truth",
+                   render_mode="rgb_array")
+    assert env.render_mode == "rgb_array" and env.metadata["render_modes"] == ["rgb_array"]
+    env.close()
+
+
+@pytest.mark.smoke
+@pytest.mark.parametrize("name", ["target_m", "start_m"])
+@pytest.mark.parametrize("point", [[False, False, True], ["0", "0", "0.08"], [b"0", 0, 0]],
+                         ids=["booleans", "text", "bytes"])
+def test_points_must_be_numbers(name, point):
+    import gymnasium as gym
+
+    with pytest.raises(ValueError, match=rf"^{name} must be three numbers \(m\)"):
+        gym.make("SoftArmReach-v0", preset="wang2023", feedback="ground_truth", **{name: point})
+
+
+# -------------------------------------------------------------- environment variables
+@pytest.mark.parametrize("main, argv", [
+    (eval_main.main, ["suite", "small"]),
+    (eval_main.main, ["track"]),
+    (train_main, ["--timesteps", "64"]),
+    (train_main, ["sweep", "--steps", "2000"]),
+], ids=["eval suite", "eval track", "train", "train sweep"])
+def test_a_bad_cache_setting_is_refused_before_any_work(main, argv, tmp_path, capsys,
+                                                        monkeypatch):
+    monkeypatch.setenv("SOFT_GYM_CACHE", "maybe")
+    out = tmp_path / "out"
+    line = assert_one_line_error(main, argv + ["--out", str(out)], "SOFT_GYM_CACHE", capsys,
+                                 out=out)
+    assert "'on' or 'off'" in line and "'maybe'" in line
+
+
+def test_run_suite_refuses_a_bad_cache_setting_before_any_run(tmp_path, monkeypatch):
+    monkeypatch.setenv("SOFT_GYM_CACHE", "maybe")
+    ran = []
+    with pytest.raises(ValueError, match="SOFT_GYM_CACHE must be 'on' or 'off'"):
+        suite.run_suite("small", tmp_path / "out", check=False, progress=False,
+                        backend=lambda fn, items, workers: ran.extend(items) or iter(()))
+    assert ran == [] and not (tmp_path / "out").exists()
+
+
+def test_sweep_blames_the_hyperparameter_option_for_a_bad_learning_starts(tmp_path, capsys):
+    out = tmp_path / "out"
+    line = assert_one_line_error(train_main, ["sweep", "-hp", "learning_starts=-5", "--steps",
+                                              "2000", "--out", str(out)], "--hyperparams",
+                                 capsys, out=out)
+    assert "learning_starts must be an integer >= 0, got -5" in line and "--steps" not in line
