@@ -129,7 +129,13 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
         plot_trajectory(out / f"{label}_trajectory.png", record, label)
 
     print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
-    records_in_order = runner.run_many(configs, workers=args.workers, progress=True, on_result=keep)
+    try:
+        records_in_order = runner.run_many(configs, workers=args.workers, progress=True,
+                                           on_result=keep)
+    except ValueError as error:  # refused mid-run, e.g. a feedback a baseline cannot calibrate from
+        print(f"error: {' '.join(str(error).split())} (the runs finished before it are in "
+              f"{out})", file=sys.stderr)
+        raise SystemExit(1) from None
     for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
         records[_track_label(policy, kp, seed)] = record
         rows.append((config.identity(), summarize(record)))

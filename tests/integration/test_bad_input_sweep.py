@@ -275,3 +275,17 @@ def test_sweep_blames_the_hyperparameter_option_for_a_bad_learning_starts(tmp_pa
                                               "2000", "--out", str(out)], "--hyperparams",
                                  capsys, out=out)
     assert "learning_starts must be an integer >= 0, got -5" in line and "--steps" not in line
+
+
+def test_track_with_a_feedback_cc_model_cannot_calibrate_from_is_one_line(tmp_path, capsys):
+    """zou2022's stereo pair in low light sees no arm: cc_model's probes move no feedback pose,
+    and ``track`` says so in one line naming the feedback (exit 1: the run had started)."""
+    with pytest.raises(SystemExit) as exit_info:
+        eval_main.main(["track", "--preset", "zou2022", "--feedback", "stereo", "--faults",
+                        '{"name": "low_light"}', "--policies", "cc_model", "--cycles", "1",
+                        "--workers", "1", "--out", str(tmp_path / "out")])
+    assert exit_info.value.code == 1
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert "Traceback" not in "\n".join(lines)
+    assert lines[-1].startswith("error: ") and "feedback 'stereo'" in lines[-1]
+    assert "cc_model cannot calibrate from it" in lines[-1]
