@@ -212,9 +212,9 @@ class LocalIKASDMController(BaselinePolicy):
                  "settings": {k: getattr(self, k) for k in ("max_iterations", "batch_size",
                                                              "learning_rate", "skip", "seed")},
                  "learner": _learner_source_digest()}
-        result = cached(parts, compute, use_cache=self.cache)
-        self.network = LocalIKNetwork.from_state(result["network"])
-        self.training = result["training"]
+        self.network, self.training = cached(
+            parts, compute, use_cache=self.cache,
+            use=lambda result: (LocalIKNetwork.from_state(result["network"]), result["training"]))
         return self.training
 
     def _gauges(self):

@@ -248,11 +248,16 @@ class LWPRRWRController(BaselinePolicy):
             inverse.fit(*data)
             return {"forward": forward, "inverse": inverse, "report": report, "tips_mm": data[0]}
 
-        result = cached(self._cache_parts(), compute, use_cache=self.cache)
-        self.forward, self.inverse = result["forward"], result["inverse"]
+        def use(result: dict[str, Any]) -> tuple:
+            forward, inverse = result["forward"], result["inverse"]
+            if not (isinstance(forward, LWPR) and isinstance(inverse, RewardWeightedInverse)):
+                raise TypeError(f"holds a {type(forward).__name__} and a "
+                                f"{type(inverse).__name__}, not an LWPR model and its inverse")
+            return forward, inverse, result["report"], result["tips_mm"]
+
+        self.forward, self.inverse, self.pretraining, self._pretraining_tips_mm = cached(
+            self._cache_parts(), compute, use_cache=self.cache, use=use)
         self.inverse.window = self.window  # the window plays no part in pre-training
-        self.pretraining = result["report"]
-        self._pretraining_tips_mm = result["tips_mm"]
         self._fields_seen = self.forward.fields_per_output
         return self.pretraining
 

@@ -289,3 +289,48 @@ def test_track_with_a_feedback_cc_model_cannot_calibrate_from_is_one_line(tmp_pa
     assert "Traceback" not in "\n".join(lines)
     assert lines[-1].startswith("error: ") and "feedback 'stereo'" in lines[-1]
     assert "cc_model cannot calibrate from it" in lines[-1]
+
+
+# ------------------------------------------------------------------- calibration cache
+@pytest.fixture
+def cache_dir(tmp_path, monkeypatch):
+    from soft_gym.sensing import calibration_cache
+
+    monkeypatch.setattr(calibration_cache, "cache_directory", lambda: tmp_path / "cache")
+    monkeypatch.delenv("SOFT_GYM_CACHE", raising=False)
+    calibration_cache.clear_memory()
+    yield calibration_cache
+    calibration_cache.clear_memory()
+
+
+def test_a_cache_file_with_a_valid_header_and_a_foreign_pickle_is_rebuilt(cache_dir):
+    parts = {"what": "a test calibration"}
+    digest, description = cache_dir.cache_key(parts)
+    cache_dir._store(digest, description, {"forward": 1})  # valid header, someone else's value
+    computed = []
+
+    def compute():
+        computed.append(1)
+        return {"forward": 2, "inverse": 3}
+
+    with pytest.warns(RuntimeWarning, match=r"not this calibration: KeyError: 'inverse'"):
+        assert cache_dir.cached(parts, compute, use=lambda r: r["inverse"]) == 3
+    assert computed == [1]
+    cache_dir.clear_memory()  # the rebuilt file is used from now on, with no warning
+    assert cache_dir.cached(parts, compute, use=lambda r: r["inverse"]) == 3
+    assert computed == [1]
+
+
+@pytest.mark.parametrize("load", ["zhao2021", "zou2022", "local_ik"])
+def test_a_foreign_state_fails_the_way_the_cache_rebuilds_on(load, cache_dir):
+    """What the calibrations' ``use`` raises on a foreign state is one of the cache's
+    rebuild-on errors (the issue's KeyError 'n_gauges', not an uncaught one)."""
+    from agents.learners.local_ik import LocalIKNetwork
+    from soft_gym.sensing.zhao2021.shape_reconstruction import ShapeReconstructor
+    from soft_gym.sensing.zou2022.shape_dnn import ShapeDNN
+
+    from_state = {"zhao2021": ShapeReconstructor.from_state, "zou2022": ShapeDNN.from_state,
+                  "local_ik": LocalIKNetwork.from_state}[load]
+    for foreign in ({}, {"n_gauges": "six"}, [1, 2]):
+        with pytest.raises(cache_dir._FOREIGN):
+            from_state(foreign)
