@@ -63,9 +63,10 @@ from eval.report import (markdown_table, plot_error_time, plot_trajectory, write
                          write_results_json)
 from eval.runner import ConfigError, RunConfig, check_configs
 from eval.suite.spec import POLICY_ENV_DEFAULTS
-from soft_gym._cli import (HelpFormatter, check_output_dir, fail, finite_float, int_at_least,
-                           json_or_name, json_value, non_negative_int, positive_float,
-                           positive_int)
+from soft_gym._cli import (HelpFormatter, check_environment, check_output_dir, fail,
+                           finite_float, int_at_least, json_or_name, json_value,
+                           non_negative_int, positive_float, positive_int, seed_int)
+from soft_gym._validation import SEED_MAX
 from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
@@ -147,7 +148,13 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
         plot_trajectory(out / f"{label}_trajectory.png", record, label)
 
     print(f"{len(configs)} runs on {args.workers} worker(s)", flush=True)
-    records_in_order = runner.run_many(configs, workers=args.workers, progress=True, on_result=keep)
+    try:
+        records_in_order = runner.run_many(configs, workers=args.workers, progress=True,
+                                           on_result=keep)
+    except ValueError as error:  # refused mid-run, e.g. a feedback a baseline cannot calibrate from
+        print(f"error: {' '.join(str(error).split())} (the runs finished before it are in "
+              f"{out})", file=sys.stderr)
+        raise SystemExit(1) from None
     for (kp, seed, policy), config, record in zip(runs, configs, records_in_order):
         records[_track_label(policy, kp, seed)] = record
         rows.append((config.identity(), summarize(record)))
@@ -242,8 +249,8 @@ def _paper_parser(sub, name: str, module, help_text: str,
                            formatter_class=HelpFormatter)
     paper.add_argument("--experiments", nargs="+", default=list(module.EXPERIMENTS),
                        choices=list(module.EXPERIMENTS), help="which experiments")
-    paper.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
-                       help=f"{seeds_help}; integers >= 0")
+    paper.add_argument("--seeds", type=seed_int, nargs="+", default=[0],
+                       help=f"{seeds_help}; integers in [0, {SEED_MAX}]")
     return paper
 
 
@@ -317,7 +324,7 @@ def _estimation_parser(sub) -> argparse.ArgumentParser:
                             help="which runs ('all' for every one)")
     estimation.add_argument("--steps", type=int, default=4000,
                             help="control steps of 0.05 s per run, >= 600 (paper: ~4000)")
-    estimation.add_argument("--seed", type=non_negative_int, default=0,
+    estimation.add_argument("--seed", type=seed_int, default=0,
                             help="episode seed (integer >= 0)")
     estimation.add_argument("--out", default="results/estimation",
                             help="output directory (made; must be writable)")
@@ -370,8 +377,8 @@ def _track_parser(sub) -> argparse.ArgumentParser:
                             "baseline needs (local_ik_asdm: "
                             f"{' '.join(POLICY_ENV_DEFAULTS['local_ik_asdm']['obs'])}); SB3 "
                             "agents always get the parts they were trained with")
-    track.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0],
-                       help="episode seeds (integers >= 0)")
+    track.add_argument("--seeds", type=seed_int, nargs="+", default=[0],
+                       help=f"episode seeds (integers in [0, {SEED_MAX}])")
     track.add_argument("--out", default="results/track",
                        help="output directory (made; must be writable)")
     _add_workers(track)
@@ -487,8 +494,8 @@ def _compare_parser(sub) -> argparse.ArgumentParser:
                          help="paths to track (circle, pentagram, rectangle, spiral, star)")
     compare.add_argument("--conditions", nargs="+", default=list(compare_module.CONDITIONS),
                          choices=list(compare_module.CONDITIONS), help="test conditions")
-    compare.add_argument("--seeds", type=non_negative_int, nargs="+", default=[0, 1],
-                         help="episode seeds (integers >= 0)")
+    compare.add_argument("--seeds", type=seed_int, nargs="+", default=[0, 1],
+                         help=f"episode seeds (integers in [0, {SEED_MAX}])")
     compare.add_argument("--cycles", type=positive_int, default=2,
                          help="path cycles per run (>= 1)")
     compare.add_argument("--feedback", default="fused",
@@ -559,8 +566,9 @@ def _suite_parser(sub) -> argparse.ArgumentParser:
     _add_workers(suite)
     suite.add_argument("--resume", action="store_true",
                        help="skip the runs whose record is already in the output directory")
-    suite.add_argument("--seeds", type=non_negative_int, nargs="+", default=None,
-                       help="episode seeds replacing the suite's own (distinct integers >= 0)")
+    suite.add_argument("--seeds", type=seed_int, nargs="+", default=None,
+                       help="episode seeds replacing the suite's own (distinct integers in "
+                            f"[0, {SEED_MAX}])")
     suite.add_argument("--report-only", action="store_true",
                        help="run nothing: write the report from the records there")
     suite.add_argument("--backend", default="process", choices=["process", "serial", "ray"],
@@ -591,9 +599,10 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
         except ImportError as error:
             parser.error(f"--backend ray: {error}")
         backend = ray_backend.make_ray_map(args.address)
-    if args.seeds is not None and (any(seed < 0 for seed in args.seeds)
+    if args.seeds is not None and (any(not 0 <= seed <= SEED_MAX for seed in args.seeds)
                                    or len(set(args.seeds)) != len(args.seeds)):
-        parser.error(f"--seeds must be distinct integers >= 0, got {args.seeds}")
+        parser.error(f"--seeds must be distinct integers >= 0 and <= {SEED_MAX}, got "
+                     f"{args.seeds}")
     if args.report_only and args.resume:
         parser.error("--resume runs the missing runs; --report-only runs none: give one")
     try:
@@ -604,13 +613,20 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
         spec = suite_module.load_suite(args.spec)
         if args.seeds is not None:
             spec = spec.with_seeds(args.seeds)
-        cells = (suite_module.expand(spec) if args.report_only
-                 else suite_module.check_suite(spec, progress=True))
     except ValueError as error:
         parser.error(f"spec: {error}")
     out = Path(args.out or f"results/suite_{spec.name}")
     if args.out is None:
         check_output_dir(parser, "--out", out)
+    try:
+        suite_module.check_records_dir(out)
+    except ValueError as error:
+        fail(parser, "--out", str(error))
+    try:
+        cells = (suite_module.expand(spec) if args.report_only
+                 else suite_module.check_suite(spec, progress=True))
+    except ValueError as error:
+        parser.error(f"spec: {error}")
     if args.report_only and not suite_module.records_dir(out).is_dir():
         parser.error(f"--report-only: no records under {out} (give the --out of a suite run)")
     failure = None
@@ -623,8 +639,15 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
             suite_module.run_suite(spec, out, workers=args.workers, resume=args.resume,
                                    progress=True, check=False, backend=backend)
         except suite_module.SuiteRunError as error:
-            failure = error
+            failure = str(error)
     print(suite_module.write_report(spec, out, cells=cells))
+    bad = [problem for cell in cells
+           if (problem := suite_module.record_problem(out, cell.key)) is not None]
+    if bad and failure is None:
+        shown = "; ".join(str(problem) for problem in bad[:5])
+        more = f" and {len(bad) - 5} more" if len(bad) > 5 else ""
+        failure = (f"{len(bad)} bad record(s) left out of the report: {shown}{more}; run "
+                   f"again with --resume to redo them")
     if failure is not None:
         print(f"error: {failure}", file=sys.stderr)
     print(f"output directory: {out}")
@@ -674,6 +697,7 @@ def main(argv: list[str] | None = None) -> None:
     parsers = {name: command.add_parser(sub) for name, command in COMMANDS.items()}
     args = parser.parse_args(argv)
     command_parser = parsers[args.command]
+    check_environment(command_parser)
     _check_distinct(command_parser, args)
     if args.out is not None:  # suite's default output directory is checked once the spec is read
         check_output_dir(command_parser, "--out", args.out)

@@ -18,6 +18,8 @@ import tempfile
 from pathlib import Path
 from typing import Any, Callable, NoReturn
 
+from soft_gym._validation import SEED_MAX
+
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
     """Keeps the description's line breaks (a module docstring with its examples) and appends
@@ -39,26 +41,30 @@ def _named(function: Callable[[str], Any], name: str) -> Callable[[str], Any]:
     return function
 
 
-def int_at_least(low: int) -> Callable[[str], int]:
-    """An ``add_argument`` type: an integer >= ``low`` (``"3"``, not ``"3.0"`` or ``"abc"``)."""
+def int_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
+    """An ``add_argument`` type: an integer >= ``low`` (and <= ``high`` when given; ``"3"``, not
+    ``"3.0"`` or ``"abc"``)."""
+    wanted = f">= {low}" + ("" if high is None else f" and <= {high}")
 
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {text!r}") \
+            raise argparse.ArgumentTypeError(f"must be an integer {wanted}, got {text!r}") \
                 from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {text!r}")
+        if value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"must be an integer {wanted}, got {text!r}")
         return value
 
-    return _named(parse, f"int>={low}")
+    return _named(parse, f"int>={low}" if high is None else f"int[{low},{high}]")
 
 
 positive_int = int_at_least(1)
 """An integer >= 1 (counts: cycles, steps, workers, threads, episodes)."""
 non_negative_int = int_at_least(0)
-"""An integer >= 0 (seeds, frequencies where 0 means "never")."""
+"""An integer >= 0 (frequencies where 0 means "never", sample counts)."""
+seed_int = int_at_least(0, SEED_MAX)
+"""A seed: an integer in ``[0, SEED_MAX]`` (:data:`soft_gym._validation.SEED_MAX`)."""
 
 
 def finite_float(low: float | None = None, high: float | None = None,
@@ -171,6 +177,17 @@ def check_file(parser: argparse.ArgumentParser, option: str, path: str | os.Path
         parser.error(f"{option} {str(path)!r} {state}: give {what}")
     if not os.access(path, os.R_OK):
         parser.error(f"{option} {str(path)!r} is not readable: give {what}")
+
+
+def check_environment(parser: argparse.ArgumentParser) -> None:
+    """Refuse (one line, exit 2) a bad setting of the environment variables the package reads
+    (``SOFT_GYM_CACHE``), before any work rather than mid-run."""
+    from soft_gym.sensing.calibration_cache import CACHE_ENV_VARIABLE, disk_cache_enabled
+
+    try:
+        disk_cache_enabled()
+    except ValueError as error:
+        parser.error(f"environment variable {CACHE_ENV_VARIABLE}: {error}")
 
 
 def fail(parser: argparse.ArgumentParser, option: str, message: Any) -> NoReturn:

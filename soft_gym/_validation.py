@@ -33,6 +33,26 @@ def require_integer(name: str, value: Any, minimum: int, maximum: int | None = N
     return int(value)
 
 
+SEED_MAX = 2**32 - 1
+"""The largest seed: what every generator a seed reaches accepts (``np.random.seed`` takes
+``[0, 2**32 - 1]``, ``torch.manual_seed`` less than ``2**64``)."""
+
+
+MAX_LEARNING_RATE = 1.0
+"""The largest learning rate of a gradient step (Adam's): beyond it the networks diverge (a
+rate of 1e12 gave 1e11 m poses)."""
+
+
+def require_learning_rate(name: str, value: Any) -> float:
+    """Return ``value`` as float if it is a learning rate in ``(0, MAX_LEARNING_RATE]``."""
+    return require_positive(name, value, maximum=MAX_LEARNING_RATE)
+
+
+def require_seed(name: str, value: Any) -> int:
+    """Return ``value`` as int if it is an integer seed in ``[0, SEED_MAX]``."""
+    return require_integer(name, value, 0, SEED_MAX)
+
+
 def require_bool(name: str, value: Any) -> bool:
     """Return ``value`` if it is a bool (``True``/``False``, numpy's included): no truthy
     strings or numbers."""

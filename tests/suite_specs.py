@@ -35,6 +35,15 @@ def tiny_suite(name: str = "tiny", seeds: tuple[int, ...] = (0,)) -> str:
     return f"name: {name}\nseeds: {list(seeds)}\n" + _ARMS
 
 
+def counting_backend(ran: list[str]):
+    """A serial suite backend that appends every key it runs to ``ran``."""
+    def map_function(fn, items, workers):
+        for item in items:
+            ran.append(item["key"])
+            yield fn(item)
+    return map_function
+
+
 def assert_suite_cli_error(argv: list[str], option: str, tmp_path: Path, capsys) -> None:
     """``python -m eval suite small`` with ``argv`` exits 2 with one line naming ``option``,
     before writing anything."""

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import yaml
 
-from soft_gym._cli import (HelpFormatter, check_file, check_output_dir, fail, non_negative_int,
-                           positive_int)
+from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_output_dir, fail,
+                           non_negative_int, positive_int, seed_int)
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
@@ -54,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="hyperparameter YAML (default train/configs/<algo>.yml)")
     parser.add_argument("--timesteps", type=positive_int, default=None,
                         help="env steps to train, >= 1 (default: the config's n_timesteps)")
-    parser.add_argument("--seed", type=non_negative_int, default=0,
+    parser.add_argument("--seed", type=seed_int, default=0,
                         help="seed of envs, networks, evaluation (integer >= 0)")
     parser.add_argument("--n-envs", type=positive_int, default=None,
                         help="parallel envs, >= 1 (default: the config's n_envs)")
@@ -154,6 +154,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     parser = build_parser()
     args = parser.parse_args(argv)
+    check_environment(parser)
     # lazy: train.trainer (stable-baselines3, PyTorch) costs 1.3 s (-X importtime); --help skips it
     from train.trainer import TrainRequest, train
 

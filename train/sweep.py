@@ -76,7 +76,8 @@ import yaml
 from tqdm import tqdm
 
 import soft_gym  # noqa: F401  (registers the env ids)
-from soft_gym._cli import HelpFormatter, check_output_dir
+from soft_gym._cli import HelpFormatter, check_environment, check_output_dir, seed_int
+from soft_gym._validation import SEED_MAX
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
@@ -186,8 +187,9 @@ def base_entry(request: SweepRequest) -> dict[str, Any]:
         value = getattr(request, name)
         if not _is_int(value) or value < 1:
             raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
-    if not _is_int(request.seed) or request.seed < 0:
-        raise ValueError(f"seed must be an integer >= 0, got {request.seed!r}")
+    if not _is_int(request.seed) or not 0 <= request.seed <= SEED_MAX - EVAL_SEED_OFFSET:
+        raise ValueError(f"seed must be an integer in [0, {SEED_MAX - EVAL_SEED_OFFSET}] (the "
+                         f"evaluation uses seed + {EVAL_SEED_OFFSET}), got {request.seed!r}")
     if request.metric not in METRICS:
         raise ValueError(f"metric must be one of {list(METRICS)}, got {request.metric!r}")
     if request.search not in SEARCHES:
@@ -518,7 +520,7 @@ def build_parser() -> argparse.ArgumentParser:
                              "return (maximised)")
     parser.add_argument("--search", default="random", choices=list(SEARCHES),
                         help="random sampling, or Optuna's TPE")
-    parser.add_argument("--seed", type=int, default=0, help="seed of training, search and "
+    parser.add_argument("--seed", type=seed_int, default=0, help="seed of training, search and "
                         "evaluation")
     parser.add_argument("--workers", type=int, default=max(1, min(2, os.cpu_count() or 1)),
                         help="CPUs of the local Ray, one trial each (ignored with --address)")
@@ -539,6 +541,7 @@ def main(argv: list[str] | None = None) -> None:
     storage directories)."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    check_environment(parser)
     env_kwargs, hyperparameters = parse_env_and_hyperparameters(parser, args)
     args.env = resolve_env_id(parser, args)
     check_conf_file(parser, args.conf_file)
@@ -553,8 +556,7 @@ def main(argv: list[str] | None = None) -> None:
         progress=not args.no_progress)
     options = {"trials": "--trials", "steps": "--steps", "eval_episodes": "--eval-episodes",
                "workers": "--workers", "seed": "--seed", "address": "--address",
-               "hyperparameters": "--hyperparams", "env_id": "--env",
-               "learning_starts": "--steps", "config": "--conf-file"}
+               "hyperparameters": "--hyperparams", "env_id": "--env", "config": "--conf-file"}
     try:
         base_entry(request)  # the request's own fields first: they name their option
     except ValueError as error:

@@ -71,7 +71,7 @@ from scipy.optimize import least_squares
 
 from agents.controllers.modal_map import ModalLengthMap
 from agents.controllers.saturation import SaturationWatch
-from agents.policies.base import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, PolicyRefusal, require_soft_arm_env
 from soft_gym._validation import (require_integer, require_non_negative, require_number,
                                   require_positive)
 from soft_gym.kinematics import cc_jacobian, cc_tip_pose
@@ -128,8 +128,8 @@ class CCModelController(BaselinePolicy):
         spec = self.env.arm
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:
-                raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
-                                 f"{self.env.obs_parts!r}")
+                raise PolicyRefusal(f"the env's obs must include {part!r} for {self.name}, got "
+                                    f"{self.env.obs_parts!r}")
         self.actuation = Actuation.of_env(self.env)
         self.d = spec.chamber_offset_m
         self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa
@@ -187,9 +187,8 @@ class CCModelController(BaselinePolicy):
                 segment, own = divmod(chamber, 3)
                 length_change = self.segment_length_change(segment, displacement)[own]
             if length_change <= 1e-7:
-                raise ValueError(
-                    f"probe of chamber {chamber} gave no lengthening ({length_change:.2e} m):"
-                    " the feedback pose does not respond to actuation")
+                raise self._unresponsive(f"probe of chamber {chamber} gave no lengthening "
+                                         f"({length_change:.2e} m)")
             alpha[chamber] = (pressures[chamber] - self.p_low[chamber]) / length_change
         env.reset()
         self.reset()
@@ -237,19 +236,24 @@ class CCModelController(BaselinePolicy):
                 squares += differential_length @ differential_length
                 pose, lengths, pressures = probe_pose, lengths + change, probe
             if work <= 0.0 or squares <= 1e-14:
-                raise ValueError(
+                raise self._unresponsive(
                     f"the modal probes at level {level} gave no bending (differential length "
-                    f"change {np.sqrt(squares):.2e} m): the feedback pose does not respond to "
-                    "actuation")
+                    f"change {np.sqrt(squares):.2e} m)")
             gains.append(work / squares)
         env.reset()
         self.reset()
         if not np.all(np.diff(means) > 0.0):
-            raise ValueError(f"the modal probes' common pressures gave no increasing extension "
-                             f"(mean chamber lengths {np.round(means, 5).tolist()} m at levels "
-                             f"{list(MODAL_LEVELS)}): the feedback pose does not respond to "
-                             "actuation")
+            raise self._unresponsive(
+                f"the modal probes' common pressures gave no increasing extension (mean chamber "
+                f"lengths {np.round(means, 5).tolist()} m at levels {list(MODAL_LEVELS)})")
         return ModalLengthMap(np.array(means), np.array(commons), np.array(gains))
+
+    def _unresponsive(self, what: str) -> ValueError:
+        """The error of a calibration whose probes did not move the feedback pose: it names the
+        env's feedback source (an error of the run, not a refusal of the arm)."""
+        return ValueError(f"{what}: the pose of feedback {self.env.feedback!r} does not respond "
+                          f"to actuation, so {self.name} cannot calibrate from it (give it "
+                          "another feedback source, or lift the condition that blinds this one)")
 
     def _hold(self, env, pressures_pa: np.ndarray) -> np.ndarray:
         """Command ``pressures_pa`` for ``probe_steps`` control steps; the feedback tip (m)."""
@@ -417,8 +421,8 @@ def _length_map(value: Any, spec) -> str:
     if not isinstance(value, str) or value not in LENGTH_MAPS:
         raise ValueError(f"length_map must be one of {LENGTH_MAPS} or None, got {value!r}")
     if value == "modal" and len(spec.segments) != 1:
-        raise ValueError(f"length_map 'modal' is for one-segment arms; the {spec.name} arm has "
-                         f"{len(spec.segments)} segments (use 'chamber')")
+        raise PolicyRefusal(f"length_map 'modal' is for one-segment arms; the {spec.name} arm has "
+                            f"{len(spec.segments)} segments (use 'chamber')")
     return value
 
 

@@ -42,9 +42,10 @@ import numpy as np
 import agents.learners.local_ik
 from agents.controllers.saturation import SaturationWatch
 from agents.learners.local_ik import LocalIKNetwork
-from agents.policies.base import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, PolicyRefusal, require_soft_arm_env
 from soft_gym._model_files import read_model_state, write_model_state
-from soft_gym._validation import require_in_range, require_integer, require_positive
+from soft_gym._validation import (require_in_range, require_integer, require_learning_rate,
+                                  require_positive, require_seed)
 from soft_gym.robots.actuation import Actuation
 from soft_gym.sensing.calibration_cache import cached, sensor_description
 from soft_gym.sensing.zhao2021.shape_exploration import GAUGE_SETTINGS
@@ -110,8 +111,8 @@ class LocalIKASDMController(BaselinePolicy):
         self.settle_s = require_positive("settle_s", settle_s)
         self.max_iterations = require_integer("max_iterations", max_iterations, 1)
         self.batch_size = require_integer("batch_size", batch_size, 1)
-        self.learning_rate = require_positive("learning_rate", learning_rate)
-        self.seed = require_integer("seed", seed, 0)
+        self.learning_rate = require_learning_rate("learning_rate", learning_rate)
+        self.seed = require_seed("seed", seed)
         if exploration is not None and not isinstance(exploration, dict):
             raise ValueError(f"exploration must be None or a dict of options, got "
                              f"{exploration!r}")
@@ -120,8 +121,8 @@ class LocalIKASDMController(BaselinePolicy):
         self.env = unwrapped
         missing = [part for part in _REQUIRED_PARTS if part not in self.env.obs_parts]
         if missing:
-            raise ValueError(f"the env's obs must include {list(_REQUIRED_PARTS)} for "
-                             f"{self.name}; missing {missing} in {self.env.obs_parts!r}")
+            raise PolicyRefusal(f"the env's obs must include {list(_REQUIRED_PARTS)} for "
+                                f"{self.name}; missing {missing} in {self.env.obs_parts!r}")
         spec = self.env.arm
         self.actuation = Actuation.of_env(self.env)
         self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa
@@ -224,9 +225,9 @@ class LocalIKASDMController(BaselinePolicy):
                  "settings": {k: getattr(self, k) for k in ("max_iterations", "batch_size",
                                                              "learning_rate", "skip", "seed")},
                  "learner": _learner_source_digest()}
-        result = cached(parts, compute, use_cache=self.cache)
-        self.network = LocalIKNetwork.from_state(result["network"])
-        self.training = result["training"]
+        self.network, self.training = cached(
+            parts, compute, use_cache=self.cache,
+            use=lambda result: (LocalIKNetwork.from_state(result["network"]), result["training"]))
         return self.training
 
     def _gauges(self):

@@ -61,14 +61,19 @@ import agents.learners.rwr_inverse
 from agents.learners.lwpr import LWPR
 from agents.controllers.saturation import SaturationWatch
 from agents.learners.rwr_inverse import RewardWeightedInverse
-from agents.policies.base import BaselinePolicy, require_soft_arm_env
+from agents.policies.base import BaselinePolicy, PolicyRefusal, require_soft_arm_env
 from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import (as_finite_array, require_in_range, require_integer,
-                                  require_non_negative, require_positive)
+                                  require_non_negative, require_positive, require_seed)
 from soft_gym.robots.actuation import Actuation
 from soft_gym.sensing.calibration_cache import cached
 
 _MM = 1000.0
+MIN_RIDGE, MAX_RIDGE = 1e-3, 1e6
+"""The range of ``ridge`` (weighted samples): below it a field's normal equations go singular
+online (1e-30 failed at step 12), above it no field learns."""
+MIN_PRETRAIN_SAMPLES = 5
+"""Fewest pre-training transitions: the epochs need a test set (20 %) of at least one."""
 _FORMAT = "lwpr-rwr/1"
 _PRETRAINING_SETTINGS = ("pretrain_waypoints", "leg_decisions", "max_epochs", "init_d", "w_gen",
                          "waypoint_range", "seed", "hold_steps", "attractor_gain", "rest_actuation",
@@ -132,31 +137,39 @@ class LWPRRWRController(BaselinePolicy):
         self.kp = require_positive("kp", kp)
         self.max_step_mm = require_positive("max_step_mm", max_step_mm)
         self.hold_steps = require_integer("hold_steps", hold_steps, 1)
-        self.attractor_gain = require_non_negative("attractor_gain", attractor_gain)
+        self.attractor_gain = require_in_range("attractor_gain", attractor_gain, 0.0, 1.0)
         self.rest_actuation = require_in_range("rest_actuation", rest_actuation, 0.0, 1.0)
-        self.ridge = require_positive("ridge", ridge)
+        self.ridge = require_in_range("ridge", ridge, MIN_RIDGE, MAX_RIDGE)
         self.pretrain_waypoints = require_integer("pretrain_waypoints", pretrain_waypoints, 2)
         self.leg_decisions = require_integer("leg_decisions", leg_decisions, 1)
+        if self.pretrain_waypoints * self.leg_decisions < MIN_PRETRAIN_SAMPLES:
+            raise ValueError(f"pretrain_waypoints * leg_decisions (the pre-training's "
+                             f"transitions) must be >= {MIN_PRETRAIN_SAMPLES} for its 80/20 "
+                             f"train/test split, got {self.pretrain_waypoints} * "
+                             f"{self.leg_decisions}")
         self.max_epochs = require_integer("max_epochs", max_epochs, 1)
         self.init_d = require_positive("init_d", init_d)
         self.w_gen = require_in_range("w_gen", w_gen, 0.0, 1.0)
+        if self.w_gen in (0.0, 1.0):  # LWPR's own range, checked here rather than pre-training
+            raise ValueError(f"w_gen must be in (0, 1) (LWPR's field-creation threshold), got "
+                             f"{w_gen!r}")
         self.waypoint_range = require_in_range("waypoint_range", waypoint_range, 0.0, 1.0)
         self.min_step_mm = require_non_negative("min_step_mm", min_step_mm)
         if self.waypoint_range == 0.0:
             raise ValueError("waypoint_range must be in (0, 1], got 0.0")
-        self.seed = require_integer("seed", seed, 0)
+        self.seed = require_seed("seed", seed)
         if not isinstance(cache, (bool, np.bool_)):
             raise ValueError(f"cache must be True or False, got {cache!r}")
         self.cache = bool(cache)
         self.env = unwrapped
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:
-                raise ValueError(f"the env's obs must include {part!r} for {self.name}, got "
-                                 f"{self.env.obs_parts!r}")
+                raise PolicyRefusal(f"the env's obs must include {part!r} for {self.name}, got "
+                                    f"{self.env.obs_parts!r}")
         spec = self.env.arm
         if spec.n_chambers != 3 * spec.n_segments:
-            raise ValueError(f"{self.name} drives three chambers per segment; the env's arm has "
-                             f"{spec.n_chambers} chambers on {spec.n_segments} segments")
+            raise PolicyRefusal(f"{self.name} drives three chambers per segment; the env's arm has "
+                                f"{spec.n_chambers} chambers on {spec.n_segments} segments")
         self.actuation = Actuation.of_env(self.env)
         self.n_chambers = spec.n_chambers
         self.p_low, self.p_high = spec.p_pre_pa, spec.p_max_pa
@@ -247,11 +260,16 @@ class LWPRRWRController(BaselinePolicy):
             inverse.fit(*data)
             return {"forward": forward, "inverse": inverse, "report": report, "tips_mm": data[0]}
 
-        result = cached(self._cache_parts(), compute, use_cache=self.cache)
-        self.forward, self.inverse = result["forward"], result["inverse"]
+        def use(result: dict[str, Any]) -> tuple:
+            forward, inverse = result["forward"], result["inverse"]
+            if not (isinstance(forward, LWPR) and isinstance(inverse, RewardWeightedInverse)):
+                raise TypeError(f"holds a {type(forward).__name__} and a "
+                                f"{type(inverse).__name__}, not an LWPR model and its inverse")
+            return forward, inverse, result["report"], result["tips_mm"]
+
+        self.forward, self.inverse, self.pretraining, self._pretraining_tips_mm = cached(
+            self._cache_parts(), compute, use_cache=self.cache, use=use)
         self.inverse.window = self.window  # the window plays no part in pre-training
-        self.pretraining = result["report"]
-        self._pretraining_tips_mm = result["tips_mm"]
         self._fields_seen = self.forward.fields_per_output
         return self.pretraining
 

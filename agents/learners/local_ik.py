@@ -36,7 +36,7 @@ from torch import nn
 from tqdm.auto import tqdm
 
 from soft_gym._model_files import read_model_state, write_model_state
-from soft_gym._validation import require_integer, require_positive
+from soft_gym._validation import require_integer, require_learning_rate, require_positive
 from soft_gym.sensing.zhao2021.sfe_pd import Normaliser
 
 _FORMAT = "soft-arm-gym local-ik 1"
@@ -138,7 +138,7 @@ class LocalIKNetwork:
         max_iterations = require_integer("max_iterations", max_iterations, 1)
         require_positive("target_rmse", target_rmse)
         batch_size = require_integer("batch_size", batch_size, 1)
-        require_positive("learning_rate", learning_rate)
+        require_learning_rate("learning_rate", learning_rate)
         x = self._inputs(pressures[:-1], tips[:-1], tips[1:], gauges[:-1])
         y = pressures[1:] / self.p_max_pa
         self.input_norm = Normaliser.fit(x[:n_train])

@@ -11,7 +11,8 @@ Every baseline is registered here, by name, in :data:`BASELINES`; the controller
 in :mod:`agents.controllers` (docs/architecture.md, "Baselines").
 """
 
-from agents.policies.base import BaselinePolicy, check_observation, require_soft_arm_env
+from agents.policies.base import (BaselinePolicy, PolicyRefusal, check_observation,
+                                  require_soft_arm_env)
 from agents.policies.registry import BASELINES, make_policy
 from agents.policies.sb3 import (NORMALIZATION_MARK, SB3_ALGORITHMS, SB3_INTERFACE_KEYS,
                                  SHIPPED_DIR, SB3Policy, mark_model_file, mark_normalization,
@@ -30,7 +31,7 @@ BASELINES.register("lwpr_rwr", "agents.controllers.lwpr_rwr:LWPRRWRController", 
 BASELINES.register("local_ik_asdm", "agents.controllers.local_ik_asdm:LocalIKASDMController",
                    lazy=True)
 
-__all__ = ["BASELINES", "BaselinePolicy", "NORMALIZATION_MARK", "SB3Policy", "SB3_ALGORITHMS",
-           "SB3_INTERFACE_KEYS", "SHIPPED_DIR", "check_observation", "make_policy",
-           "mark_model_file", "mark_normalization", "model_normalization_mark",
+__all__ = ["BASELINES", "BaselinePolicy", "NORMALIZATION_MARK", "PolicyRefusal", "SB3Policy",
+           "SB3_ALGORITHMS", "SB3_INTERFACE_KEYS", "SHIPPED_DIR", "check_observation",
+           "make_policy", "mark_model_file", "mark_normalization", "model_normalization_mark",
            "normalization_file", "require_soft_arm_env", "resolve_sb3_path", "shipped_agents"]

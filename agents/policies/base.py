@@ -17,9 +17,10 @@ env's feedback source) and sensor signals; never privileged simulator state. Bas
 decide chamber pressures turn them into actions with the env's own map,
 :class:`soft_gym.robots.actuation.Actuation` (``Actuation.of_env(env)``), in either action mode.
 
-Here: :class:`BaselinePolicy` (the base class), :func:`check_observation` (an observation against
-its space), :func:`require_soft_arm_env` (the env a baseline controls) and
-:func:`describe_value` (a value in a few words, for error messages).
+Here: :class:`BaselinePolicy` (the base class), :class:`PolicyRefusal` (a baseline declining an
+env it cannot drive), :func:`check_observation` (an observation against its space),
+:func:`require_soft_arm_env` (the env a baseline controls) and :func:`describe_value` (a value in
+a few words, for error messages).
 """
 
 from __future__ import annotations
@@ -32,6 +33,13 @@ import numpy as np
 from gymnasium import spaces
 
 from soft_gym.envs import SoftArmEnv
+
+
+class PolicyRefusal(ValueError):
+    """A policy declining an env it cannot drive by design: an arm of another layout (chambers,
+    segments), an observation without the parts it reads, an SB3 agent's other interface. The
+    suite records such a run as ``n/a`` (:mod:`eval.suite`); every other error while a run is
+    set up (a bad option, a calibration that fails) is an error."""
 
 
 def describe_value(value: Any) -> str:

@@ -24,7 +24,7 @@ import numpy as np
 import yaml
 from gymnasium import spaces
 
-from agents.policies.base import BaselinePolicy, check_observation, describe_value
+from agents.policies.base import BaselinePolicy, PolicyRefusal, check_observation, describe_value
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "trained"
 """Trained agents kept in the repository, one directory each (``sb3:<name>`` loads one)."""
@@ -378,7 +378,7 @@ class SB3Policy(BaselinePolicy):
                  if _space_shapes(ours) != _space_shapes(theirs)]
         if wrong:
             source = "" if self.model_path is None else f" {str(self.model_path)!r}"
-            raise ValueError(
+            raise PolicyRefusal(
                 f"the sb3 model{source} does not fit the env's {' and '.join(wrong)}: the agent "
                 f"reads observations {_describe_space(model_spaces[0])} and writes actions "
                 f"{_describe_space(model_spaces[1])}, the env gives observations "

@@ -14,7 +14,23 @@ Running
 ``resume``). A run that finishes writes ``out/records/<key>.json`` at once and, when it ran, the
 per-step record ``out/records/<key>.npz`` (the arrays of :func:`eval.runner.run_episode`: m, s,
 Pa), each to a temporary file renamed into place, the JSON last, so a killed suite leaves no
-half record and ``resume`` redoes exactly the unfinished cells. The JSON record::
+half record and ``resume`` redoes exactly the unfinished cells.
+
+Every record is verified when it is read (:func:`eval.suite.store.read_record`): readable JSON
+holding an object, its ``key`` the file's and the hash of its ``config`` (a record copied over
+another's is caught), a known ``status``, finite metrics >= 0 (:data:`REQUIRED_METRICS`) when
+done, and the per-step arrays matching the digest ``steps_sha256`` written with it. A bad
+record (truncated, copied over, null metrics, ...) is never trusted: ``resume`` reports it by
+path and runs its cell again; the report leaves it out and lists it (``suite.json``,
+``bad_records``), and the command line then exits with status 1. ``out/records`` being a file
+is refused before any work.
+
+Before running a cell the process claims it with the lock file ``out/locks/<key>.lock``
+(:mod:`eval.suite.locks`: made atomically, holding the owner's pid and host), so two processes
+on one output directory never run the same cell: the second leaves the cells the first holds
+to it. A claim whose process has died is taken over by the next run. Pool workers end with the
+process that started them (:func:`exit_with_parent`), so a killed suite leaves no process
+behind. The JSON record::
 
     {"key", "suite", "labels": {"preset", "path", "condition", "policy", "seed"},
      "config": resolved config, "status": "done" | "n/a", "reason": why n/a (else null),
@@ -23,13 +39,17 @@ half record and ``resume`` redoes exactly the unfinished cells. The JSON record:
                  "last_cycle_path_deviation_mm", "feedback_error_mm", "per_cycle_error_mm",
                  "per_cycle_path_deviation_mm", "n_steps", "n_cycles"} (null when n/a),
      "wall_s", "versions": {soft_arm_gym, gymnasium, stable_baselines3, torch, numpy,
-     pybullet, python}, "git_revision", "steps_file"}
+     pybullet, python}, "git_revision", "steps_file", "steps_sha256"}
 
-``n/a``: the policy could not be set up on the cell's env (a ``ValueError`` while the env and
-policy are made and calibrated, e.g. ``cc_model`` and ``hybrid_gpr`` on a two-segment arm, an
-agent on an arm whose observation it cannot read); the reason is the error's text. Any other
-error leaves no record: the other runs go on, and :class:`SuiteRunError` lists the failed cells
-at the end (their tracebacks in ``out/errors/<key>.txt``); ``resume`` retries them.
+``n/a``: the policy declined the cell's env while it was made and calibrated, with the specific
+refusal :class:`agents.policies.PolicyRefusal` (an arm of another layout, e.g. ``lwpr_rwr`` on
+an arm without three chambers per segment; an observation without the parts it reads; an
+agent on an arm whose observation it cannot read); the reason is the refusal's text. Any other
+error, a ``ValueError`` of the env or the policy too (a bad ``sensing`` option, a feedback pose
+that does not respond to a calibration's probes), is an error, never ``n/a``: it leaves no
+record, the other runs go on, and :class:`SuiteRunError` lists the failed cells at the end
+(their tracebacks in ``out/errors/<key>.txt``; the command line exits with status 1);
+``resume`` retries them.
 
 Backends. A backend is a function ``map(fn, items, workers)`` that applies ``fn`` to every item
 and yields the results as they complete (:data:`MapFunction`). ``"process"`` (default) runs them
@@ -47,34 +67,40 @@ from __future__ import annotations
 #   grid.py          spec -> cells (one run each) and their keys (the hash of a resolved config)
 #   check.py         the spec checked before any run (envs built, baselines made, agents loaded)
 #   run.py           one cell in a worker, the backends (process pool, serial), run_suite
-#   store.py         the records on disk: write, read, finished or not (resume), provenance
+#   store.py         the records on disk: write, read and verify, finished or not (resume),
+#                    provenance
+#   locks.py         a cell claimed by one process (lock files), taken over from a dead one
 #   report.py        records -> leaderboard, aggregates with bootstrap CIs, plots
 #   ray_backend.py   the optional "ray" backend (importing it registers it)
 from eval.suite.check import check_suite
 from eval.suite.grid import ENV_ID, KEY_DIGITS, Cell, canonical_json, cell_key, expand
+from eval.suite.locks import claim, lock_path, release
 from eval.suite.report import (DEFAULT_REPS, PROFILE_REPS, SCORE, aggregate_scores,
                                collect_rows, fraction_within, leaderboard_markdown,
                                leaderboards, performance_profiles, profile_taus,
                                require_rliable, score_matrices, write_report)
 from eval.suite.run import (BACKENDS, MapFunction, SuiteRunError, cell_metrics,
-                            one_compute_thread, order_cells, process_map, register_backend,
-                            run_cell, run_suite, serial_map)
+                            exit_with_parent, one_compute_thread, order_cells, process_map,
+                            register_backend, run_cell, run_suite, serial_map)
 from eval.suite.spec import (ARM_KEYS, DEFAULT_CYCLES, ENV_KEYS, POLICY_ENV_DEFAULTS,
                              POLICY_KEYS, SUITE_ENV_KEYS, SUITES_DIR, TOP_KEYS, ArmEntry,
                              PolicyEntry, SuiteError, SuiteSpec, bundled_suites, load_suite,
                              parse_suite, resolve_suite_path)
-from eval.suite.store import (git_revision, is_finished, library_versions, read_record,
-                              read_steps, record_path, records_dir, steps_path, write_record)
+from eval.suite.store import (REQUIRED_METRICS, RecordError, check_records_dir, git_revision,
+                              is_finished, library_versions, read_record, read_steps,
+                              record_path, record_problem, records_dir, steps_digest,
+                              steps_path, write_record)
 
 __all__ = ["ARM_KEYS", "BACKENDS", "DEFAULT_CYCLES", "DEFAULT_REPS", "ENV_ID", "ENV_KEYS",
-           "KEY_DIGITS", "POLICY_ENV_DEFAULTS", "POLICY_KEYS", "PROFILE_REPS", "SCORE",
-           "SUITES_DIR", "SUITE_ENV_KEYS", "TOP_KEYS", "ArmEntry", "Cell", "MapFunction",
-           "PolicyEntry", "SuiteError", "SuiteRunError", "SuiteSpec", "aggregate_scores",
-           "bundled_suites", "canonical_json", "cell_key", "cell_metrics", "check_suite",
-           "collect_rows", "expand", "fraction_within", "git_revision", "is_finished",
+           "KEY_DIGITS", "POLICY_ENV_DEFAULTS", "POLICY_KEYS", "PROFILE_REPS",
+           "REQUIRED_METRICS", "SCORE", "SUITES_DIR", "SUITE_ENV_KEYS", "TOP_KEYS", "ArmEntry",
+           "Cell", "MapFunction", "PolicyEntry", "RecordError", "SuiteError", "SuiteRunError",
+           "SuiteSpec", "aggregate_scores", "bundled_suites", "canonical_json", "cell_key",
+           "cell_metrics", "check_records_dir", "check_suite", "claim", "collect_rows",
+           "exit_with_parent", "expand", "fraction_within", "git_revision", "is_finished",
            "leaderboard_markdown", "leaderboards", "library_versions", "load_suite",
-           "one_compute_thread", "order_cells", "parse_suite", "performance_profiles",
-           "process_map", "profile_taus", "read_record", "read_steps", "record_path",
-           "records_dir", "register_backend", "require_rliable", "resolve_suite_path",
-           "run_cell", "run_suite", "score_matrices", "serial_map", "steps_path",
-           "write_record", "write_report"]
+           "lock_path", "one_compute_thread", "order_cells", "parse_suite",
+           "performance_profiles", "process_map", "profile_taus", "read_record", "read_steps",
+           "record_path", "record_problem", "records_dir", "register_backend", "release",
+           "require_rliable", "resolve_suite_path", "run_cell", "run_suite", "score_matrices",
+           "serial_map", "steps_digest", "steps_path", "write_record", "write_report"]

@@ -10,7 +10,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from agents.policies import SB3Policy, make_policy
+from agents.policies import PolicyRefusal, SB3Policy, make_policy
 from eval.runner import uncalibrated_env_class
 from eval.suite.grid import Cell, arm_env, canonical_json, expand
 from eval.suite.spec import PolicyEntry, SuiteError, SuiteSpec
@@ -36,6 +36,8 @@ class _EnvChecker:
                 env = self.make(kwargs)
             except (ValueError, TypeError) as error:
                 self.errors[text] = str(error)
+            except Exception as error:  # noqa: BLE001 - reported naming the suite's key
+                self.errors[text] = f"{type(error).__name__}: {error}"
             else:
                 env.close()
                 self.errors[text] = None
@@ -62,14 +64,18 @@ def check_suite(spec: SuiteSpec, progress: bool = False) -> list[Cell]:
     for arm in tqdm(spec.arms, desc="checking the suite envs", disable=not progress,
                     leave=False):
         akey = f"arms.{arm.preset}"
-        base_key = f"{akey}.env" if arm.env else f"{akey}.feedback"
-        _raise_if(source, base_key, checker.error(arm_env(arm, arm.paths[0])))
+        cycles_key = f"{akey}.cycles" if arm.cycles != spec.cycles else "cycles"
+        names = {"preset": akey, "path": f"{akey}.paths[0]", "cycles": cycles_key,
+                 "feedback": f"{akey}.feedback", **{k: f"{akey}.env.{k}" for k in arm.env}}
+        _raise_if(source, *_blame(checker, {}, arm_env(arm, arm.paths[0]), names))
         for i, path in enumerate(arm.paths):
             _raise_if(source, f"{akey}.paths[{i}]", checker.error(arm_env(arm, path)))
         for path in arm.paths:
             for condition, kwargs in arm.conditions.items():
+                ckey = f"{akey}.conditions.{condition}"
+                _raise_if(source, *_blame(checker, arm_env(arm, path), kwargs,
+                                          {k: f"{ckey}.{k}" for k in kwargs}, ckey))
                 merged = {**arm_env(arm, path), **kwargs}
-                _raise_if(source, f"{akey}.conditions.{condition}", checker.error(merged))
                 for j, entry in enumerate(arm.policies):
                     pkey = f"{akey}.policies[{j}]"
                     full = {**merged, **entry.env}
@@ -96,6 +102,20 @@ def check_suite(spec: SuiteSpec, progress: bool = False) -> list[Cell]:
     return cells
 
 
+def _blame(checker: _EnvChecker, base: Mapping[str, Any], added: Mapping[str, Any],
+           names: Mapping[str, str], fallback: str = "") -> tuple[str, str | None]:
+    """``(key, refusal)`` of the first of the ``added`` keyword arguments (in their order, on
+    top of ``base``) whose addition the env refuses, ``key`` its suite key from ``names``;
+    ``(fallback, None)`` when the env accepts them all."""
+    partial = dict(base)
+    for name, value in added.items():
+        partial[name] = value
+        message = checker.error(partial)
+        if message is not None:
+            return names.get(name, fallback), message
+    return fallback, None
+
+
 def _raise_if(source: str, key: str, message: str | None) -> None:
     if message is not None:
         raise SuiteError(source, key, message)
@@ -111,17 +131,22 @@ def _agent_error(name: str) -> str | None:
 
 def _policy_error(env, entry: PolicyEntry, seed: int) -> str | None:
     """A baseline's refusal of the entry's parameters on ``env``; ``None`` when it accepts them
-    or refuses the arm itself (with its defaults too: an ``n/a`` run, not a suite error)."""
+    or declines the arm itself (a :class:`~agents.policies.PolicyRefusal` with its defaults too:
+    an ``n/a`` run, not a suite error). Any other error is the entry's."""
     params = {**entry.params, **{name: seed for name in entry.seed_params}}
     try:
         make_policy(entry.name, env=env, **params)
-    except ValueError as error:
+    except (ValueError, TypeError) as error:
+        if not isinstance(error, PolicyRefusal):
+            return str(error)
         given = str(error)
     else:
         return None
     try:
         make_policy(entry.name, env=env)
-    except ValueError:
+    except PolicyRefusal:
         return None
+    except (ValueError, TypeError):
+        pass
     return given
 

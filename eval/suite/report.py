@@ -68,7 +68,8 @@ from eval.report import (error_peaks_mm, markdown_table, package_version, plot_e
                          save_figure, write_json)
 from eval.suite.grid import Cell, expand
 from eval.suite.spec import SuiteSpec
-from eval.suite.store import git_revision, library_versions, read_record, read_steps
+from eval.suite.store import (RecordError, git_revision, library_versions, read_record,
+                              read_steps)
 
 SCORE = "last_cycle_error_mm"
 """The metric of a run that the leaderboard ranks and the aggregates summarise (mm)."""
@@ -112,14 +113,20 @@ def _global_seed(seed: int) -> Iterator[None]:
 
 # ------------------------------------------------------------------------------ the rows
 def collect_rows(cells: Sequence[Cell], out: str | os.PathLike) -> list[dict[str, Any]]:
-    """One flat row per cell: labels, ``key``, ``status`` (``done``, ``n/a`` or ``missing``),
-    ``reason``, the metrics (mm) and ``wall_s``; plus the record's versions and git revision."""
+    """One flat row per cell: labels, ``key``, ``status`` (``done``, ``n/a``, ``missing`` or
+    ``bad``: a record that fails verification, :func:`eval.suite.store.read_record`, whose
+    ``reason`` names its path and problem), ``reason``, the metrics (mm) and ``wall_s``; plus
+    the record's versions and git revision."""
     rows = []
     for cell in cells:
-        record = read_record(out, cell.key)
         row: dict[str, Any] = {"key": cell.key, **cell.labels}
+        try:
+            record, problem = read_record(out, cell.key), None
+        except RecordError as error:
+            record, problem = None, str(error)
         if record is None:
-            row.update(status="missing", reason=None, wall_s=None)
+            row.update(status="missing" if problem is None else "bad", reason=problem,
+                       wall_s=None)
             row.update({name: math.nan for name in _CSV_METRICS})
         else:
             metrics = record.get("metrics") or {}
@@ -133,7 +140,11 @@ def collect_rows(cells: Sequence[Cell], out: str | os.PathLike) -> list[dict[str
 
 
 def _number(value: Any) -> float:
-    return math.nan if value is None else float(value)
+    """A metric as a float; NaN for anything but a number (a verified record's optional
+    metrics may be null)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return math.nan
+    return float(value)
 
 
 def _mean(values: Sequence[float]) -> float:
@@ -166,6 +177,7 @@ def leaderboards(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, str], lis
             done = [r for r in runs if r["status"] == "done"]
             refused = [r for r in runs if r["status"] == "n/a"]
             missing = [r for r in runs if r["status"] == "missing"]
+            bad = [r for r in runs if r["status"] == "bad"]
             notes = []
             if refused:
                 reason = str(refused[0]["reason"] or "")
@@ -175,6 +187,9 @@ def leaderboards(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, str], lis
                 notes.append(prefix + short)
             if missing:
                 notes.append(f"{len(missing)} of {len(runs)} run(s) not made yet")
+            if bad:
+                notes.append(f"{len(bad)} of {len(runs)} record(s) bad (not trusted; redo "
+                             f"with --resume)")
             paths = list(dict.fromkeys(r["path"] for r in runs))
             entry = {
                 "policy": policy, "runs": len(done), "of": len(runs),
@@ -186,7 +201,8 @@ def leaderboards(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, str], lis
                 "path_deviation_mm": _mean([r["path_deviation_mm"] for r in done]),
                 "per_path": {path: _mean([r[SCORE] for r in done if r["path"] == path])
                              for path in paths},
-                "status": "done" if done else ("n/a" if refused else "missing"),
+                "status": "done" if done else ("n/a" if refused else
+                                               "bad" if bad else "missing"),
                 "note": "; ".join(notes),
             }
             entries.append(entry)
@@ -225,6 +241,9 @@ def score_matrices(rows: Sequence[Mapping[str, Any]], preset: str
             continue
         if "missing" in statuses:
             excluded[policy] = f"{statuses.count('missing')} of {len(statuses)} runs not made yet"
+            continue
+        if "bad" in statuses:
+            excluded[policy] = f"{statuses.count('bad')} of {len(statuses)} records bad"
             continue
         matrix = np.array([[runs[(seed, path, condition)][SCORE] for path, condition in tasks]
                            for seed in seeds], dtype=float)
@@ -337,7 +356,7 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
             "scores_mm": {policy: matrix.tolist() for policy, matrix in matrices.items()},
         }
     counts = {status: sum(r["status"] == status for r in rows)
-              for status in ("done", "n/a", "missing")}
+              for status in ("done", "n/a", "missing", "bad")}
     text = leaderboard_markdown(spec, rows, boards, per_arm, counts)
     (out / "leaderboard.md").write_text(text, encoding="utf-8")
     _write_runs_csv(out / "runs.csv", rows)
@@ -361,6 +380,7 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
                                         if r.get("git_revision")}),
         "counts": {"cells": len(rows), **counts},
         "missing": [r["key"] for r in rows if r["status"] == "missing"],
+        "bad_records": [r["reason"] for r in rows if r["status"] == "bad"],
         "leaderboards": [{"preset": preset, "condition": condition, "entries": entries}
                          for (preset, condition), entries in boards.items()],
         "arms": per_arm,
@@ -396,7 +416,10 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
     if spec.description:
         lines += [spec.description.strip(), ""]
     lines += [f"{len(rows)} runs: {counts['done']} done, {counts['n/a']} n/a, "
-              f"{counts['missing']} not made yet; seeds {list(spec.seeds)}; suite file "
+              f"{counts['missing']} not made yet"
+              + (f", {counts['bad']} bad record(s) left out (listed in suite.json; redo them "
+                 f"with --resume)" if counts.get("bad") else "")
+              + f"; seeds {list(spec.seeds)}; suite file "
               f"`{Path(spec.source).name}` (sha256 {spec.sha256[:12]}).", "",
               "Score: the last-cycle tracking error (mm; mean distance from the target to the "
               "true tip over the last path cycle), lower is better. Aggregates per arm over "
@@ -579,7 +602,7 @@ def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapp
                               {})[labels["policy"]] = cell.key
     loaded: dict[tuple[str, str, str], dict[str, Mapping[str, np.ndarray]]] = {}
     for group, keys in groups.items():
-        records = {policy: read_steps(out, key) for policy, key in keys.items()}
+        records = {policy: _steps_or_none(out, key) for policy, key in keys.items()}
         records = {policy: record for policy, record in records.items() if record is not None}
         if records:
             loaded[group] = records
@@ -594,6 +617,14 @@ def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapp
         plot_error_time(directory / f"error_{stem}.png", records, title,
                         ymax_mm=peaks[preset])
         _plot_trajectories(directory / f"trajectory_{stem}.png", records, title)
+
+
+def _steps_or_none(out: Path, key: str) -> dict[str, np.ndarray] | None:
+    """The verified per-step arrays of ``key``; ``None`` when absent or bad (the rows say so)."""
+    try:
+        return read_steps(out, key)
+    except RecordError:
+        return None
 
 
 def _plot_trajectories(path: Path, records: Mapping[str, Mapping[str, np.ndarray]],

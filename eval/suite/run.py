@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import contextlib
 import copy
-import math
 import multiprocessing
 import os
+import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -16,16 +17,18 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
-from eval.metrics import MM_PER_M, summarize
+from agents.policies import PolicyRefusal
 from eval.runner import RunConfig, build, run_episode
 from eval.suite.check import check_suite
+from eval.suite.locks import LOCKS_DIR, claim, release
 from eval.suite.grid import Cell, expand, label_text
 from eval.suite.spec import SuiteSpec, load_suite
-from eval.suite.store import git_revision, is_finished, library_versions, records_dir, write_record
+from eval.suite.store import (cell_metrics, check_records_dir, git_revision, is_finished,
+                              library_versions, record_problem, records_dir, write_record)
+from soft_gym.sensing.calibration_cache import disk_cache_enabled
 
 
 class SuiteRunError(RuntimeError):
@@ -38,30 +41,6 @@ class SuiteRunError(RuntimeError):
         more = f" and {len(failures) - 5} more" if len(failures) > 5 else ""
         super().__init__(f"{len(failures)} run(s) failed: {names}{more}; tracebacks in "
                          f"errors/<key>.txt; run again with resume to retry them")
-
-
-def cell_metrics(record: Mapping[str, np.ndarray]) -> dict[str, Any]:
-    """The summary metrics of one run's per-step record (mm; see the module docstring)."""
-    summary = summarize(record)
-    track, deviation = summary["tracking"], summary["deviation"]
-    feedback = np.linalg.norm(np.asarray(record["feedback_m"]) - np.asarray(record["tip_m"]),
-                              axis=1) * MM_PER_M
-    finite = feedback[np.isfinite(feedback)]
-    return {
-        "last_cycle_error_mm": track["per_cycle"]["mean_mm"][-1],
-        "mean_error_mm": track["mean_mm"],
-        "max_error_mm": track["max_mm"],
-        "rmse_error_mm": track["rmse_mm"],
-        "final_error_mm": track["final_mm"],
-        "last_cycle_max_error_mm": track["per_cycle"]["max_mm"][-1],
-        "path_deviation_mm": deviation["mean_mm"],
-        "last_cycle_path_deviation_mm": deviation["per_cycle"]["mean_mm"][-1],
-        "feedback_error_mm": float(np.mean(finite)) if finite.size else math.nan,
-        "per_cycle_error_mm": list(track["per_cycle"]["mean_mm"]),
-        "per_cycle_path_deviation_mm": list(deviation["per_cycle"]["mean_mm"]),
-        "n_steps": summary["n_steps"],
-        "n_cycles": summary["n_cycles"],
-    }
 
 
 @contextlib.contextmanager
@@ -89,8 +68,9 @@ def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
     ``config``, ``versions`` and ``git_revision``.
 
     Returns the JSON record (see the module docstring) with the per-step arrays under
-    ``"steps"`` (``None`` when n/a), or, for an error other than a refusal, ``status`` ``"error"``
-    with the ``error`` and its ``traceback``.
+    ``"steps"`` (``None`` when n/a: the policy raised :class:`~agents.policies.PolicyRefusal`),
+    or, for any other error (a ``ValueError`` of the env or the policy too), ``status``
+    ``"error"`` with the ``error`` and its ``traceback``.
     """
     start = time.perf_counter()
     config = task["config"]
@@ -105,7 +85,7 @@ def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
         with one_compute_thread():
             try:
                 env, policy = build(run_config)
-            except ValueError as error:  # the policy cannot drive this arm or env
+            except PolicyRefusal as error:  # the policy declines this arm or env: n/a
                 result.update(status="n/a", reason=" ".join(str(error).split()))
             else:
                 try:
@@ -131,20 +111,41 @@ def serial_map(fn: Callable[[Any], Any], items: Sequence[Any], workers: int = 1)
         yield fn(item)
 
 
+PARENT_POLL_S = 0.5
+"""How often a pool worker checks that the process that started it is alive (s)."""
+
+
+def exit_with_parent(parent_pid: int, poll_s: float = PARENT_POLL_S) -> None:
+    """A pool worker's initializer: a daemon thread that ends this process (exit status 1) as
+    soon as its parent ``parent_pid`` is gone (this process handed to another parent).
+
+    Without it a ``kill -9`` of the suite leaves its workers blocked on the pool's pipe for
+    good: each worker holds the pipe's writing end too, so it never reads end-of-file.
+    """
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(poll_s)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
+
+
 def process_map(fn: Callable[[Any], Any], items: Sequence[Any],
                 workers: int = 1) -> Iterator[Any]:
     """Run ``fn`` on every item in ``workers`` spawned processes (in this process when
     ``workers == 1`` or there is one item), yielding results as they complete.
 
     At most ``2 * workers`` items are submitted ahead, so a stopped iteration leaves little
-    work behind, which is cancelled.
+    work behind, which is cancelled. Each worker ends itself when this process dies (killed
+    too: :func:`exit_with_parent`), and the pool's resource tracker with them.
     """
     if workers == 1 or len(items) <= 1:
         yield from serial_map(fn, items)
         return
     context = multiprocessing.get_context("spawn")
     pending_items = iter(items)
-    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=context) as pool:
+    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=context,
+                             initializer=exit_with_parent, initargs=(os.getpid(),)) as pool:
         running = set()
         try:
             for item in pending_items:
@@ -197,7 +198,9 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
         spec: a loaded suite, a suite file or a bundled suite name.
         out: output directory (records under ``out/records``).
         workers: parallel runs (>= 1).
-        resume: skip the cells whose record is there; without it every cell runs again.
+        resume: skip the cells whose record is there and sound (:func:`eval.suite.store.
+            read_record`); a bad one is reported by path and run again. Without it every cell
+            runs again.
         backend: a name from :data:`BACKENDS` or a map function (:data:`MapFunction`);
             ``"ray"`` is there once :mod:`eval.suite.ray_backend` is imported (it imports
             this module).
@@ -205,10 +208,12 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
         check: run :func:`check_suite` first (the command line has already done so).
 
     Returns:
-        ``{"cells", "skipped", "done", "n/a", "wall_s"}``: counts and the wall time (s).
+        ``{"cells", "skipped", "done", "n/a", "bad", "claimed_elsewhere", "wall_s"}``: counts
+        (``bad``: records found bad and redone with ``resume``; ``claimed_elsewhere``: cells
+        another live process is running, left to it) and the wall time (s).
 
     Raises:
-        ValueError: a bad argument or suite (before any run).
+        ValueError: a bad argument, suite or output directory (before any run).
         SuiteRunError: some runs failed with an error other than a refusal (after the others).
     """
     if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
@@ -223,31 +228,57 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
     else:
         raise ValueError(f"backend must be one of {sorted(BACKENDS)} or a map function, got "
                          f"{backend!r}")
+    check_records_dir(out)
+    disk_cache_enabled()  # SOFT_GYM_CACHE refused now, not in every run
     if not isinstance(spec, SuiteSpec):
         spec = load_suite(spec)
     cells = check_suite(spec, progress=progress) if check else expand(spec)
     start = time.perf_counter()
-    todo = [cell for cell in cells if not (resume and is_finished(out, cell.key))]
+    bad = {cell.key: problem for cell in cells
+           if (problem := record_problem(out, cell.key)) is not None} if resume else {}
+    for problem in bad.values():
+        tqdm.write(f"{problem}: redoing it", file=sys.stderr)
+    candidates = [cell for cell in cells if not (resume and is_finished(out, cell.key))]
     records_dir(out).mkdir(parents=True, exist_ok=True)
-    versions, revision = library_versions(), git_revision()
-    tasks = [{"key": cell.key, "suite": spec.name, "labels": cell.labels, "config": cell.config,
-              "versions": versions, "git_revision": revision} for cell in order_cells(todo)]
-    counts = {"cells": len(cells), "skipped": len(cells) - len(todo), "done": 0, "n/a": 0}
-    failures = []
-    bar = tqdm(total=len(tasks), desc=f"suite {spec.name}", unit="run", disable=not progress)
-    for result in map_function(run_cell, tasks, workers):
-        if result["status"] == "error":
-            failures.append(result)
-            errors = Path(out) / "errors"
-            errors.mkdir(parents=True, exist_ok=True)
-            (errors / f"{result['key']}.txt").write_text(
-                f"{label_text(result['labels'])}\n{result['traceback']}", encoding="utf-8")
-        else:
-            write_record(out, result)
-            counts[result["status"]] += 1
-        bar.set_postfix_str(label_text(result["labels"]), refresh=False)
-        bar.update(1)
-    bar.close()
+    claimed: list[Cell] = []
+    counts = {"cells": len(cells), "skipped": len(cells) - len(candidates), "done": 0, "n/a": 0,
+              "bad": len(bad), "claimed_elsewhere": 0}
+    try:
+        for cell in candidates:
+            if not claim(out, cell.key):
+                counts["claimed_elsewhere"] += 1
+            elif resume and is_finished(out, cell.key):  # finished by another since the scan
+                release(out, cell.key)
+                counts["skipped"] += 1
+            else:
+                claimed.append(cell)
+        if counts["claimed_elsewhere"]:
+            tqdm.write(f"{counts['claimed_elsewhere']} run(s) claimed by another live process "
+                       f"(see {Path(out) / LOCKS_DIR}/): left to it", file=sys.stderr)
+        versions, revision = library_versions(), git_revision()
+        tasks = [{"key": cell.key, "suite": spec.name, "labels": cell.labels,
+                  "config": cell.config, "versions": versions, "git_revision": revision}
+                 for cell in order_cells(claimed)]
+        failures = []
+        bar = tqdm(total=len(tasks), desc=f"suite {spec.name}", unit="run",
+                   disable=not progress)
+        for result in map_function(run_cell, tasks, workers):
+            if result["status"] == "error":
+                failures.append(result)
+                errors = Path(out) / "errors"
+                errors.mkdir(parents=True, exist_ok=True)
+                (errors / f"{result['key']}.txt").write_text(
+                    f"{label_text(result['labels'])}\n{result['traceback']}", encoding="utf-8")
+            else:
+                write_record(out, result)
+                counts[result["status"]] += 1
+            release(out, result["key"])
+            bar.set_postfix_str(label_text(result["labels"]), refresh=False)
+            bar.update(1)
+        bar.close()
+    finally:
+        for cell in claimed:
+            release(out, cell.key)
     counts["wall_s"] = time.perf_counter() - start
     if failures:
         raise SuiteRunError(failures)

@@ -5,6 +5,12 @@ An alias fixes its preset: ``gym.make("SoftArmReachWang2023-v0", preset="ho2018"
 ``ValueError`` (the same preset passed again is accepted); the generic ids take any preset.
 Every id refuses a keyword argument the env does not take with a ``ValueError`` naming it and
 listing the ones it takes (rather than Python's ``TypeError``).
+
+The entry points carry no ``metadata`` of their own, on purpose: ``gymnasium.make`` reads an entry
+point's ``render_modes`` and, for ``render_mode="human"``, swaps in ``"rgb_array"`` behind its
+``HumanRendering`` wrapper, which fails only at ``reset`` for want of pygame. Without them the
+env itself sees ``"human"`` and refuses it at construction, naming the modes it has
+(``SoftArmEnv.metadata["render_modes"]``, which the made env reports).
 """
 
 from __future__ import annotations
@@ -42,8 +48,6 @@ def make_env(**kwargs: Any) -> SoftArmEnv:
     return SoftArmEnv(**kwargs)
 
 
-make_env.metadata = SoftArmEnv.metadata  # what gymnasium.make reads of an entry point
-
 
 def make_alias_env(alias_preset: str, **kwargs: Any) -> SoftArmEnv:
     """The entry point of the alias ids: a :class:`SoftArmEnv` on the alias's preset.
@@ -58,9 +62,6 @@ def make_alias_env(alias_preset: str, **kwargs: Any) -> SoftArmEnv:
     """
     check_arguments(kwargs)
     return SoftArmEnv(**_with_alias_preset(alias_preset, kwargs))
-
-
-make_alias_env.metadata = SoftArmEnv.metadata  # what gymnasium.make reads of an entry point
 
 
 def _with_alias_preset(alias_preset: str, kwargs: dict[str, Any]) -> dict[str, Any]:

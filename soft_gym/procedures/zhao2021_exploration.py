@@ -151,5 +151,6 @@ def cached_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig,
     parts = {"what": "zhao2021 shape reconstruction", "arm": repr(spec),
              "gauges": sensor_description(gauges, GAUGE_SETTINGS), "config": asdict(config),
              **(key or {})}
-    result = cached(parts, compute, use_cache=use_cache)
-    return ShapeReconstructor.from_state(result["state"]), result["report"]
+    return cached(parts, compute, use_cache=use_cache,
+                  use=lambda result: (ShapeReconstructor.from_state(result["state"]),
+                                      result["report"]))

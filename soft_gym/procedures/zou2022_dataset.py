@@ -166,5 +166,5 @@ def cached_shape_dnn(spec: ArmSpec, encoders, stereo=None,
              "encoders": sensor_description(encoders, _ENCODER_SETTINGS),
              "stereo": sensor_description(stereo, _STEREO_SETTINGS),
              "ases": ases_config.describe(), "config": asdict(config)}
-    result = cached(parts, compute, use_cache=use_cache)
-    return ShapeDNN.from_state(result["state"]), result["report"]
+    return cached(parts, compute, use_cache=use_cache,
+                  use=lambda result: (ShapeDNN.from_state(result["state"]), result["report"]))

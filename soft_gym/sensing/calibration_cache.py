@@ -6,8 +6,8 @@ configurations, sensing options, the package's source and the numerical librarie
 computed once and then reused: from memory in the same process, and from a file in the user's
 cache directory (``platformdirs.user_cache_dir("soft-arm-gym")``) in any other, e.g. a
 ``SubprocVecEnv`` worker. ``SOFT_GYM_CACHE=off`` turns the disk cache off (the in-process one
-stays). A file whose header does not match the key, or whose payload digest does not match, is
-ignored with a warning and rebuilt.
+stays). A file whose header does not match the key, whose payload digest does not match, or whose
+value its caller cannot use (a foreign pickle), is ignored with a warning and rebuilt.
 """
 
 from __future__ import annotations
@@ -80,25 +80,44 @@ def sensor_description(sensor, names: tuple[str, ...]) -> str:
     return repr([(name, repr(getattr(sensor, name, None))) for name in names])
 
 
-def cached(parts: dict[str, Any], compute: Callable[[], Any], use_cache: bool = True) -> Any:
-    """The value for the key ``parts``: from memory, from disk, or ``compute()`` (then stored).
+_FOREIGN = (KeyError, IndexError, TypeError, ValueError, AttributeError)
+"""What a cache file whose payload is not the calibration its caller wants raises when used."""
+
+
+def cached(parts: dict[str, Any], compute: Callable[[], Any], use_cache: bool = True,
+           use: Callable[[Any], Any] | None = None) -> Any:
+    """``use(value)`` for the key ``parts``: the value from memory, from disk, or ``compute()``
+    (then stored); without ``use``, the value itself.
 
     ``use_cache=False`` computes afresh and stores nothing (a recalibration in the moment's
-    conditions is not a function of the key). Returns a deep copy each time, so callers may
-    change what they get.
+    conditions is not a function of the key). ``use`` turns the value into what the caller
+    needs (e.g. a model from its state): a disk file whose value it cannot use (a foreign
+    pickle: a missing key, a wrong type) is ignored with a warning and rebuilt, like a file
+    whose header does not match. Each call works on a deep copy, so callers may change what
+    they get.
     """
+    use = (lambda value: value) if use is None else use
     if not use_cache:
-        return compute()
+        return use(compute())
     digest, description = cache_key(parts)
     if digest in _memory:
-        return copy.deepcopy(_memory[digest])
+        return use(copy.deepcopy(_memory[digest]))
     value = _load(digest, description) if disk_cache_enabled() else None
-    if value is None:
-        value = compute()
-        if disk_cache_enabled():
-            _store(digest, description, value)
+    if value is not None:
+        try:
+            result = use(copy.deepcopy(value))
+        except _FOREIGN as error:
+            warnings.warn(f"ignoring calibration cache file {str(_path(digest))!r} (its content "
+                          f"is not this calibration: {type(error).__name__}: {error}); "
+                          "calibrating afresh", RuntimeWarning, stacklevel=2)
+        else:
+            _memory[digest] = value
+            return result
+    value = compute()
+    if disk_cache_enabled():
+        _store(digest, description, value)
     _memory[digest] = copy.deepcopy(value)
-    return value
+    return use(value)
 
 
 def clear_memory() -> None:

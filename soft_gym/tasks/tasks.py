@@ -133,7 +133,14 @@ class ReachTask(_TrackingReward):
 
 def within_reach(spec: ArmSpec, name: str, point_m: Any) -> np.ndarray:
     """``point_m`` as a float (3,) array, refused with a ``ValueError`` naming ``name`` unless it
-    is finite and within the arm's reach of its base (:attr:`ArmSpec.max_reach_m`)."""
+    is three finite numbers (not booleans or text) within the arm's reach of its base
+    (:attr:`ArmSpec.max_reach_m`)."""
+    try:
+        kind = np.asarray(point_m).dtype.kind
+    except (TypeError, ValueError):  # ragged nesting: as_finite_array says what is wrong
+        kind = "f"
+    if kind not in "iuf":
+        raise ValueError(f"{name} must be three numbers (m), got {point_m!r}")
     point = as_finite_array(name, point_m, shape=(3,))
     if np.linalg.norm(point) > spec.max_reach_m:
         raise ValueError(f"{name} must lie within the {spec.name} arm's reach of "

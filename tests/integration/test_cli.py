@@ -17,6 +17,7 @@ import eval.papers.estimation as estimation
 from soft_gym import demo
 from train import ship
 from train.__main__ import main as train_main
+from cli_errors import assert_one_line_error
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT = re.compile(r"\(default:\s+[^)]+\)")
@@ -148,24 +149,6 @@ def wrong_models(tmp_path_factory) -> dict[str, str]:
     directory = tmp_path_factory.mktemp("wrong_models")
     return {"obs": f"sb3:{_wrong_space_model(directory / 'obs.zip', 5, 3)}",
             "act": f"sb3:{_wrong_space_model(directory / 'act.zip', 16, 9)}"}
-
-
-def assert_one_line_error(main, argv: list[str], option: str, capsys, out: Path | None = None,
-                          also: str | None = None) -> str:
-    """``main(argv)`` exits 2 printing argparse's usage and one error line that names
-    ``option`` (and ``also``), with no traceback, before writing ``out``; returns the line."""
-    with pytest.raises(SystemExit) as exit_info:
-        main(argv)
-    assert exit_info.value.code == 2, argv
-    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
-    errors = [line for line in lines if ": error:" in line]
-    assert len(errors) == 1 and lines[-1] == errors[0], lines
-    assert all(line.startswith("usage:") or line.startswith(" ") for line in lines[:-1]), lines
-    assert "Traceback" not in "\n".join(lines)
-    assert option in errors[0], (option, errors[0])
-    assert also is None or also in errors[0], (also, errors[0])
-    assert out is None or not out.exists(), "wrote output before refusing"
-    return errors[0]
 
 
 NOT_A_DIR = "NOT_A_DIR"

@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from soft_gym._validation import (fields_from_options, require_integer, require_non_negative,
-                                  require_positive)
+from soft_gym._validation import (fields_from_options, require_integer, require_learning_rate,
+                                  require_non_negative, require_positive, require_seed)
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing.zhao2021.backbone_fit import fit_backbone
 from soft_gym.sensing.zhao2021.shape_exploration import N_KEY_POINTS
@@ -67,11 +67,11 @@ class ReconstructionConfig:
         require_integer("max_iterations", self.max_iterations, 1)
         require_positive("target_rmse", self.target_rmse)
         require_integer("batch_size", self.batch_size, 1)
-        require_positive("learning_rate", self.learning_rate)
+        require_learning_rate("learning_rate", self.learning_rate)
         if not isinstance(self.dropout, (int, float)) or not 0.0 <= self.dropout < 1.0:
             raise ValueError(f"dropout must be a number in [0, 1), got {self.dropout!r}")
         require_integer("n_points", self.n_points, 2)
-        require_integer("seed", self.seed, 0)
+        require_seed("seed", self.seed)
 
     @classmethod
     def from_options(cls, options: dict[str, Any]) -> "ReconstructionConfig":

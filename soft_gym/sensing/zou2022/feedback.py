@@ -44,6 +44,7 @@ stays unseen.
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 import numpy as np
@@ -53,7 +54,8 @@ from soft_gym.sensing.zou2022.cc_shape import cc_shape
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.measurement import Measurement
 from soft_gym.sensing.zou2022.shape_dnn import STEREO_INTRINSICS, ShapeDNNConfig
-from soft_gym.sensing.zou2022.stereo_shape import ASESConfig, estimate_stereo_shape
+from soft_gym.sensing.zou2022.stereo_shape import N_POINTS, ASESConfig, estimate_stereo_shape
+from soft_gym.sensors.stereo import StereoCamera
 
 
 def tangent_quaternion(points_m: np.ndarray) -> np.ndarray:
@@ -130,6 +132,10 @@ class StereoFeedback(FeedbackSource):
     def __init__(self, options: dict | None = None) -> None:
         self.spec: ArmSpec | None = None
         self.config = ASESConfig.from_options(dict(options or {}))
+        if self.config.n_points != N_POINTS:
+            raise ValueError(f"n_points must be {N_POINTS} for the stereo feedback source (the "
+                             f"env's shape part and the baselines read the points P_0..P_6), got "
+                             f"{self.config.n_points!r}")
         self._last_good: np.ndarray | None = None
         self._held = 0
         self._last_time_s = -np.inf
@@ -171,6 +177,11 @@ class EncoderDNNFeedback(FeedbackSource):
         if stereo is not None and not isinstance(stereo, dict):
             raise ValueError(f"stereo must be a dict of StereoCamera keyword arguments, got "
                              f"{stereo!r}")
+        allowed = [name for name in inspect.signature(StereoCamera).parameters]
+        unknown = [name for name in (stereo or {}) if name not in allowed]
+        if unknown:
+            raise ValueError(f"stereo: unknown StereoCamera option {unknown[0]!r}; allowed: "
+                             f"{allowed}")
         self.spec: ArmSpec | None = None
         self.stereo_options = dict(stereo or {})
         self.config = ShapeDNNConfig.from_options(options)

@@ -44,7 +44,8 @@ from tqdm.auto import tqdm
 
 from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import (fields_from_options, require_in_range, require_integer,
-                                  require_non_negative, require_positive)
+                                  require_learning_rate, require_non_negative, require_positive,
+                                  require_seed)
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
 from soft_gym.sensors.stereo import StereoCamera
@@ -107,7 +108,7 @@ class ShapeDNNConfig:
                              f"{self.validation_fraction}")
         require_integer("epochs", self.epochs, 1)
         require_integer("batch_size", self.batch_size, 1)
-        require_positive("learning_rate", self.learning_rate)
+        require_learning_rate("learning_rate", self.learning_rate)
         require_non_negative("l2", self.l2)
         widths = self.hidden_widths
         if (not isinstance(widths, (tuple, list)) or not widths or not all(
@@ -116,7 +117,7 @@ class ShapeDNNConfig:
             raise ValueError(f"hidden_widths must be a non-empty sequence of integers >= 1, got "
                              f"{widths!r}")
         object.__setattr__(self, "hidden_widths", tuple(int(w) for w in widths))
-        require_integer("seed", self.seed, 0)
+        require_seed("seed", self.seed)
 
     @classmethod
     def from_options(cls, options: dict[str, Any]) -> "ShapeDNNConfig":
@@ -230,7 +231,7 @@ class ShapeDNN:
 
         self.n_inputs = require_integer("n_inputs", n_inputs, 1)
         self.hidden_widths = ShapeDNNConfig(hidden_widths=hidden_widths).hidden_widths
-        self.seed = require_integer("seed", seed, 0)
+        self.seed = require_seed("seed", seed)
         torch.manual_seed(self.seed)
         self.network = build_network(self.hidden_widths, self.n_inputs)
         self.input_mean: np.ndarray | None = None
@@ -254,7 +255,7 @@ class ShapeDNN:
         validation = self._check_index("validation", validation, len(lengths))
         epochs = require_integer("epochs", epochs, 1)
         batch_size = require_integer("batch_size", batch_size, 1)
-        require_positive("learning_rate", learning_rate)
+        require_learning_rate("learning_rate", learning_rate)
         require_non_negative("l2", l2)
         targets = points.reshape(len(points), -1)
         self.input_mean = lengths[train].mean(axis=0)

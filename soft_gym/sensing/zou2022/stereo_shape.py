@@ -96,7 +96,7 @@ import cv2
 import numpy as np
 
 from soft_gym._validation import (as_finite_array, fields_from_options, require_in_range,
-                                  require_integer, require_number, require_positive)
+                                  require_integer, require_number, require_positive, require_seed)
 
 N_POINTS = 7
 """``b`` of Table 1: centre points per image, and points ``P_0 .. P_6`` of the backbone."""
@@ -183,7 +183,7 @@ class ASESConfig:
         require_integer("max_contour_points", self.max_contour_points, 10)
         require_positive("epipolar_tolerance_px", self.epipolar_tolerance_px)
         require_positive("base_tolerance_m", self.base_tolerance_m)
-        require_integer("seed", self.seed, 0)
+        require_seed("seed", self.seed)
         require_integer("occlusion_gap_px", self.occlusion_gap_px, 1)
         require_positive("backdrop_tolerance", self.backdrop_tolerance)
         widths = require_number("tip_occlusion_widths", self.tip_occlusion_widths)

@@ -28,8 +28,8 @@ from agents.learners.local_ik import LocalIKNetwork
 from agents.learners.lwpr import LWPR
 from agents.learners.rwr_inverse import RewardWeightedInverse
 from agents.learners.sliding_gp import SlidingWindowGP
-from agents.policies import (BASELINES, NORMALIZATION_MARK, SB3Policy, SHIPPED_DIR,
-                             check_observation, make_policy, mark_model_file,
+from agents.policies import (BASELINES, NORMALIZATION_MARK, PolicyRefusal, SB3Policy,
+                             SHIPPED_DIR, check_observation, make_policy, mark_model_file,
                              model_normalization_mark)
 from eval.runner import RunConfig, run, run_episode
 from soft_gym._model_files import write_model_state
@@ -165,12 +165,12 @@ SHIPPED = SHIPPED_DIR / "sac_wang2023_track"
 ZHAO_OBS = ("pose", "target", "strain", "pressure")
 
 
-def _refused(match: str, call: Callable[[], Any]) -> str:
-    """``call()`` raises exactly ``ValueError`` (no subclass) whose message matches ``match``;
-    returns the message."""
+def _refused(match: str, call: Callable[[], Any], kind: type = ValueError) -> str:
+    """``call()`` raises exactly ``kind`` (no subclass: ``ValueError``, or the declared refusal
+    of an env, ``PolicyRefusal``) whose message matches ``match``; returns the message."""
     with pytest.raises(ValueError) as info:
         call()
-    assert type(info.value) is ValueError, f"{type(info.value).__name__}: {info.value}"
+    assert type(info.value) is kind, f"{type(info.value).__name__}: {info.value}"
     message = str(info.value)
     assert re.search(match, message), message
     return message
@@ -400,11 +400,12 @@ def test_an_sb3_model_with_six_actions_is_refused_for_a_three_chamber_env(tmp_pa
 
     model_path = tmp_path / "six_actions.zip"
     PPO("MlpPolicy", _SpacesEnv(16, 6), n_steps=64, batch_size=64, device="cpu").save(model_path)
-    message = _refused(_named(model_path), lambda: make_policy(f"sb3:{model_path}", env=track))
+    message = _refused(_named(model_path), lambda: make_policy(f"sb3:{model_path}", env=track),
+                       PolicyRefusal)
     assert "actions" in message and "(6,)" in message and "(3,)" in message
     assert "observations" in message and "(16,)" in message
     policy = SB3Policy.load(model_path)  # without an env it loads; check_env refuses later
-    _refused(r"does not fit the env's actions", lambda: policy.check_env(track))
+    _refused(r"does not fit the env's actions", lambda: policy.check_env(track), PolicyRefusal)
     _refused(r"env must be a gymnasium environment", lambda: policy.check_env("track"))
 
 

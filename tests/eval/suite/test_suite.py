@@ -18,7 +18,7 @@ import scipy.stats
 import eval.__main__ as eval_main
 from eval import suite
 from eval.suite import report
-from suite_specs import assert_suite_cli_error, tiny_suite
+from suite_specs import assert_suite_cli_error, counting_backend, tiny_suite
 
 pytest.importorskip("rliable")
 
@@ -146,19 +146,11 @@ def test_seed_params_and_seed_override_enter_the_config(tmp_path):
 
 
 # --------------------------------------------------------------------------- running
-def _counting_backend(ran: list[str]):
-    def map_function(fn, items, workers):
-        for item in items:
-            ran.append(item["key"])
-            yield fn(item)
-    return map_function
-
-
 def test_run_records_na_and_resume_redoes_no_finished_run(tmp_path):
     spec = suite.load_suite(_write(tmp_path, TINY))
     out = tmp_path / "out"
     ran: list[str] = []
-    counts = suite.run_suite(spec, out, backend=_counting_backend(ran), progress=False)
+    counts = suite.run_suite(spec, out, backend=counting_backend(ran), progress=False)
     cells = suite.expand(spec)
     assert sorted(ran) == sorted(c.key for c in cells)
     assert (counts["done"], counts["n/a"], counts["skipped"]) == (2, 1, 0)
@@ -188,7 +180,7 @@ def test_run_records_na_and_resume_redoes_no_finished_run(tmp_path):
     mtimes = {c.key: suite.record_path(out, c.key).stat().st_mtime_ns for c in cells}
     suite.record_path(out, cells[0].key).unlink()
     ran.clear()
-    counts = suite.run_suite(spec, out, resume=True, backend=_counting_backend(ran),
+    counts = suite.run_suite(spec, out, resume=True, backend=counting_backend(ran),
                              progress=False, check=False)
     assert ran == [cells[0].key]
     assert (counts["done"], counts["skipped"]) == (1, 2)
@@ -204,7 +196,7 @@ def test_run_records_na_and_resume_redoes_no_finished_run(tmp_path):
         assert (out / name).is_file(), name
     provenance = json.loads((out / "suite.json").read_text())
     assert provenance["spec_text"] == spec.text and provenance["spec_sha256"] == spec.sha256
-    assert provenance["counts"] == {"cells": 3, "done": 2, "n/a": 1, "missing": 0}
+    assert provenance["counts"] == {"cells": 3, "done": 2, "n/a": 1, "missing": 0, "bad": 0}
 
 
 def test_a_failed_write_leaves_no_record(tmp_path, monkeypatch):
