@@ -104,16 +104,20 @@ def check_suite(spec: SuiteSpec, progress: bool = False) -> list[Cell]:
 
 def _blame(checker: _EnvChecker, base: Mapping[str, Any], added: Mapping[str, Any],
            names: Mapping[str, str], fallback: str = "") -> tuple[str, str | None]:
-    """``(key, refusal)`` of the first of the ``added`` keyword arguments (in their order, on
-    top of ``base``) whose addition the env refuses, ``key`` its suite key from ``names``;
-    ``(fallback, None)`` when the env accepts them all."""
+    """``(key, refusal)`` of the env's refusal of ``added`` on top of ``base``: ``key`` is the
+    suite key (from ``names``) of the first of the ``added`` keyword arguments, in their order,
+    whose addition gives that refusal (``fallback`` if none does alone); ``(fallback, None)``
+    when the env accepts them all. Arguments that only work together (``path="waypoints"`` and
+    ``waypoints_m``) are judged together first, so a partial set is never blamed."""
+    message = checker.error({**base, **added})
+    if message is None:
+        return fallback, None
     partial = dict(base)
     for name, value in added.items():
         partial[name] = value
-        message = checker.error(partial)
-        if message is not None:
+        if checker.error(partial) == message:
             return names.get(name, fallback), message
-    return fallback, None
+    return fallback, message
 
 
 def _raise_if(source: str, key: str, message: str | None) -> None:

@@ -114,6 +114,21 @@ def test_bundled_suites_load_and_expand():
     assert set(suite.bundled_suites()) >= {"default", "small"}
 
 
+@pytest.mark.parametrize("name", ["small", "default"])
+def test_bundled_suites_pass_their_checks(name):
+    """The README's main job and the default suite pass the check a run starts with (an arm
+    whose path needs the arm's waypoints: the check judges keyword arguments that only work
+    together as a whole before it blames one)."""
+    assert len(suite.check_suite(suite.load_suite(name))) == {"small": 30, "default": 426}[name]
+
+
+def test_a_refusal_is_blamed_on_the_key_that_causes_it_not_on_a_partial_set(tmp_path):
+    text = TINY.replace("paths: [circle]", "paths: [waypoints]", 1)
+    spec = suite.load_suite(_write(tmp_path, text, "waypoints.yaml"))
+    with pytest.raises(ValueError, match=r"arms\.wang2023\.paths\[0\].*waypoints_m"):
+        suite.check_suite(spec)
+
+
 # ---------------------------------------------------------------------- expansion and keys
 @pytest.mark.smoke
 def test_expansion_and_keys_are_deterministic(tmp_path):
