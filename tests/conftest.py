@@ -1,11 +1,28 @@
-"""Fixtures shared by the physics and sensor tests."""
+"""Fixtures shared by the physics and sensor tests, and one thread per numerical library.
+
+The test process and the processes it starts (spawned run workers, the zoo's trainer) run
+OpenMP, OpenBLAS, MKL and torch on one thread each unless the environment says otherwise: the
+tests' matrices and networks are small, and on two busy cores a call split over two threads
+waits for a thread that has no core (the ho2018 varying-load experiment took 44 s with two
+threads, 27.5 s with one, the same numbers; soft_gym/sensing/_blas.py does the same for
+the sensing pipeline).
+"""
 
 from __future__ import annotations
 
-import pytest
+import os
 
-from soft_gym.engines import make_simulator
-from soft_gym.simulator import Simulator
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+import pytest  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
+
+from soft_gym.engines import make_simulator  # noqa: E402
+from soft_gym.simulator import Simulator  # noqa: E402
+
+if os.environ["OMP_NUM_THREADS"] == "1":
+    threadpool_limits(1)  # a library loaded before the variables were read
 
 
 @pytest.fixture

@@ -3,6 +3,7 @@ resume, and rl-baselines3-zoo training the registered ids."""
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -210,24 +211,27 @@ def test_cli_help_and_bad_input(capsys):
         train_main(["--resume", "somewhere"])
 
 
-def test_sb3_agent_with_another_interface_is_refused(tmp_path):
-    run_dir = train(TrainRequest(algo="ppo", env_kwargs=FAST_ENV, timesteps=256,
-                                 hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1},
-                                 out_dir=str(tmp_path), eval_freq=0, checkpoint_freq=0,
-                                 progress=False))
+@pytest.fixture(scope="module")
+def small_ppo_run(tmp_path_factory) -> Path:
+    """A 256-step PPO run on FAST_ENV (its directory is only read by the tests that use it)."""
+    return train(TrainRequest(algo="ppo", env_kwargs=FAST_ENV, timesteps=256,
+                              hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1},
+                              out_dir=str(tmp_path_factory.mktemp("small_ppo")), eval_freq=0,
+                              checkpoint_freq=0, progress=False))
+
+
+def test_sb3_agent_with_another_interface_is_refused(small_ppo_run):
+    run_dir = small_ppo_run
     env = gym.make("SoftArmTrackWang2023-v0", obs=("pose", "target"), **FAST_ENV)
     with pytest.raises(ValueError, match="interface"):
         make_policy(f"sb3:{run_dir}", env=env)
     env.close()
 
 
-def test_shipping_keeps_what_loading_needs(tmp_path):
+def test_shipping_keeps_what_loading_needs(tmp_path, small_ppo_run):
     from train.ship import ship
 
-    run_dir = train(TrainRequest(algo="ppo", env_kwargs=FAST_ENV, timesteps=256,
-                                 hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1},
-                                 out_dir=str(tmp_path), eval_freq=0, checkpoint_freq=0,
-                                 progress=False))
+    run_dir = small_ppo_run
     shipped = ship(run_dir, "tiny", destination=tmp_path / "shipped")
     assert sorted(p.name for p in shipped.iterdir()) == [
         "config.yaml", "learning_curve.png", "model.zip", "source.txt", "training.yaml",
@@ -242,7 +246,10 @@ def test_shipping_keeps_what_loading_needs(tmp_path):
 
 
 def test_rl_zoo3_trains_a_registered_id(tmp_path):
-    """rl-baselines3-zoo trains our ids from our config file (its own format)."""
+    """rl-baselines3-zoo trains our ids from our config file (its own format).
+
+    The zoo runs torch with one thread, as ``python -m train`` does (``TrainRequest.threads``):
+    with a thread per core, a busy second core made the 200 tiny gradient steps take 80 s."""
     pytest.importorskip("rl_zoo3")
     command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "sac",
                "--env", "SoftArmTrackWang2023-v0", "--gym-packages", "soft_gym",
@@ -250,7 +257,8 @@ def test_rl_zoo3_trains_a_registered_id(tmp_path):
                "-n", "300", "--eval-freq", "-1", "-f", str(tmp_path), "--seed", "1",
                "--env-kwargs", "feedback:'ground_truth'", "-params", "learning_starts:100",
                "--log-interval", "-1", "--verbose", "0"]
-    result = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=ROOT)
+    result = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=ROOT,
+                            env={**os.environ, "OMP_NUM_THREADS": "1"})
     assert result.returncode == 0, result.stderr[-2000:]
     models = list(tmp_path.rglob("SoftArmTrackWang2023-v0.zip"))
     assert models, result.stdout[-2000:]
