@@ -104,19 +104,21 @@ def check_suite(spec: SuiteSpec, progress: bool = False) -> list[Cell]:
 
 def _blame(checker: _EnvChecker, base: Mapping[str, Any], added: Mapping[str, Any],
            names: Mapping[str, str], fallback: str = "") -> tuple[str, str | None]:
-    """``(key, refusal)`` of the env's refusal of ``added`` on top of ``base``: ``key`` is the
-    suite key (from ``names``) of the first of the ``added`` keyword arguments, in their order,
-    whose addition gives that refusal (``fallback`` if none does alone); ``(fallback, None)``
-    when the env accepts them all. Arguments that only work together (``path="waypoints"`` and
-    ``waypoints_m``) are judged together first, so a partial set is never blamed."""
+    """``(key, refusal)`` when the env refuses ``added`` on top of ``base``: ``key`` is the suite
+    key (from ``names``) of the first of the ``added`` keyword arguments, in their order, whose
+    addition the env refuses, with that refusal (``fallback`` and the whole set's refusal if no
+    partial set is refused); ``(fallback, None)`` when the env accepts them all. The whole set
+    is judged first, so arguments that only work together (``path="waypoints"`` and its
+    ``waypoints_m``) are never blamed for a partial set's refusal."""
     message = checker.error({**base, **added})
     if message is None:
         return fallback, None
     partial = dict(base)
     for name, value in added.items():
         partial[name] = value
-        if checker.error(partial) == message:
-            return names.get(name, fallback), message
+        refusal = checker.error(partial)
+        if refusal is not None:
+            return names.get(name, fallback), refusal
     return fallback, message
 
 
