@@ -76,6 +76,16 @@ class CommonArm:
         self.time_s = 0.0
         self._restart_substeps()
 
+    def _start_episode(self, settle_s: float) -> None:
+        """The end of a reset: the clock and the loads at time 0, then ``settle_s`` (s) of rest
+        with the clock restarted after it."""
+        self.time_s = 0.0
+        self._restart_substeps()
+        self.restart_loads()
+        if settle_s > 0:
+            self.step_physics(settle_s)
+            self.restart_clock()
+
     def _restart_substeps(self) -> None:
         """Count substeps from 0 again and drop the per-substep read-out caches."""
         raise NotImplementedError

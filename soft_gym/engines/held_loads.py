@@ -88,6 +88,25 @@ class HeldForceTable:
         return float(self.chain.station_rest_length[matches[0]]) if len(matches) else 0.0
 
 
+def carry_tip_payload(held: HeldForceTable, centre_of_mass_m: np.ndarray, tip_length_m: float,
+                      payload_kg: float, gravity: np.ndarray) -> np.ndarray:
+    """Carry a point mass at the tip as both engines do (docs/architecture.md, "Tip payloads and
+    the mass matrix"): its mass sits at the tip link's centre of mass ``c`` (m, link frame), which
+    the engine keeps where it is, so the link's inertia about ``c`` gains ``m r^2`` about the
+    transverse axes (``r`` from ``c`` to the tip, ``tip_length_m`` along the link), and a held
+    force couple (``m g`` at the tip, ``-m g`` at ``c``) moves the weight's line of action to the
+    tip without changing the net force.
+
+    Sets the couple on ``held`` and returns the principal inertia to add (kg m^2, (3,)).
+    """
+    tip_point = np.array([0.0, 0.0, tip_length_m])
+    lever_m = np.linalg.norm(tip_point - centre_of_mass_m)
+    weight = payload_kg * gravity
+    held.set("payload_tip", -1, weight, tuple(tip_point), on_body=False)
+    held.set("payload_com", -1, -weight, tuple(centre_of_mass_m), on_body=False)
+    return payload_kg * lever_m**2 * np.array([1.0, 1.0, 0.0])
+
+
 def require_load_capacity(spec: ArmSpec, loads: list, load, gravity: np.ndarray) -> None:
     """Refuse ``load`` if with ``loads`` it would weigh or push more than the arm bears.
 

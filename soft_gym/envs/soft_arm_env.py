@@ -495,23 +495,22 @@ class SoftArmEnv(gym.Env):
             self.sensors["image"].set_faults(make_faults(self._faults.get("image")) + draw.faults)
 
     def step(self, action):
-        action = self.begin_step(action)
+        action = self.check_action(action)
+        self.command(action)
         self.sim.step_physics(self.arm.control_period_s)
         return self.finish_step(action)
 
-    def begin_step(self, action) -> np.ndarray:
-        """The first half of :meth:`step`: check ``action`` and command its pressures; the
-        physics (one ``control_period_s``) comes next, then :meth:`finish_step`. A batch of envs
-        (:class:`~soft_gym.envs.vector.SoftArmVectorEnv`) steps their arms' physics together in
-        between. Returns the checked action."""
-        action = self.check_action(action)
+    def command(self, action: np.ndarray) -> None:
+        """The first half of :meth:`step`: command the pressures of an action checked by
+        :meth:`check_action`; the physics (one ``control_period_s``) comes next, then
+        :meth:`finish_step`. A batch of envs (:class:`~soft_gym.envs.vector.SoftArmVectorEnv`)
+        steps their arms' physics together in between."""
         self._command = self.actuation.pressure(action, self._command)
         self.sim.set_pressures(self._command)
-        return action
 
     def finish_step(self, action: np.ndarray):
         """The second half of :meth:`step`, after the physics: sense, reward, observation and
-        info for the checked ``action`` (from :meth:`begin_step`)."""
+        info for the checked ``action``."""
         self.step_count += 1
         self._sense()
         tip, _ = self.sim.tip_pose()

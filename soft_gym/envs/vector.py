@@ -26,7 +26,6 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array
 
 from soft_gym._validation import require_integer
-from soft_gym.engines.mujoco import MujocoArmSimulator
 from soft_gym.engines.mujoco.stepping import step_arms
 from soft_gym.envs.soft_arm_env import SoftArmEnv
 
@@ -95,7 +94,6 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         self._observations = create_empty_array(first.observation_space, self.num_envs)
         self._needs_reset = np.zeros(self.num_envs, dtype=bool)
         self._executor = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
-        self._sims: list[MujocoArmSimulator] = [env.sim for env in self.envs]
 
     # ------------------------------------------------------------------ gymnasium's API
     def reset(self, *, seed: int | Sequence[int] | None = None, options: dict | None = None):
@@ -138,8 +136,8 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         checked = {i: env.check_action(actions[i]) for i, env in enumerate(self.envs)
                    if not resetting[i]}
         for i, action in checked.items():
-            self.envs[i].begin_step(action)
-        step_arms([self._sims[i] for i in checked], self.envs[0].arm.control_period_s,
+            self.envs[i].command(action)
+        step_arms([self.envs[i].sim for i in checked], self.envs[0].arm.control_period_s,
                   self._executor, self.threads)
         results: list = [None] * self.num_envs
         for i, env in enumerate(self.envs):

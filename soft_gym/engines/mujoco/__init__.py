@@ -2,7 +2,8 @@
 stops native, integrated in C between actuation updates (docs/architecture.md, "The MuJoCo
 engine").
 
-- :mod:`.model`: the chain as an MJCF model (one arm, or a batch of arms side by side).
+- :mod:`.model`: the chain as an MJCF model, with the end stops' tendons or without.
+- :mod:`.stepping`: one arm or a batch of arms advanced in lockstep.
 - :mod:`.simulator`: :class:`MujocoArmSimulator`, the :class:`soft_gym.simulator.Simulator`.
 - :mod:`.world`: :class:`MujocoWorld`, which has no bodies beside the arm and no cameras.
 """

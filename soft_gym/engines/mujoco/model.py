@@ -1,8 +1,8 @@
 """The arm's chain as a MuJoCo model: the same bodies as the PyBullet arm, with its springs native.
 
 Built from :class:`~soft_gym.robots.chain.Chain` (as the PyBullet arm is), as MJCF text compiled
-in memory, one arm or ``n_arms`` side by side in one model (a batch, each arm's chain hanging from
-the world at the origin; the arms never touch: no geom collides):
+in memory, the chain hanging from the world at the origin (no geom collides; a batch of arms is
+one model per arm, :mod:`soft_gym.engines.mujoco.stepping`):
 
 - every sub-link is a body with its one joint (hinge for the bends and the torsion, slide for the
   axial joint), its mass, principal inertia and centre of mass exactly as the chain gives them;
@@ -41,24 +41,17 @@ link-local modes bounded at the presets' physics steps."""
 
 @dataclass
 class ArmModel:
-    """A compiled MuJoCo model of ``n_arms`` copies of one arm, and where each arm's parts are.
+    """A compiled MuJoCo model of one arm, and where its parts are.
 
     Attributes:
-        model: the ``mujoco.MjModel``.
-        n_arms: arms in the model.
-        n_joints: joints of one arm (its ``qpos`` / ``qvel`` block is ``n_joints`` long).
-        body_ids: (n_arms, n_joints) body id of each sub-link.
-        station_body_ids: (n_arms, n_stations) body id of each link's body sub-link.
-        stop_tendons: (4, n_joints) tendon ids of arm 0's stops (upper start, upper end, lower
-            start, lower end); arm ``a``'s are offset by ``a * 4 * n_joints``.
+        model: the ``mujoco.MjModel`` (its ``qpos`` / ``qvel`` are the chain's joints, in order).
+        body_ids: (n_joints,) body id of each sub-link.
+        station_body_ids: (n_stations,) body id of each link's body sub-link.
     """
 
     model: mujoco.MjModel
-    n_arms: int
-    n_joints: int
     body_ids: np.ndarray
     station_body_ids: np.ndarray
-    stop_tendons: np.ndarray
 
 
 def _numbers(values) -> str:
@@ -66,8 +59,8 @@ def _numbers(values) -> str:
     return " ".join(repr(float(v)) for v in np.ravel(values))
 
 
-def _chain_bodies(chain: Chain, arm: int, spec: ArmSpec) -> str:
-    """The nested ``<body>`` elements of one arm's chain (arm index ``arm`` names them)."""
+def _chain_bodies(chain: Chain, spec: ArmSpec) -> str:
+    """The nested ``<body>`` elements of the arm's chain."""
     links = chain.sub_links
     k0 = 1.0 / chain.compliance
     cubic = k0 * chain.stiffening * chain.strain_scale ** 2
@@ -82,17 +75,17 @@ def _chain_bodies(chain: Chain, arm: int, spec: ArmSpec) -> str:
             geom = (f'<geom type="cylinder" size="{_numbers([segment.outer_radius_m, half])}" '
                     f'pos="0 0 {half!r}" contype="0" conaffinity="0" group="1" mass="0"/>')
         opened.append(
-            f'<body name="a{arm}_l{i}" pos="{_numbers(links.positions[i])}">'
+            f'<body name="l{i}" pos="{_numbers(links.positions[i])}">'
             f'<inertial pos="{_numbers(links.inertial_positions[i])}" '
             f'mass="{float(links.masses[i])!r}" diaginertia="{_numbers(links.inertias[i])}"/>'
-            f'<joint name="a{arm}_j{i}" type="{joint_type}" axis="{_numbers(JOINT_AXES[kind])}" '
+            f'<joint name="j{i}" type="{joint_type}" axis="{_numbers(JOINT_AXES[kind])}" '
             f'stiffness="{_numbers([k0[i], 0.0, cubic[i]])}" damping="{float(damping[i])!r}" '
             f'springref="0" armature="0" limited="false"/>{geom}')
         closing.append("</body>")
     return "".join(opened) + "".join(reversed(closing))
 
 
-def _stop_tendons(chain: Chain, arm: int) -> str:
+def _stop_tendons(chain: Chain) -> str:
     """Four one-sided dead-band tendon springs per joint: the end stops (see the module)."""
     stops = chain.end_stops()
     start_low, band_low, start_high, band_high = stops.bands()
@@ -108,18 +101,17 @@ def _stop_tendons(chain: Chain, arm: int) -> str:
         )
         for name, low, high, quadratic in sides:
             tendons.append(
-                f'<fixed name="a{arm}_{name}{i}" stiffness="{_numbers([0.0, quadratic])}" '
+                f'<fixed name="{name}{i}" stiffness="{_numbers([0.0, quadratic])}" '
                 f'springlength="{_numbers([low, high])}">'
-                f'<joint joint="a{arm}_j{i}" coef="1"/></fixed>')
+                f'<joint joint="j{i}" coef="1"/></fixed>')
     return "".join(tendons)
 
 
-def arm_model_xml(spec: ArmSpec, chain: Chain, physics_dt_s: float, n_arms: int = 1,
-                  stops: bool = True) -> str:
-    """MJCF text of ``n_arms`` copies of the arm (see the module); ``stops=False`` leaves the
-    end stops' tendons out (the model for an arm whose joints are all in their free range)."""
-    bodies = "".join(_chain_bodies(chain, arm, spec) for arm in range(n_arms))
-    tendons = "".join(_stop_tendons(chain, arm) for arm in range(n_arms)) if stops else ""
+def arm_model_xml(spec: ArmSpec, chain: Chain, physics_dt_s: float, stops: bool = True) -> str:
+    """MJCF text of the arm (see the module); ``stops=False`` leaves the end stops' tendons out
+    (the model for an arm whose joints are all in their free range)."""
+    bodies = _chain_bodies(chain, spec)
+    tendons = _stop_tendons(chain) if stops else ""
     return (
         f'<mujoco model="{spec.name}">'
         f'<compiler angle="radian" inertiafromgeom="false" autolimits="false"/>'
@@ -129,14 +121,10 @@ def arm_model_xml(spec: ArmSpec, chain: Chain, physics_dt_s: float, n_arms: int 
 
 
 def build_arm_model(spec: ArmSpec, chain: Chain, physics_dt_s: float,
-                    n_arms: int = 1, stops: bool = True) -> ArmModel:
-    """Compile the MuJoCo model of ``n_arms`` copies of the arm ``spec`` (chain ``chain``) at the
-    physics step ``physics_dt_s`` (s), with the end stops' tendons or (``stops=False``) without."""
-    model = mujoco.MjModel.from_xml_string(arm_model_xml(spec, chain, physics_dt_s, n_arms,
-                                                         stops))
-    n = chain.n_joints
-    body_ids = np.array([[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"a{arm}_l{i}")
-                          for i in range(n)] for arm in range(n_arms)])
-    stations = body_ids[:, chain.station_link]
-    stop_tendons = np.arange(4 * n).reshape(n, 4).T if stops else np.zeros((4, 0), dtype=int)
-    return ArmModel(model, n_arms, n, body_ids, stations, stop_tendons)
+                    stops: bool = True) -> ArmModel:
+    """Compile the MuJoCo model of the arm ``spec`` (chain ``chain``) at the physics step
+    ``physics_dt_s`` (s), with the end stops' tendons or (``stops=False``) without."""
+    model = mujoco.MjModel.from_xml_string(arm_model_xml(spec, chain, physics_dt_s, stops))
+    body_ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"l{i}")
+                         for i in range(chain.n_joints)])
+    return ArmModel(model, body_ids, body_ids[chain.station_link])

@@ -22,7 +22,7 @@ from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 from soft_gym.engines.chain_readout import ChainReadout, PhysicsDivergedError
 from soft_gym.engines.common_arm import CommonArm
-from soft_gym.engines.held_loads import HeldForceTable, update_payload
+from soft_gym.engines.held_loads import HeldForceTable, carry_tip_payload, update_payload
 from soft_gym.engines.mujoco.model import ArmModel, build_arm_model
 from soft_gym.engines.mujoco.stepping import step_arms
 from soft_gym.engines.mujoco.world import MujocoWorld
@@ -72,8 +72,8 @@ class MujocoArmSimulator(CommonArm):
         self._free_centre, self._free_half_width = stops.free_centre, stops.free_half_width
         self.world = MujocoWorld()
         self._readout = ChainReadout(spec, self.chain)
-        self._bodies = self._arm.body_ids[0]
-        self._station_bodies = self._arm.station_body_ids[0]
+        self._bodies = self._arm.body_ids
+        self._station_bodies = self._arm.station_body_ids
         self.supply = PneumaticSupply(spec)
         self.area_growth = chamber_area_growth(spec)
         self.area_grows = bool(np.any(self.area_growth))
@@ -82,12 +82,15 @@ class MujocoArmSimulator(CommonArm):
         self._nominal_damping = self.model.dof_damping.copy()
         self._nominal_mass = self.model.body_mass.copy()
         self._nominal_inertia = self.model.body_inertia.copy()
-        self._stiffness0 = 1.0 / self.chain.compliance
         self._pressure_to_rest_nominal = pressure_to_rest_matrix(spec, self.chain)
         self._pressure_to_rest = self._pressure_to_rest_nominal
         # joint force per unit effective pressure, (n_chambers, n_dofs): k0 q_rest, which a
         # stiffness scale leaves unchanged (k0 scales up as q_rest scales down)
-        self.moments = (self._stiffness0[:, None] * self._pressure_to_rest_nominal).T.copy()
+        stiffness = 1.0 / self.chain.compliance
+        self.moments = (stiffness[:, None] * self._pressure_to_rest_nominal).T.copy()
+        # arms with equal keys can share one actuation update (stepping.step_arms)
+        self.lockstep_key = (self.physics_dt_s, self.per_actuation, self.moments.tobytes(),
+                             self.area_growth.tobytes(), spec.p_max_pa.tobytes())
         self._held = HeldForceTable(self.chain)
         self.joint_force = self.joint_force_previous = np.zeros(self.model.nv)
         self.wrench: np.ndarray | None = None  # body wrenches of the held forces, (n_bodies, 6)
@@ -124,13 +127,7 @@ class MujocoArmSimulator(CommonArm):
         self.choose_model()
         self.forces_started = False
         self.wrench = self.wrench_previous = None
-        self.time_s = 0.0
-        self.substep = 0
-        self._kinematics_substep = self._tip_substep = -1
-        self.restart_loads()
-        if settle_s > 0:
-            self.step_physics(settle_s)
-            self.restart_clock()
+        self._start_episode(settle_s)
 
     def _restart_substeps(self) -> None:
         self.substep = 0
@@ -255,7 +252,6 @@ class MujocoArmSimulator(CommonArm):
         pressure moments stay. Used by domain randomisation."""
         scale = require_positive("scale", scale)
         self._pressure_to_rest = self._pressure_to_rest_nominal / scale
-        self._stiffness0 = scale / self.chain.compliance
         for model in self._models.values():
             model.jnt_stiffness[:] = self._nominal_stiffness * scale
             model.jnt_stiffnesspoly[:] = self._nominal_cubic * scale
@@ -327,18 +323,13 @@ class MujocoArmSimulator(CommonArm):
         return self._frames
 
     def _apply_payload(self) -> None:
-        """Put the sum of the payloads on the tip link: its mass at the link's centre of mass,
-        the inertia ``m r^2`` about the transverse axes (``r`` from there to the tip), and the
-        weight couple that moves its line of action to the tip."""
+        """Put the sum of the payloads on the tip link (as the PyBullet arm:
+        :func:`~soft_gym.engines.held_loads.carry_tip_payload`), in both models."""
         body = self._bodies[self.chain.tip_link]
         payload = sum(self._payload.values())
         com = np.asarray(self.chain.sub_links.inertial_positions[self.chain.tip_link], float)
-        tip_point = np.array([0.0, 0.0, self.chain.station_rest_length[-1]])
-        lever_m = np.linalg.norm(tip_point - com)
+        added = carry_tip_payload(self._held, com, self.chain.station_rest_length[-1], payload,
+                                  self.gravity)
         for model in self._models.values():
             model.body_mass[body] = self._nominal_mass[body] + payload
-            model.body_inertia[body] = (self._nominal_inertia[body]
-                                        + payload * lever_m**2 * np.array([1.0, 1.0, 0.0]))
-        weight = payload * self.gravity
-        self._held.set("payload_tip", -1, weight, tuple(tip_point), on_body=False)
-        self._held.set("payload_com", -1, -weight, tuple(com), on_body=False)
+            model.body_inertia[body] = self._nominal_inertia[body] + added

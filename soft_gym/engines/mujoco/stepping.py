@@ -46,6 +46,7 @@ class MujocoArm(Protocol):
     wrench_previous: np.ndarray | None
     forces_started: bool
     with_stops: bool
+    lockstep_key: tuple     # equal keys: one actuation update serves the arms
 
     def choose_model(self, lookahead_s: float = 0.0, force_stops: bool = False) -> None: ...
 
@@ -169,13 +170,13 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
 
 
 def _compatible(sims: Sequence[MujocoArm]) -> bool:
-    """Whether the arms can be stepped in lockstep: one arm model, one physics step, their
-    clocks at the same phase of the actuation update."""
+    """Whether the arms can be stepped in lockstep: the same actuation (physics step, pressure
+    moments, bore growth, pressure limits: ``lockstep_key``), their clocks at the same phase of
+    the actuation update."""
     first = sims[0]
-    return all(sim.spec is first.spec or sim.spec == first.spec for sim in sims) and all(
-        sim.physics_dt_s == first.physics_dt_s
-        and sim.substep % sim.per_actuation == first.substep % first.per_actuation
-        for sim in sims)
+    key, phase = first.lockstep_key, first.substep % first.per_actuation
+    return all(sim.lockstep_key == key and sim.substep % sim.per_actuation == phase
+               for sim in sims)
 
 
 def step_arms(sims: Sequence[MujocoArm], seconds: float,

@@ -13,7 +13,7 @@ import numpy as np
 from pybullet_utils import bullet_client
 
 from soft_gym._quaternion import quaternion_to_matrix
-from soft_gym.engines.held_loads import HeldForceTable, update_payload
+from soft_gym.engines.held_loads import HeldForceTable, carry_tip_payload, update_payload
 from soft_gym.engines.pybullet.builder import ArmBody
 from soft_gym.engines.pybullet.mass_matrix import LinkInertias
 
@@ -85,21 +85,11 @@ class TipPayload:
 
     def apply(self, gravity: np.ndarray) -> None:
         """Put the sum of the payloads on the tip link: mass, inertia and weight at the tip
-        (``gravity`` in m/s^2, base frame).
-
-        PyBullet keeps the link's centre of mass ``c`` where it is, so the payload's mass sits at
-        ``c``: its inertia about ``c`` gains ``m r^2`` about the transverse axes (``r`` from ``c``
-        to the tip), and a held force couple (``m g`` at the tip, ``-m g`` at ``c``) moves the
-        weight's line of action to the tip without changing the net force.
-        """
+        (``gravity`` in m/s^2, base frame; :func:`~soft_gym.engines.held_loads.
+        carry_tip_payload`)."""
         link = self.arm.tip_link
         payload = sum(self.masses.values())
         nominal_mass, nominal_inertia = self.inertias.nominal[link]
-        com = self.inertias.centre_of_mass[link]
-        tip_point = np.array([0.0, 0.0, self.arm.station_rest_length[-1]])
-        lever_m = np.linalg.norm(tip_point - com)
-        inertia = nominal_inertia + payload * lever_m**2 * np.array([1.0, 1.0, 0.0])
-        self.inertias.set_link_inertia(link, nominal_mass + payload, inertia)
-        weight = payload * gravity
-        self.forces.set("payload_tip", -1, weight, tuple(tip_point), on_body=False)
-        self.forces.set("payload_com", -1, -weight, tuple(com), on_body=False)
+        added = carry_tip_payload(self.forces, self.inertias.centre_of_mass[link],
+                                  self.arm.station_rest_length[-1], payload, gravity)
+        self.inertias.set_link_inertia(link, nominal_mass + payload, nominal_inertia + added)

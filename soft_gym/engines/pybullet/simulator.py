@@ -304,13 +304,7 @@ class ArmSimulator(CommonArm):
         if self._refinement != 1:  # an episode that ended whipping leaves no finer step behind
             self._refinement = 1
             self.client.setPhysicsEngineParameter(fixedTimeStep=self.physics_dt_s)
-        self._frames_substep = self._positions_substep = self._tip_substep = -1
-        self.time_s = 0.0
-        self._substep = 0
-        self.restart_loads()
-        if settle_s > 0:
-            self.step_physics(settle_s)
-            self.restart_clock()
+        self._start_episode(settle_s)
 
     def _restart_substeps(self) -> None:
         self._substep = 0

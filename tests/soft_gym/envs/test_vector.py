@@ -99,11 +99,11 @@ def test_bad_arguments_are_refused_by_name(kwargs, named):
 def test_bad_actions_and_seeds_are_refused_before_any_arm_moves():
     env = SoftArmVectorEnv(2, engine="mujoco", feedback="ground_truth")
     env.reset(seed=0)
-    times = [sim.time_s for sim in env._sims]
+    times = [arm.sim.time_s for arm in env.envs]
     with pytest.raises(ValueError, match="actions must have shape"):
         env.step(np.zeros((3, 3)))
     with pytest.raises(ValueError, match=r"action must lie in \[-1, 1\]"):
         env.step(np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]))
-    assert [sim.time_s for sim in env._sims] == times
+    assert [arm.sim.time_s for arm in env.envs] == times
     with pytest.raises(ValueError, match="seed must be an integer or 2 seeds"):
         env.reset(seed=[1, 2, 3])
