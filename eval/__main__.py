@@ -12,6 +12,10 @@ occluding hand (``python -m eval benchmark --help``).
 ``compare``: the SB3 agents against the baselines, nominal and out of distribution (see
 ``eval/compare.py``).
 
+``claims``: the papers' headline claims as a ledger, each reproduced, partly or not reproduced
+on every seed against a criterion from the paper's own figures (``eval/claims/``; the last full
+run is docs/claims.md).
+
 ``estimation``: the wang2023 estimation experiments (camera, F-emp and fusion vs ground truth;
 Figs. 6-7, Tables III, IV, VI). ``track``: baselines tracking a path on an arm preset, with loads,
 visual faults and a feedback source, several gains and seeds; a Markdown table with mean +- std,
@@ -52,6 +56,9 @@ from agents.policies import BASELINES, shipped_agents
 from eval import compare as compare_module
 from eval import runner  # runner.run_many, looked up at each call (tests stand in for it)
 from eval import suite as suite_module
+from eval.claims import CLAIMS, PAPERS
+from eval.claims.report import ledger_table, summary_line, write_ledger
+from eval.claims.run import run_ledger, select_claims
 from eval.metrics import add_improvement, improvement, summarize, summary_table
 from eval.papers import estimation as estimation_module
 from eval.papers import ho2018 as ho2018_module
@@ -481,6 +488,91 @@ def _run_zou2022(parser: argparse.ArgumentParser, args: argparse.Namespace) -> N
     print(f"output directory: {args.out}")
 
 
+# --------------------------------------------------------------------------------------- claims
+CLAIMS_DESCRIPTION = (
+    "The papers' headline claims as a ledger: run the experiments behind each claim for every "
+    "seed and report each claim reproduced, partly or not reproduced, with the numbers that "
+    "decided it (the criteria are the papers' own figures; docs/claims.md holds the last full "
+    "run). Writes claims.md, claims.json and records/ (one summary per experiment and seed, "
+    "read back by --resume) to --out. A full run of every paper on seeds 0-2 takes hours "
+    "(README: 'The claims ledger'); --quick runs a small version of every experiment in "
+    "minutes, its verdicts marked quick.")
+"""``claims --help``'s description."""
+
+DOCS_LEDGER = Path(__file__).resolve().parents[1] / "docs" / "claims.md"
+"""Where ``claims --docs`` writes the ledger of a full run (the repository's docs/claims.md)."""
+
+
+def _claims_parser(sub) -> argparse.ArgumentParser:
+    """The ``claims`` subcommand's parser."""
+    claims = sub.add_parser("claims", help="the papers' claims as a ledger: reproduced, partly "
+                            "or not, per seed", description=textwrap.fill(CLAIMS_DESCRIPTION, 96),
+                            formatter_class=HelpFormatter)
+    claims.add_argument("--papers", nargs="+", default=list(PAPERS), choices=list(PAPERS),
+                        help="whose claims")
+    claims.add_argument("--claims", nargs="+", default=None, metavar="KEY",
+                        help=f"only these claims (of {len(CLAIMS)}: " + ", ".join(CLAIMS) + ")")
+    claims.add_argument("--seeds", type=seed_int, nargs="+", default=[0, 1, 2],
+                        help=f"seeds every claim is judged on (integers in [0, {SEED_MAX}])")
+    claims.add_argument("--quick", action="store_true",
+                        help="a small version of every experiment (minutes; verdicts marked "
+                             "quick)")
+    claims.add_argument("--out", default="results/claims",
+                        help="output directory (made; must be writable)")
+    claims.add_argument("--resume", action="store_true",
+                        help="read the experiment records already in --out instead of running "
+                             "them again")
+    claims.add_argument("--report-only", action="store_true",
+                        help="run nothing: judge each claim on the seeds whose records are in "
+                             "--out (a claim with none is 'not run')")
+    claims.add_argument("--docs", action="store_true",
+                        help="also write the ledger to docs/claims.md (a full run of every "
+                             "claim only)")
+    _add_workers(claims)
+    return claims
+
+
+def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``claims``: check the options, run the experiments, print and write the ledger."""
+    try:
+        select_claims(args.papers, args.claims)
+    except ValueError as error:
+        fail(parser, "--claims", error)
+    if args.report_only and args.resume:
+        parser.error("--resume runs the missing experiments; --report-only runs none: give one")
+    if args.docs and (args.quick or args.claims is not None
+                      or list(args.papers) != list(PAPERS)):
+        parser.error("--docs writes the full ledger: every paper and claim, without --quick")
+    if args.docs:
+        check_output_dir(parser, "--docs", DOCS_LEDGER.parent)
+    command = _claims_command(args)
+    ledger = run_ledger(args.papers, args.seeds, quick=args.quick, out=args.out,
+                        resume=args.resume, workers=args.workers, progress=True,
+                        claims=args.claims, report_only=args.report_only)
+    markdown_path, _ = write_ledger(ledger, args.out, command)
+    print(ledger_table(ledger))
+    print(summary_line(ledger))
+    if args.docs:
+        DOCS_LEDGER.write_text(markdown_path.read_text(encoding="utf-8"), encoding="utf-8")
+        print(f"ledger written to {DOCS_LEDGER}")
+    print(f"output directory: {args.out}")
+
+
+def _claims_command(args: argparse.Namespace) -> str:
+    """The command line that makes this ledger (for its header)."""
+    parts = ["python -m eval claims"]
+    if list(args.papers) != list(PAPERS):
+        parts.append("--papers " + " ".join(args.papers))
+    if args.claims is not None:
+        parts.append("--claims " + " ".join(args.claims))
+    parts.append("--seeds " + " ".join(str(seed) for seed in args.seeds))
+    if args.quick:
+        parts.append("--quick")
+    if args.report_only:
+        parts.append("--report-only")
+    return " ".join(parts)
+
+
 # -------------------------------------------------------------------------------------- compare
 def _compare_parser(sub) -> argparse.ArgumentParser:
     """The ``compare`` subcommand's parser."""
@@ -673,11 +765,13 @@ COMMANDS: dict[str, Command] = {
     "zhao2021": Command(_zhao2021_parser, _run_zhao2021),
     "zou2022": Command(_zou2022_parser, _run_zou2022),
     "compare": Command(_compare_parser, _run_compare),
+    "claims": Command(_claims_parser, _run_claims),
     "suite": Command(_suite_parser, _run_suite),
 }
 """Subcommand name -> its parser and its work, in the order ``--help`` lists them."""
 
-DISTINCT_OPTIONS = ("policies", "kp", "seeds", "paths", "conditions", "experiments", "baselines")
+DISTINCT_OPTIONS = ("policies", "kp", "seeds", "paths", "conditions", "experiments", "baselines",
+                    "papers", "claims")
 """List options whose values must not repeat (each run once)."""
 
 

@@ -49,8 +49,7 @@ def collect_dataset(spec: ArmSpec, encoders, stereo=None,
     encoder = copy.copy(encoders)
     encoder.rng, encoder._last = np.random.default_rng([config.seed, 1]), None
     camera = _private_camera(default_stereo() if stereo is None else stereo, config.seed)
-    p_max = spec.p_max_pa
-    levels = np.floor((p_max - spec.p_pre_pa) / config.pressure_step_pa + 1e-9).astype(int) + 1
+    commands = grid_commands(spec, config, rng)
     n = config.n_samples
     pressures = np.empty((n, spec.n_chambers))
     lengths = np.empty((n, spec.n_chambers))
@@ -62,7 +61,7 @@ def collect_dataset(spec: ArmSpec, encoders, stereo=None,
         sim.reset(settle_s=config.settle_s)
         for i in tqdm(range(n), desc=f"{spec.name} exploration", disable=not progress,
                       leave=False):
-            command = spec.p_pre_pa + config.pressure_step_pa * rng.integers(0, levels)
+            command = commands[i]
             sim.set_pressures(command)
             sim.step_physics(config.settle_s)
             pressures[i] = command
@@ -92,13 +91,58 @@ def collect_dataset(spec: ArmSpec, encoders, stereo=None,
         keep = good
     data = ZouDataset(pressures[keep], lengths[keep], labels[keep], truth[keep],
                       augmented[keep], int(lost.sum()))
-    order = rng.permutation(len(data))
-    n_train = int(round(config.train_fraction * len(data)))
-    n_validation = max(1, int(round(config.validation_fraction * len(data))))
-    data.train = np.sort(order[:n_train])
-    data.validation = np.sort(order[n_train:n_train + n_validation])
-    data.test = np.sort(order[n_train + n_validation:])
+    data.train, data.validation, data.test = split_by_command(
+        data.pressures_pa, config.train_fraction, config.validation_fraction, rng)
     return data
+
+
+def grid_commands(spec: ArmSpec, config: ShapeDNNConfig,
+                  rng: np.random.Generator) -> np.ndarray:
+    """``config.n_samples`` distinct commands of the pressure grid, in random order (Pa).
+
+    The grid is every chamber's ``p_pre .. p_max`` in ``pressure_step_pa`` steps: zou2022's
+    ``31^3 = 29791`` commands (0-3 bar in 0.1 bar steps), swept once each by the paper
+    (Section 5.1). Drawing them without replacement keeps any command out of two samples, so
+    no test sample repeats a training sample's command.
+
+    Raises:
+        ValueError: ``n_samples`` larger than the grid.
+    """
+    levels = np.floor((spec.p_max_pa - spec.p_pre_pa) / config.pressure_step_pa
+                      + 1e-9).astype(int) + 1
+    size = int(np.prod(levels))
+    if config.n_samples > size:
+        raise ValueError(f"n_samples must be at most the pressure grid's {size} commands "
+                         f"({' x '.join(str(int(v)) for v in levels)} levels at "
+                         f"pressure_step_pa={config.pressure_step_pa:g}), got {config.n_samples}")
+    chosen = rng.choice(size, config.n_samples, replace=False)
+    indices = np.stack(np.unravel_index(chosen, tuple(int(v) for v in levels)), axis=1)
+    return spec.p_pre_pa + config.pressure_step_pa * indices
+
+
+def split_by_command(pressures_pa: np.ndarray, train_fraction: float,
+                     validation_fraction: float,
+                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Train / validation / test sample indices with every distinct command in one set only.
+
+    The commands are shuffled and dealt out whole until each set holds its share of the
+    samples (a rotated copy standing in for a lost sample shares its command with the sample it
+    copies, so the two always land in the same set)."""
+    _, group = np.unique(pressures_pa, axis=0, return_inverse=True)
+    group = group.ravel()
+    order = rng.permutation(int(group.max()) + 1)
+    sizes = np.bincount(group)[order]
+    ends = np.cumsum(sizes)
+    n = len(group)
+    n_train = int(round(train_fraction * n))
+    n_validation = max(1, int(round(validation_fraction * n)))
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    position = ends[rank[group]]  # the running count at the end of each sample's command
+    train = position <= n_train
+    validation = ~train & (position <= n_train + n_validation)
+    test = ~train & ~validation
+    return (np.flatnonzero(train), np.flatnonzero(validation), np.flatnonzero(test))
 
 
 def _private_camera(stereo, seed: int):
@@ -165,6 +209,7 @@ def cached_shape_dnn(spec: ArmSpec, encoders, stereo=None,
     parts = {"what": "zou2022 shape DNN", "arm": repr(spec),
              "encoders": sensor_description(encoders, _ENCODER_SETTINGS),
              "stereo": sensor_description(stereo, _STEREO_SETTINGS),
-             "ases": ases_config.describe(), "config": asdict(config)}
+             "ases": ases_config.describe(), "config": asdict(config),
+             "recipe": config.dataset_recipe()}
     return cached(parts, compute, use_cache=use_cache,
                   use=lambda result: (ShapeDNN.from_state(result["state"]), result["report"]))

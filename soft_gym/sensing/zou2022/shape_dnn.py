@@ -126,9 +126,12 @@ class ShapeDNNConfig:
 
     def dataset_recipe(self) -> dict[str, Any]:
         """The fields that change the data set (a cache key)."""
-        return {name: getattr(self, name) for name in
-                ("n_samples", "pressure_step_pa", "settle_s", "augment", "train_fraction",
-                 "validation_fraction", "seed")}
+        recipe = {name: getattr(self, name) for name in
+                  ("n_samples", "pressure_step_pa", "settle_s", "augment", "train_fraction",
+                   "validation_fraction", "seed")}
+        # each grid command once, split by command (no test sample repeats a training command)
+        recipe["sampling"] = "grid without replacement, split by command"
+        return recipe
 
 
 # ---------------------------------------------------------------------------------- data set

@@ -1,8 +1,8 @@
 """The zhao2021 experiments (``python -m eval zhao2021``).
 
-Default: a short version on a small model (the runner's plumbing, reachability of the paper's
-points, the tables). Slow (``pytest -m slow``): the paper's patterns on seeds 0, 1 and 2 with the
-paper's exploration and training (Sections VI-B to VI-D).
+A short version on a small model: the runner's plumbing, reachability of the paper's points, the
+tables. The paper's findings on seeds 0-2 are the claims ledger's (``eval/claims/zhao2021.py``,
+``pytest -m slow tests/eval/claims/test_claims_full.py``).
 """
 
 from __future__ import annotations
@@ -48,41 +48,3 @@ def test_short_point_to_point_run_reports_and_plots(tmp_path):
     table = zhao2021.report_tables({"p2p": result})
     assert "ASDM (d1 = 8)" in table and "| run |" in table
     assert zhao2021.plot_control(tmp_path / "p2p.png", {"p2p": result}).stat().st_size > 10_000
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_paper_patterns(seed, tmp_path):
-    results = zhao2021.run_and_report(list(zhao2021.EXPERIMENTS), [seed], tmp_path,
-                                      progress=False)[f"seed{seed}"]
-    shape = results["shape"]
-    # Table III: the key points predicted as well as the paper's on average (its errors 1.3-2.1
-    # mm; seeds 0-2 here: mean 0.61, 0.38, 1.54 mm, the far tip up to 6.1 mm on seed 2) and the
-    # backbone far within its 5.85 mm (0.37, 0.47, 0.31 mm)
-    assert np.mean(shape["table3"]["errors_mm"]) < 2.14
-    assert shape["mean_backbone_error_mm"] < 5.85
-    # Table IV: the backbone error grows only slightly with the tip load
-    free = np.mean(shape["table4"]["0"]["mean_backbone_mm"])
-    heaviest = np.mean(shape["table4"]["150"]["mean_backbone_mm"])
-    assert heaviest < free + 3.0
-    runs = results["p2p"]["runs"]
-    steps = {label: run["steps"] for label, run in runs.items()}
-    assert all(value is not None for value in steps.values()), steps
-    # ASDM needs no more steps than d = 8 and a fraction of d = 2's (seeds 0-2: 7/7/28, 9/10/37,
-    # 8/9/28; the paper: 14, 24, 75), without oscillating (at most one rise of the distance)
-    assert steps["ASDM (d1 = 8)"] <= steps["d = 8"] < steps["d = 2"] / 2
-    assert runs["ASDM (d1 = 8)"]["distance_rises"] <= 1
-    # loads slow it down but are rejected (seed 0: 9, 10, 12 steps with 50, 75, 100 g)
-    assert steps["ASDM, 100 g"] >= steps["ASDM (d1 = 8)"]
-    sway = results["sway"]
-    assert sway["steps"] is not None
-    assert sway["step_mm_during_pull"] > sway["step_mm_before_pull"]
-    circle = results["circle"]
-    for run in circle.values():  # round the whole circle, free and loaded (seeds 0-2: 53-108 steps)
-        assert run["points_reached"] == zhao2021.CIRCLE_POINTS, run["points_reached"]
-    assert circle["free"]["path_error_mean_mm"] < 5.0
-    carried = circle["50 g, steps 29-60"]["recovery_steps"]
-    assert carried["added"] is not None and carried["added"] <= 10  # seed 0: 4 steps
-    # 263 g is beyond the arm's reach around the circle; once removed, the arm is back in a few
-    heavy = circle["263 g, steps 29-60"]["recovery_steps"]
-    assert heavy["removed"] is not None and heavy["removed"] <= 10  # seed 0: 7 steps

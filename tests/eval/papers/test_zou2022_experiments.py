@@ -3,8 +3,8 @@ continuous bend, ASES under visual faults.
 
 References: the bend's pressure schedule from the paper's text (PMA2 1 -> 2.5 bar in 0.05 bar
 steps over 30 s); the simulator's true points; the paper's qualitative result (Table 4: the DNN
-several times more accurate than constant curvature from the same encoders). The slow test
-trains the DNN on 5000 exploration samples per seed (~8 min each on one core).
+several times more accurate than constant curvature from the same encoders; the claims ledger,
+``eval/claims/zou2022.py``, judges it at the paper's ratio of the 3-D RMSEs, 3.74).
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ def test_table3_reports_the_test_set_against_labels_and_truth(quick_dnn):
     dnn, report = quick_dnn
     result = zou2022.run_table3(dnn, report)
     assert result["n_test"] == len(report["data"].test) > 0
+    assert result["test_share_with_a_training_command"] == 0.0  # split by command: no leak
     for reference in ("ases", "truth"):
         row = result[reference]
         assert np.all(np.isfinite(row["rmse_mm"])) and np.all(row["rmse_mm"] > 0)
@@ -86,15 +87,3 @@ def test_bad_options_are_one_line_errors_before_any_work(argv, option, capsys):
         main(argv)
     assert error.value.code == 2
     assert option in capsys.readouterr().err
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_the_dnn_is_several_times_more_accurate_than_rses_on_the_bend(seed):
-    """zou2022 Table 4's pattern: RSES/DNN end-point RMSE ratio >= 2.5 against ASES (the paper's
-    reference; paper 4.9) and against the true tip."""
-    config = ShapeDNNConfig(n_samples=5000, seed=seed)
-    dnn, _ = zou2022.shape_dnn(config, progress=False)
-    result = zou2022.run_table4(dnn, seed=seed, progress=False)
-    assert result["ratio_tip_vs_ases"] >= 2.5, result
-    assert result["ratio_tip_vs_truth"] >= 2.5, result

@@ -20,7 +20,7 @@ import soft_gym  # noqa: F401
 from soft_gym.robots.presets import get_preset
 from soft_gym.sensing.zou2022.cc_shape import arc_parameters, cc_shape, cc_shape_points
 from soft_gym.sensing.measurement import Measurement
-from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
+from soft_gym.procedures.zou2022_dataset import cached_shape_dnn, grid_commands
 from soft_gym.sensing.zou2022.shape_dnn import (ShapeDNN, ShapeDNNConfig, axis_errors_mm,
                                         default_stereo, rotate_about_axis, true_shape_points)
 from soft_gym.sensing.zou2022.stereo_shape import (ASESConfig, arm_mask, estimate_stereo_shape,
@@ -191,14 +191,31 @@ def test_dataset_split_and_labels(small_dnn):
     data = report["data"]
     assert len(data) == 150 and data.lengths_m.shape == (150, 3)
     sets = [set(data.train), set(data.validation), set(data.test)]
-    assert [len(s) for s in sets] == [105, 22, 23]                 # 70 / 15 / 15 %
+    assert sum(len(s) for s in sets) == 150
+    # 70 / 15 / 15 %, dealt out by whole commands (a rotated stand-in shares its source's)
+    assert abs(len(sets[0]) - 105) <= 2 and abs(len(sets[1]) - 22) <= 2
     assert not (sets[0] & sets[1] or sets[0] & sets[2] or sets[1] & sets[2])
+    commands = [{tuple(row) for row in data.pressures_pa[sorted(s)].tolist()} for s in sets]
+    assert not (commands[0] & commands[1] or commands[0] & commands[2]
+                or commands[1] & commands[2])  # no command in two sets: no test leak
+    real = data.pressures_pa[~data.augmented]
+    assert len(np.unique(real, axis=0)) == len(real)  # each grid command drawn once
     assert np.all(np.isfinite(data.labels_m)) and np.allclose(data.labels_m[:, 0], 0.0)
     # the pressures are points of the 0.1 bar grid within 0-3 bar
     assert np.allclose(data.pressures_pa / 1e4, np.round(data.pressures_pa / 1e4))
     assert data.pressures_pa.min() >= 0.0 and data.pressures_pa.max() <= 3e5
     # ASES labels lie close to the truth
     assert axis_errors_mm(data.labels_m, data.truth_m)["mean_distance_mm"] < 4.5
+
+
+def test_a_data_set_larger_than_the_pressure_grid_is_refused_by_name():
+    coarse = ShapeDNNConfig(n_samples=65, pressure_step_pa=1e5)  # 4 levels a chamber: 64
+    with pytest.raises(ValueError, match=r"n_samples must be at most the pressure grid's 64 "
+                                         r"commands \(4 x 4 x 4 levels"):
+        grid_commands(ZOU, coarse, np.random.default_rng(0))
+    commands = grid_commands(ZOU, ShapeDNNConfig(n_samples=64, pressure_step_pa=1e5),
+                             np.random.default_rng(0))
+    assert len(np.unique(commands, axis=0)) == 64  # the whole grid, once each
 
 
 def test_dnn_learns_the_vision_labels(small_dnn):

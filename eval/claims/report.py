@@ -1,0 +1,78 @@
+"""The ledger as Markdown (``claims.md``) and JSON (``claims.json``)."""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from eval.claims.ledger import VERDICTS
+from eval.report import write_json
+
+MARK = {"reproduced": "reproduced", "partly": "partly", "not reproduced": "NOT reproduced",
+        "not run": "not run"}
+
+
+def summary_line(ledger: dict[str, Any]) -> str:
+    """``"20 claims on seeds 0, 1, 2 (full): 9 reproduced, 6 partly, 5 not reproduced"``."""
+    counts = Counter(entry["verdict"] for entry in ledger["claims"])
+    seeds = ", ".join(str(seed) for seed in ledger["seeds"])
+    mode = "quick" if ledger["quick"] else "full"
+    verdicts = list(VERDICTS) + (["not run"] if counts.get("not run") else [])
+    return (f"{len(ledger['claims'])} claims on seeds {seeds} ({mode}): "
+            + ", ".join(f"{counts.get(verdict, 0)} {verdict}" for verdict in verdicts))
+
+
+def ledger_table(ledger: dict[str, Any]) -> str:
+    """One row per claim: the claim, the paper, ours per seed (the numbers that decided), the
+    verdict."""
+    quick = " (quick)" if ledger["quick"] else ""
+    every = list(ledger["seeds"])
+    lines = ["| claim | paper | ours, per seed | verdict |", "|---|---|---|---|"]
+    for entry in ledger["claims"]:
+        ours = "<br>".join(f"seed {s['seed']}: {s['measured']} ({s['verdict']})"
+                           for s in entry["seeds"])
+        verdict = MARK[entry["verdict"]] + quick
+        judged = [s["seed"] for s in entry["seeds"]]
+        if entry["seeds"] and judged != every:
+            verdict += f" (seeds {', '.join(str(s) for s in judged)} only)"
+        if entry["verdict"] != "reproduced" and entry["cause"]:
+            verdict += f"<br>why: {entry['cause']}"
+        lines.append(f"| **{entry['key']}** ({entry['where']}): {entry['statement']} | "
+                     f"{entry['paper_figures']} | {ours} | {verdict} |")
+    return "\n".join(lines)
+
+
+def markdown(ledger: dict[str, Any], command: str) -> str:
+    """``claims.md``: how it was made, the summary, the table, the criteria and the
+    experiments with their times."""
+    versions = ", ".join(f"{k} {v}" for k, v in ledger["versions"].items())
+    lines = ["# The papers' claims: reproduced or not", "",
+             f"Made by `{command}` (git {ledger['git_revision'] or 'unknown'}; {versions}).",
+             "Each claim's criterion comes from the paper's own figures and was written before "
+             "any run; a claim is *reproduced* when every seed meets it, *not reproduced* when "
+             "no seed meets any of it, *partly* otherwise.", "", f"**{summary_line(ledger)}**",
+             "", ledger_table(ledger), "", "## Criteria", ""]
+    for entry in ledger["claims"]:
+        lines.append(f"- **{entry['key']}**: {entry['criterion']} (experiment "
+                     f"`{entry['experiment']}`)")
+    lines += ["", "## Experiments", "", "| experiment | what runs | seconds per seed |",
+              "|---|---|---|"]
+    for name, experiment in ledger["experiments"].items():
+        what = experiment["description"]
+        if ledger["quick"]:
+            what += f"; quick: {experiment['quick_description']}"
+        seconds = ", ".join(f"{s:.0f}" for s in experiment["seconds"]) or "not run"
+        lines.append(f"| `{name}` | {what} | {seconds} |")
+    total = sum(sum(e["seconds"]) for e in ledger["experiments"].values())
+    lines += ["", f"Total experiment time: {total / 60:.1f} minutes."]
+    return "\n".join(lines) + "\n"
+
+
+def write_ledger(ledger: dict[str, Any], out: str | Path, command: str) -> tuple[Path, Path]:
+    """Write ``claims.md`` and ``claims.json`` under ``out``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    md = out / "claims.md"
+    md.write_text(markdown(ledger, command), encoding="utf-8")
+    return md, write_json(out / "claims.json", {**ledger, "command": command})

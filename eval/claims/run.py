@@ -1,0 +1,137 @@
+"""Run the claims' experiments for every seed and judge each claim (:func:`run_ledger`).
+
+Each experiment's summary for one seed is written to ``<out>/records/<experiment>_seed<N>.json``
+(``..._quick.json`` for ``quick``) as soon as it is done, with the time it took and the versions
+that made it; ``resume=True`` reads the records already there instead of running them again, so
+an interrupted full run continues where it stopped.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+from eval.claims import CLAIMS, EXPERIMENTS, PAPERS
+from eval.claims.ledger import Claim, Outcome, combine
+from eval.report import write_json
+from eval.suite.store import git_revision, library_versions
+
+NOT_RUN = "not run"
+"""The verdict of a claim with no record on any seed (``report_only``)."""
+
+RECORD_FORMAT = 1
+"""The layout of a record file; a record of another format is run again."""
+
+
+def select_claims(papers: Sequence[str] | None = None,
+                  claims: Sequence[str] | None = None) -> list[Claim]:
+    """The claims of ``papers`` (default: every paper's), or only those named in ``claims``;
+    an unknown paper or claim is a ``ValueError`` naming it and the known ones."""
+    papers = list(PAPERS) if papers is None else list(papers)
+    unknown = [paper for paper in papers if paper not in PAPERS]
+    if unknown:
+        raise ValueError(f"papers must be among {list(PAPERS)}, got {unknown}")
+    chosen = [claim for claim in CLAIMS.values() if claim.paper in papers]
+    if claims is not None:
+        missing = [key for key in claims if key not in CLAIMS]
+        if missing:
+            raise ValueError(f"claims must be among {list(CLAIMS)}, got {missing}")
+        chosen = [claim for claim in chosen if claim.key in claims]
+        if not chosen:
+            raise ValueError(f"none of the claims {list(claims)} is a claim of the papers "
+                             f"{papers}")
+    return chosen
+
+
+def record_file(out: str | Path, experiment: str, seed: int, quick: bool) -> Path:
+    """Where one experiment's summary for one seed is kept under ``out``."""
+    return Path(out) / "records" / f"{experiment}_seed{seed}{'_quick' if quick else ''}.json"
+
+
+def read_record(path: Path, experiment: str, seed: int, quick: bool) -> dict | None:
+    """The record at ``path`` when it is one of this experiment, seed and mode (else
+    ``None``: it will be run again)."""
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if (not isinstance(record, dict) or record.get("format") != RECORD_FORMAT
+            or record.get("experiment") != experiment or record.get("seed") != seed
+            or record.get("quick") != quick or not isinstance(record.get("summary"), dict)):
+        return None
+    return record
+
+
+def run_ledger(papers: Sequence[str] | None = None, seeds: Sequence[int] = (0, 1, 2),
+               quick: bool = False, out: str | Path = "results/claims", resume: bool = False,
+               workers: int = 1, progress: bool = True,
+               claims: Sequence[str] | None = None, report_only: bool = False) -> dict[str, Any]:
+    """Run the experiments the chosen claims read, for every seed, and judge the claims.
+
+    Args:
+        papers: paper keys (default: all).
+        seeds: episode / training seeds; each claim is judged on every one.
+        quick: the small version of every experiment (verdicts marked quick).
+        out: output directory (``records/`` of the experiments' summaries).
+        resume: read the records already under ``out`` instead of running them again.
+        workers: processes for the experiments that run several independent episodes.
+        progress: progress bars.
+        claims: only these claim keys.
+        report_only: run nothing: judge each claim on the seeds whose records are under
+            ``out`` (a claim with none is ``"not run"``).
+
+    Returns:
+        The ledger: ``{"quick", "seeds", "versions", "git_revision", "experiments": {name:
+        {"seconds": [...]}}, "claims": [{key, paper, where, statement, paper_figures,
+        criterion, experiment, cause, verdict, seeds: [{seed, verdict, measured}]}]}``.
+    """
+    chosen = select_claims(papers, claims)
+    seeds = list(seeds)
+    if not seeds or len(set(seeds)) != len(seeds):
+        raise ValueError(f"seeds must be distinct and at least one, got {seeds}")
+    names = list(dict.fromkeys(claim.experiment for claim in chosen))
+    summaries: dict[tuple[str, int], dict] = {}
+    seconds: dict[str, list[float]] = {name: [] for name in names}
+    for name in names:
+        experiment = EXPERIMENTS[name]
+        for seed in seeds:
+            path = record_file(out, name, seed, quick)
+            record = read_record(path, name, seed, quick) if resume or report_only else None
+            if record is None and report_only:
+                continue
+            if record is None:
+                if progress:
+                    print(f"{name}, seed {seed}{' (quick)' if quick else ''}", flush=True)
+                start = time.perf_counter()
+                summary = experiment.run(seed, quick, workers, progress)
+                record = {"format": RECORD_FORMAT, "experiment": name, "seed": seed,
+                          "quick": quick, "seconds": time.perf_counter() - start,
+                          "versions": library_versions(), "git_revision": git_revision(),
+                          "summary": summary}
+                write_json(path, record)
+                record = json.loads(path.read_text(encoding="utf-8"))  # as a resume reads it
+            summaries[name, seed] = record["summary"]
+            seconds[name].append(float(record["seconds"]))
+    entries = []
+    for claim in chosen:
+        judged = [seed for seed in seeds if (claim.experiment, seed) in summaries]
+        outcomes = [claim.judge(summaries[claim.experiment, seed]) for seed in judged]
+        entries.append(_entry(claim, judged, outcomes))
+    return {"quick": quick, "seeds": seeds, "versions": library_versions(),
+            "git_revision": git_revision(),
+            "experiments": {name: {"paper": EXPERIMENTS[name].paper,
+                                   "description": EXPERIMENTS[name].description,
+                                   "quick_description": EXPERIMENTS[name].quick_description,
+                                   "seconds": seconds[name]} for name in names},
+            "claims": entries}
+
+
+def _entry(claim: Claim, seeds: list[int], outcomes: list[Outcome]) -> dict[str, Any]:
+    return {"key": claim.key, "paper": claim.paper, "where": claim.where,
+            "statement": claim.statement, "paper_figures": claim.paper_figures,
+            "criterion": claim.criterion, "experiment": claim.experiment,
+            "cause": claim.cause, "verdict": combine(outcomes) if outcomes else NOT_RUN,
+            "seeds": [{"seed": seed, "verdict": outcome.verdict, "measured": outcome.measured}
+                      for seed, outcome in zip(seeds, outcomes)]}

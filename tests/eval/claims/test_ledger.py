@@ -1,0 +1,304 @@
+"""The claims ledger's machinery (``eval.claims``): verdicts, the registry, the criteria against
+the papers' own figures, records and resume, the Markdown, and the CLI's refusals.
+
+The papers' own results must meet each claim's criterion (a criterion the paper itself fails
+was misread from it), and the measured results that prompted the ledger must not.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from eval.__main__ import main
+from eval.claims import CLAIMS, EXPERIMENTS, PAPERS, ClaimExperiment, Outcome, combine, graded
+from eval.claims.ledger import Claim
+from eval.claims.report import ledger_table, markdown, summary_line
+from eval.claims.run import read_record, record_file, run_ledger, select_claims
+from eval.claims.wang2023 import PAPER_TRACKING, PATHS
+from eval.claims.zou2022 import PAPER_TABLE4_RATIO
+from eval.papers import zou2022
+
+
+def _estimators(**phases_by_estimator) -> dict:
+    """A summary of estimation errors: ``camera={"all": {...}, "phase name": {...}}``."""
+    summary = {}
+    for estimator, parts in phases_by_estimator.items():
+        summary[estimator] = {"all": parts.get("all", {}),
+                              "phases": {k: v for k, v in parts.items() if k != "all"}}
+    return summary
+
+
+def _tracking_summary() -> dict:
+    summary = {"gains": [0.04, 0.06, 0.08, 0.10], "cycles": 4}
+    for path in PATHS:
+        table = PAPER_TRACKING[path]
+        summary[path] = {policy: {f"{metric}_mm": [table[metric][kp][column]
+                                                   for kp in summary["gains"]]
+                                  for metric in ("tracking", "deviation")}
+                         for column, policy in enumerate(("cc_model", "hybrid_gpr"))}
+    return summary
+
+
+def _p2p(d8=24, d2=75, asdm=14, d8_rises=2, asdm_rises=0, loaded=(16, 18, 21)) -> dict:
+    runs = {"d = 8": {"steps": d8, "distance_rises": d8_rises},
+            "d = 2": {"steps": d2, "distance_rises": 0},
+            "ASDM (d1 = 8)": {"steps": asdm, "distance_rises": asdm_rises}}
+    for label, steps in zip(("ASDM, 50 g", "ASDM, 75 g", "ASDM, 100 g"), loaded):
+        runs[label] = {"steps": steps, "distance_rises": 1}
+    return {"goal_from_paper_goal_mm": 0.0, "runs": runs}
+
+
+def _ho2018(static=((4.56, 5.72, 5.53), (4.42, 3.33, 1.63)),
+            varying=((6.01, 7.19, 7.08, 6.94), (5.82, 7.24, 10.36, 12.84),
+                     (4.16, 3.10, 1.07, 0.98))) -> dict:
+    labels = ("offline, no load", "online, 14.2 g tip", "offline, empty 14 g tip",
+              "offline, filling", "online, filling")
+    means = list(static) + list(varying)
+    return {label: {"cycle_mean_mm": list(m), "cycle_max_mm": list(m)}
+            for label, m in zip(labels, means)}
+
+
+PAPER_SUMMARIES = {
+    "wang2023.tracking": _tracking_summary(),
+    "wang2023.occlusion": _estimators(
+        camera={"partial occluder": {"mean_mm": 1.694, "max_mm": 26.272},
+                "full covers": {"max_mm": 38.483}},
+        fused={"partial occluder": {"mean_mm": 1.132, "max_mm": 2.573},
+               "full covers": {"max_mm": 4.747}}),
+    "wang2023.lighting": _estimators(camera={"all": {"rmse_mm": 3.116}},
+                                     fused={"all": {"rmse_mm": 1.324}}),
+    # Table III, LEGO, case 1: SLAM / F-emp / fusion means; F-emp's std
+    "wang2023.push": _estimators(
+        camera={"push on tip cap": {"mean_mm": 0.689}, "push on body": {"mean_mm": 0.516}},
+        femp={"push on tip cap": {"mean_mm": 0.950, "std_mm": 0.752},
+              "push on body": {"mean_mm": 0.732, "std_mm": 0.875}},
+        fused={"push on tip cap": {"mean_mm": 0.747}, "push on body": {"mean_mm": 0.703}}),
+    "wang2023.flick": _estimators(camera={"all": {"mean_mm": 1.249}},
+                                  femp={"all": {"mean_mm": 1.324}},
+                                  fused={"all": {"mean_mm": 1.221}}),
+    "wang2023.init": {str(n): _estimators(femp={"all": {"mean_mm": mean}})
+                      for n, mean in ((450, 1.972), (900, 1.939), (1800, 0.615))},
+    "ho2018.static": _ho2018(),
+    "ho2018.varying": _ho2018(),
+    "zhao2021.shape": {"table3_errors_mm": [1.31, 1.3, 2.14, 1.7, 1.45, 1.51],
+                       "mean_backbone_error_mm": 5.85,
+                       "table4_mean_backbone_mm": {"0": 5.7475, "150": 6.61}},
+    "zhao2021.p2p": _p2p(),
+    "zhao2021.sway": {"steps": 20, "step_mm_before_pull": 8.0, "step_mm_during_pull": 15.0},
+    "zhao2021.circle": {"263 g, steps 29-60": {
+        "points_reached": 24, "path_error_mean_mm": 3.0,
+        "recovery_steps": {"added": 6, "removed": 4}}},
+    "zou2022.dnn": {"n_samples": 29791, "n_test": 4469,
+                    "test_share_with_a_training_command": 0.0,
+                    "table3_rmse_vs_ases_mm": list(zou2022.TABLE3_PAPER["rmse_mm"]),
+                    "table3_rmse_vs_truth_mm": list(zou2022.TABLE3_PAPER["rmse_mm"]),
+                    "table4_rses_tip_rmse_mm": list(zou2022.TABLE4_PAPER_RMSE_MM["RSES"]),
+                    "table4_dnn_tip_rmse_mm": list(zou2022.TABLE4_PAPER_RMSE_MM["DNN"]),
+                    "table4_ratio_vs_ases": PAPER_TABLE4_RATIO,
+                    "table4_ratio_vs_truth": PAPER_TABLE4_RATIO},
+}
+"""Each experiment's summary as the paper reports it (its tables and text)."""
+
+
+# ------------------------------------------------------------------------------- verdicts
+def test_combine_needs_every_seed_for_reproduced_and_none_for_not():
+    yes, part, no = (Outcome(v, "x") for v in ("reproduced", "partly", "not reproduced"))
+    assert combine([yes, yes, yes]) == "reproduced"
+    assert combine([no, no]) == "not reproduced"
+    assert combine([yes, yes, no]) == "partly"
+    assert combine([part]) == "partly"
+    assert combine([yes, part]) == "partly"
+    with pytest.raises(ValueError, match="at least one seed"):
+        combine([])
+
+
+def test_graded_and_outcome_refuse_nonsense():
+    assert graded(True, False, "m").verdict == "reproduced"
+    assert graded(False, True, "m").verdict == "partly"
+    assert graded(False, False, "m").verdict == "not reproduced"
+    with pytest.raises(ValueError, match="verdict must be one of"):
+        Outcome("maybe", "m")
+    with pytest.raises(ValueError, match="measured must be a non-empty string"):
+        Outcome("partly", "")
+
+
+# ------------------------------------------------------------------------------- registry
+def test_every_paper_has_its_headline_claims_and_every_claim_a_registered_experiment():
+    assert PAPERS == ("wang2023", "ho2018", "zhao2021", "zou2022")
+    for claim in CLAIMS.values():
+        assert claim.key.startswith(claim.paper + "."), claim.key
+        assert EXPERIMENTS[claim.experiment].paper == claim.paper
+        for text in (claim.where, claim.statement, claim.paper_figures, claim.criterion):
+            assert isinstance(text, str) and len(text) > 5, claim.key
+    wanted = {  # the findings the ledger must cover, by where the paper states them
+        "wang2023": ["Tables I-II", "Fig. 6", "Fig. 7", "Table III", "Table IV", "Table VI"],
+        "ho2018": ["Table 1", "Table 2"],
+        "zhao2021": ["Table III", "Table IV", "Fig. 11", "Figs. 11(e)", "Fig. 12(b)"],
+        "zou2022": ["Table 3", "Table 4"]}
+    for paper, places in wanted.items():
+        wheres = [claim.where for claim in CLAIMS.values() if claim.paper == paper]
+        for place in places:
+            assert any(where.startswith(place) for where in wheres), (paper, place)
+    used = {claim.experiment for claim in CLAIMS.values()}
+    assert used == set(EXPERIMENTS), set(EXPERIMENTS) ^ used
+
+
+@pytest.mark.parametrize("key", list(CLAIMS))
+def test_the_papers_own_results_meet_every_criterion(key):
+    claim = CLAIMS[key]
+    outcome = claim.judge(PAPER_SUMMARIES[claim.experiment])
+    assert outcome.verdict == "reproduced", (key, outcome.measured)
+
+
+@pytest.mark.parametrize("key, summary, verdict", [
+    # ho2018 Table 1, seed 2 before the ledger: no improvement (2.57, 2.74, 2.61 mm)
+    ("ho2018.table1_online_learns",
+     _ho2018(static=((3.51, 3.76, 3.75), (2.57, 2.74, 2.61))), "not reproduced"),
+    ("ho2018.table1_online_learns",
+     _ho2018(static=((2.51, 2.34, 2.38), (4.61, 2.70, 2.59))), "partly"),
+    ("ho2018.table2_online_near_1mm",
+     _ho2018(varying=((6, 6, 6, 6), (7.14, 9, 15, 21.95), (2.82, 2.5, 2.4, 2.76))), "partly"),
+    # zhao2021: ASDM as many steps as d = 8 (7 vs 7), d = 8 without oscillation
+    ("zhao2021.p2p_asdm_fewest_steps", _p2p(d8=7, d2=28, asdm=7), "partly"),
+    ("zhao2021.p2p_asdm_fewest_steps", _p2p(asdm=None), "not reproduced"),
+    ("zhao2021.p2p_d8_oscillates", _p2p(d8_rises=0, asdm_rises=0), "not reproduced"),
+    ("zhao2021.table3_key_points",
+     {"table3_errors_mm": [0.5, 0.6, 0.7, 1.0, 1.5, 6.1]}, "partly"),
+    ("zou2022.table3_dnn_accuracy",
+     {**PAPER_SUMMARIES["zou2022.dnn"], "test_share_with_a_training_command": 0.502},
+     "partly"),
+    ("wang2023.tables1-2_hybrid_deviation",
+     {**_tracking_summary(), "circle": {"cc_model": {"deviation_mm": [3, 2, 1, 0.5]},
+                                        "hybrid_gpr": {"deviation_mm": [1, 1, 0.9, 0.6]}}},
+     "not reproduced"),
+])
+def test_the_results_that_prompted_the_ledger_fall_short(key, summary, verdict):
+    assert CLAIMS[key].judge(summary).verdict == verdict
+
+
+def test_select_claims_refuses_unknown_papers_and_claims_by_name():
+    assert {c.paper for c in select_claims(["ho2018"])} == {"ho2018"}
+    with pytest.raises(ValueError, match="papers must be among .*'nature2030'"):
+        select_claims(["nature2030"])
+    with pytest.raises(ValueError, match="claims must be among .*'ho2018.nope'"):
+        select_claims(None, ["ho2018.nope"])
+    with pytest.raises(ValueError, match="none of the claims"):
+        select_claims(["ho2018"], ["zou2022.table3_dnn_accuracy"])
+
+
+# ------------------------------------------------------------------------ runs and records
+@pytest.fixture
+def fake_claims():
+    """Two claims on one fake experiment whose result depends on the seed and counts its
+    runs."""
+    calls = []
+
+    def run(seed, quick, workers, progress):
+        calls.append((seed, quick))
+        return {"error_mm": 1.0 + seed, "quick": quick}
+
+    experiment = ClaimExperiment("wang2023.fake", "wang2023", "a fake run", "shorter", run)
+    claims = [Claim("wang2023.fake_small", "wang2023", "Fig. 99", "The error is small.",
+                    "1 mm", "reproduced: under 1.5 mm; partly: under 2.5 mm", "wang2023.fake",
+                    lambda s: graded(s["error_mm"] < 1.5, s["error_mm"] < 2.5,
+                                     f"{s['error_mm']:.1f} mm")),
+              Claim("wang2023.fake_never", "wang2023", "Fig. 98", "The error is zero.", "0 mm",
+                    "reproduced: zero", "wang2023.fake",
+                    lambda s: graded(s["error_mm"] == 0, False, f"{s['error_mm']:.1f} mm"),
+                    cause="the fake arm has an error")]
+    EXPERIMENTS.register(experiment.name, experiment)
+    for claim in claims:
+        CLAIMS.register(claim.key, claim)
+    yield calls
+    EXPERIMENTS.unregister(experiment.name)
+    for claim in claims:
+        CLAIMS.unregister(claim.key)
+
+
+def test_run_ledger_judges_every_seed_writes_records_and_resumes(fake_claims, tmp_path):
+    keys = ["wang2023.fake_small", "wang2023.fake_never"]
+    ledger = run_ledger(["wang2023"], seeds=[0, 1, 2], out=tmp_path, claims=keys,
+                        progress=False)
+    assert fake_claims == [(0, False), (1, False), (2, False)]  # one run per seed, shared
+    small, never = ledger["claims"]
+    assert [s["verdict"] for s in small["seeds"]] == ["reproduced", "partly", "not reproduced"]
+    assert small["verdict"] == "partly" and never["verdict"] == "not reproduced"
+    assert never["cause"] == "the fake arm has an error"
+    record = read_record(record_file(tmp_path, "wang2023.fake", 1, False), "wang2023.fake", 1,
+                         False)
+    assert record["summary"] == {"error_mm": 2.0, "quick": False}
+    assert record["versions"]["soft_arm_gym"]
+    again = run_ledger(["wang2023"], seeds=[0, 1, 2], out=tmp_path, claims=keys, resume=True,
+                       progress=False)
+    assert fake_claims == [(0, False), (1, False), (2, False)]  # nothing ran again
+    assert again["claims"] == ledger["claims"]
+    # a quick run is another record; a corrupt record is run again
+    record_file(tmp_path, "wang2023.fake", 0, False).write_text("{not json")
+    run_ledger(["wang2023"], seeds=[0], out=tmp_path, claims=keys, resume=True, progress=False)
+    run_ledger(["wang2023"], seeds=[0], quick=True, out=tmp_path, claims=keys, resume=True,
+               progress=False)
+    assert fake_claims[3:] == [(0, False), (0, True)]
+    with pytest.raises(ValueError, match="seeds must be distinct"):
+        run_ledger(["wang2023"], seeds=[1, 1], out=tmp_path, claims=keys, progress=False)
+
+
+def test_report_only_judges_the_seeds_on_record_and_runs_nothing(fake_claims, tmp_path):
+    keys = ["wang2023.fake_small"]
+    empty = run_ledger(["wang2023"], seeds=[0, 1], out=tmp_path, claims=keys,
+                       report_only=True, progress=False)
+    assert fake_claims == [] and empty["claims"][0]["verdict"] == "not run"
+    assert "1 not run" in summary_line(empty)
+    run_ledger(["wang2023"], seeds=[1], out=tmp_path, claims=keys, progress=False)
+    ledger = run_ledger(["wang2023"], seeds=[0, 1], out=tmp_path, claims=keys,
+                        report_only=True, progress=False)
+    assert fake_claims == [(1, False)]
+    entry = ledger["claims"][0]
+    assert [s["seed"] for s in entry["seeds"]] == [1] and entry["verdict"] == "partly"
+    assert "partly (seeds 1 only)" in ledger_table(ledger)
+
+
+def test_the_markdown_shows_verdicts_numbers_criteria_and_causes(fake_claims, tmp_path):
+    ledger = run_ledger(["wang2023"], seeds=[0, 1], out=tmp_path, quick=True, progress=False,
+                        claims=["wang2023.fake_small", "wang2023.fake_never"])
+    text = markdown(ledger, "python -m eval claims --quick")
+    assert "2 claims on seeds 0, 1 (quick): 0 reproduced, 1 partly, 1 not reproduced" in text
+    assert summary_line(ledger) in text and ledger_table(ledger) in text
+    assert "seed 1: 2.0 mm (partly)" in text
+    assert "NOT reproduced (quick)<br>why: the fake arm has an error" in text
+    assert "reproduced: under 1.5 mm; partly: under 2.5 mm" in text
+    assert "`wang2023.fake` | a fake run; quick: shorter |" in text
+
+
+# ------------------------------------------------------------------------------------ CLI
+@pytest.mark.parametrize("argv, option", [
+    (["claims", "--papers", "nature2030"], "--papers"),
+    (["claims", "--claims", "ho2018.nope"], "--claims"),
+    (["claims", "--papers", "ho2018", "--claims", "zou2022.table3_dnn_accuracy"], "--claims"),
+    (["claims", "--seeds", "-1"], "--seeds"),
+    (["claims", "--seeds", "0", "0"], "--seeds"),
+    (["claims", "--quick", "--docs"], "--docs"),
+    (["claims", "--papers", "ho2018", "--docs"], "--docs"),
+    (["claims", "--workers", "0"], "--workers"),
+    (["claims", "--resume", "--report-only"], "--report-only"),
+])
+def test_bad_options_are_one_line_errors_before_any_work(argv, option, capsys, tmp_path):
+    with pytest.raises(SystemExit) as error:
+        main(argv + ["--out", str(tmp_path / "out")])
+    assert error.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert option in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_cli_prints_and_writes_the_ledger(fake_claims, tmp_path, capsys):
+    main(["claims", "--papers", "wang2023", "--claims", "wang2023.fake_small", "--seeds", "0",
+          "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert "1 claims on seeds 0 (full): 1 reproduced" in out
+    ledger = json.loads((tmp_path / "claims.json").read_text())
+    assert ledger["command"] == ("python -m eval claims --papers wang2023 --claims "
+                                 "wang2023.fake_small --seeds 0")
+    assert ledger["claims"][0]["verdict"] == "reproduced"
+    assert (tmp_path / "claims.md").read_text().startswith("# The papers' claims")
