@@ -1,7 +1,8 @@
 """``python -m train sweep`` (train/sweep.py): a two-trial Ray Tune search on a local Ray (two
 CPUs) writes the best trial's hyperparameters as a zoo-format YAML that the trainer loads, a
 trial's score on Ray equals the same trial run in this process, and bad options fail in one
-line before any trial. ``python -m train --algo ...`` is unchanged."""
+line before any trial. ``python -m train --algo ...`` is unchanged. The searches on a real
+local Ray (an optional extra) run with ``-m slow``."""
 
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ FAST_ENV = ["feedback=ground_truth", "path=circle", "speed_m_s=0.05", "randomiza
 FIXED = ["learning_starts=100", "buffer_size=10000"]
 
 
+@pytest.mark.slow
 def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, local_ray,
                                                                      capsys):
     out = tmp_path / "sweep"
@@ -73,6 +75,7 @@ def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, lo
     assert local["score"] == best["score"] and local["reward"] == best["reward"]
 
 
+@pytest.mark.slow
 def test_a_sweep_whose_trials_all_fail_exits_1_naming_the_error(tmp_path, local_ray, capsys):
     """A failure only training meets (the replay buffer refuses a keyword argument; bad options
     and env keyword arguments are refused before any trial)."""

@@ -151,6 +151,7 @@ def short_static():
     return run_experiment("static", seed=0, progress=False, **SHORT)
 
 
+@pytest.mark.slow
 def test_short_static_load_online_improves_offline_does_not(short_static):
     """ho2018 Table 1's pattern on a shorter version (LWPR epochs at most 6, 10 s lead-in):
     under the unknown 14.2 g tip the online error falls from cycle 1 to cycle 3, while the
@@ -193,9 +194,9 @@ def test_short_filling_load_offline_degrades_online_holds(short_varying):
     learner's stays far below it. Measured (seed 0): offline 8.10, 7.59, 12.84, 24.20 mm; online
     4.05, 3.76, 3.88, 3.77 mm.
 
-    Slow (three tracking runs, 270 simulated seconds: 25-65 s on one core): in the default run
-    test_short_static_load_online_improves_offline_does_not checks the same controller adapting
-    online to an unknown load through the same experiment runner,
+    Slow (three tracking runs, 270 simulated seconds: 25-65 s on one core), like the static
+    one (two runs, 50 s): in the default run tests/eval/claims/test_quick_claims.py runs the
+    same controller adapting online to an unknown load through the same experiment runner,
     test_fit_and_online_refit_match_the_paper_equations_written_out its online refit, and
     tests/soft_gym/scenarios/test_scenarios.py::
     test_filling_load_mass_rises_at_its_rate_to_its_maximum the filling load."""

@@ -32,7 +32,10 @@ def test_paper_start_is_reached_and_the_goal_is_the_nearest_reachable_point():
     assert np.linalg.norm(goal - start) > 0.06  # still a long move (73 mm)
 
 
+@pytest.mark.slow
 def test_short_point_to_point_run_reports_and_plots(tmp_path):
+    """A 12-step ASDM run (about 30 s; slow: the default run drives the same runner through the
+    claims ledger's quick sway, tests/eval/claims/test_quick_claims.py)."""
     sensing = asdict(SMALL)
     result = zhao2021.run_p2p(sensing, seed=0, progress=False,
                               runs=(("ASDM (d1 = 8)", 8.0, True, 0.0),), max_steps=12)

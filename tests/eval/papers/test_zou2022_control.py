@@ -2,7 +2,8 @@
 plot.
 
 The runs are short: a circle at four times the default speed (two ~5 s cycles), ``cc_model``
-only, and a tiny DNN for ``encoder_dnn``.
+only, and a tiny DNN for ``encoder_dnn``; the grid of every feedback and condition (about 40 s)
+runs with ``-m slow``.
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ def test_fault_covers_the_last_cycle_and_reaches_the_pair():
         "n_samples": 50}
 
 
+@pytest.mark.slow
 def test_one_row_per_feedback_and_condition_with_finite_true_errors(short_grid):
     assert [(r["policy"], r["feedback"], r["condition"]) for r in short_grid] == [
         ("cc_model", source, condition) for source in CONTROL_FEEDBACK
@@ -73,6 +75,7 @@ def test_one_row_per_feedback_and_condition_with_finite_true_errors(short_grid):
         assert set(np.unique(record["cycle"])) == {0, 1} and steps > 150
 
 
+@pytest.mark.slow
 def test_the_dark_pair_is_lost_for_stereo_and_unread_by_the_encoders(short_grid):
     faulted = _row(short_grid, "stereo", "stereo faulted")
     nominal = _row(short_grid, "stereo", "nominal")
@@ -93,6 +96,7 @@ def test_the_dark_pair_is_lost_for_stereo_and_unread_by_the_encoders(short_grid)
                                                               abs=0.5)
 
 
+@pytest.mark.slow
 def test_table_and_plot(short_grid, tmp_path):
     table = control_table(short_grid)
     lines = table.strip().splitlines()

@@ -1,7 +1,8 @@
 """The suite's Ray backend (eval/suite/ray_backend.py, ``python -m eval suite --backend ray``): a
 small grid on a local Ray (two CPUs) writes the same records as the process pool; the map starts,
 connects to and shuts down only the Ray it should (checked on a stand-in module, without Ray);
-the command line's backend options fail in one line before any work."""
+the command line's backend options fail in one line before any work. Ray is an optional extra:
+the two tests that start a real local Ray run with ``-m slow``; the stand-in tests run always."""
 
 from __future__ import annotations
 
@@ -39,6 +40,7 @@ def _without_wall_time(record: dict) -> dict:
 
 
 # ----------------------------------------------------------------------- on a local Ray
+@pytest.mark.slow
 def test_ray_records_equal_the_process_pool_records(tmp_path, local_ray, capsys):
     pytest.importorskip("rliable")
     spec_path = _write(tmp_path, GRID)
@@ -74,6 +76,7 @@ def test_ray_records_equal_the_process_pool_records(tmp_path, local_ray, capsys)
     assert (ray_out / "leaderboard.md").is_file()
 
 
+@pytest.mark.slow
 def test_the_ray_backend_is_registered_and_yields_as_tasks_complete(local_ray):
     assert suite.BACKENDS["ray"] is ray_backend.ray_map
     results = list(ray_backend.ray_map(math.sqrt, [1.0, 4.0, 9.0, 16.0], workers=2))

@@ -1,0 +1,74 @@
+"""One quick claim per paper through the whole ledger path: the experiment's quick version runs,
+its record is written and read back, the claim is judged and reported.
+
+wang2023's Tables I-II run as ``--quick`` runs them and are held to the paper's criteria (the
+CC model's error grows as K_p falls; the hybrid improves on it by at least 0.9 x the paper's
+smallest improvement). The others run on the smaller models the default suite already trains
+(zhao2021's 360-sample SR model and 16 steps of sway, zou2022's 150-sample DNN:
+cached once per machine), where a
+verdict says nothing about the paper, so they check the ledger's bookkeeping against the
+experiment's own numbers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from eval.claims import VERDICTS
+from eval.claims import ho2018 as ho2018_claims
+from eval.claims import zhao2021 as zhao2021_claims
+from eval.claims import zou2022 as zou2022_claims
+from eval.claims.report import markdown
+from eval.claims.run import read_record, record_file, run_ledger
+from eval.papers import zhao2021 as zhao2021_papers
+from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
+from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
+
+
+def _quick(paper: str, claim: str, out) -> tuple[dict, dict]:
+    ledger = run_ledger([paper], seeds=[0], quick=True, out=out, claims=[claim],
+                        progress=False)
+    entry = ledger["claims"][0]
+    assert entry["key"] == claim and entry["verdict"] in VERDICTS
+    assert [s["seed"] for s in entry["seeds"]] == [0]
+    record = read_record(record_file(out, entry["experiment"], 0, True), entry["experiment"], 0,
+                         True)
+    assert record is not None and record["seconds"] > 0
+    assert claim in markdown(ledger, "python -m eval claims --quick")
+    return entry, record["summary"]
+
+
+def test_wang2023_tables1_2_quick_meet_the_papers_criteria(tmp_path):
+    ledger = run_ledger(["wang2023"], seeds=[0], quick=True, out=tmp_path, progress=False,
+                        claims=["wang2023.tables1-2_gain_matters",
+                                "wang2023.tables1-2_hybrid_tracking"])
+    for entry in ledger["claims"]:
+        assert entry["verdict"] == "reproduced", (entry["key"], entry["seeds"])
+
+
+def test_ho2018_table1_quick_is_judged_on_its_three_cycles(tmp_path):
+    entry, summary = _quick("ho2018", "ho2018.table1_online_learns", tmp_path)
+    online = summary[ho2018_claims.STATIC_ONLINE]["cycle_mean_mm"]
+    assert len(online) == 3 and all(math.isfinite(v) and v > 0 for v in online)
+    assert f"cycle 3 / cycle 1 = {online[2] / online[0]:.2f}" in entry["seeds"][0]["measured"]
+
+
+def test_zhao2021_sway_quick_is_judged_on_its_steps(tmp_path, monkeypatch):
+    monkeypatch.setattr(zhao2021_claims, "QUICK_MODEL",
+                        ReconstructionConfig(n_free=240, n_loaded=120, max_iterations=80))
+    monkeypatch.setattr(zhao2021_papers, "MAX_P2P_STEPS", 16)  # past the pull (steps 7-12)
+    entry, summary = _quick("zhao2021", "zhao2021.sway_and_pull", tmp_path)
+    assert 2.0 <= summary["step_mm_before_pull"] <= summary["step_mm_during_pull"] <= 15.0
+    assert f"largest during it {summary['step_mm_during_pull']:.1f} mm" in \
+        entry["seeds"][0]["measured"]
+
+
+def test_zou2022_table4_quick_is_judged_without_a_leaking_test_set(tmp_path, monkeypatch):
+    monkeypatch.setattr(zou2022_claims, "QUICK_DNN", ShapeDNNConfig(
+        n_samples=150, settle_s=0.8, batch_size=16, epochs=200))
+    entry, summary = _quick("zou2022", "zou2022.table4_dnn_beats_rses", tmp_path)
+    assert summary["test_share_with_a_training_command"] == 0.0
+    assert summary["table4_ratio_vs_ases"] > 0
+    assert f"3-D RMSEs {summary['table4_ratio_vs_ases']:.2f}" in entry["seeds"][0]["measured"]
