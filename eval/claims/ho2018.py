@@ -40,6 +40,14 @@ EXPERIMENTS = (
         "15 s cycles and an 8 s lead-in", _runner("varying")),
 )
 
+PLATEAU = ("the online learner levels off at a 2-3 mm floor (cycle 3 of Table 1: 2.59, 2.38, "
+           "2.61 mm on seeds 0-2) that the unloaded offline model shares (2.38, 2.20 mm on seeds "
+           "0-1), where the paper's offline model tracked at 4.6-5.7 mm; what sets the floor (the "
+           "P controller's lag at the path speed, the EM noise, the ridge toward the pre-trained "
+           "model, the minimum-step filter, the window, the 10 Hz decisions) is not yet measured")
+"""The measured cause shared by the claims of online learning that do not reproduce."""
+
+
 STATIC_ONLINE, STATIC_OFFLINE = "online, 14.2 g tip", "offline, no load"
 EMPTY, FILLING_OFFLINE, FILLING_ONLINE = ("offline, empty 14 g tip", "offline, filling",
                                           "online, filling")
@@ -85,14 +93,19 @@ CLAIMS = (
           "online, 14.2 g tip: 4.42, 3.33, 1.63 mm per cycle (cycle 3 = 0.37 x cycle 1)",
           "reproduced: the online error falls every cycle and cycle 3 is at most 0.5 x cycle "
           "1; partly: cycle 3 below cycle 1",
-          "ho2018.static", _online_learns_static),
+          "ho2018.static", _online_learns_static,
+          cause="online 4.61 -> 2.59 and 2.81 -> 2.38 mm (0.56 x, 0.85 x) on seeds 0-1, "
+                "2.57, 2.74, 2.61 mm on seed 2 (the pre-trained model suits the loaded arm "
+                "from the start): " + PLATEAU),
     Claim("ho2018.table1_online_beats_offline", "ho2018", "Table 1",
           "Online learning under the load ends far below the offline model's error without "
           "load, which does not improve.",
           "cycle 3: online under load 1.63 mm, offline without load 5.53 mm (0.29 x); offline "
           "4.56, 5.72, 5.53 mm",
           "reproduced: online cycle 3 at most 0.5 x offline cycle 3; partly: below it",
-          "ho2018.static", _online_below_offline),
+          "ho2018.static", _online_below_offline,
+          cause="cycle 3 online under load / offline without load: 1.09, 1.08, 0.70 x on "
+                "seeds 0-2: " + PLATEAU),
     Claim("ho2018.table2_offline_unstable", "ho2018", "Table 2, Section 3.5.2",
           "Offline, the filling container makes the error grow cycle by cycle (unstable), "
           "where the empty container's does not.",
@@ -107,5 +120,7 @@ CLAIMS = (
           "online filling 4.16, 3.10, 1.07, 0.98 mm (cycle 4 = 0.24 x cycle 1)",
           "reproduced: cycle 4 at most 0.5 x cycle 1 and at most 1.5 mm; partly: cycle 4 "
           "below cycle 1",
-          "ho2018.varying", _online_rides_the_filling),
+          "ho2018.varying", _online_rides_the_filling,
+          cause="online filling ends at 2.76, 2.23 and 2.17 mm (cycle 4 / 1 = 0.98, 0.74, "
+                "0.82) on seeds 0-2: " + PLATEAU),
 )

@@ -381,12 +381,16 @@ def _summary_circle(run: dict, load_steps) -> dict:
 
 
 def run_circle(sensing: dict, seed: int = 0, progress: bool = True,
-               baselines: tuple[str, ...] = ()) -> dict:
-    """Section VI-D: the circle free and with the 263 g block from step 29 to 60."""
+               baselines: tuple[str, ...] = (),
+               masses_kg: tuple[float, ...] = (0.0,) + CIRCLE_LOADS_KG) -> dict:
+    """Section VI-D: the circle free and with the 263 g block from step 29 to 60.
+
+    ``masses_kg``: the runs, by the block's mass (kg; 0: the free run)."""
     points = circle_points_m()
     results = {}
-    runs = [("free", 0.0)] + [(f"{mass * 1000:.0f} g, steps {CIRCLE_LOAD_STEPS[0]}-"
-                               f"{CIRCLE_LOAD_STEPS[1]}", mass) for mass in CIRCLE_LOADS_KG]
+    runs = [("free", 0.0) if mass == 0 else
+            (f"{mass * 1000:.0f} g, steps {CIRCLE_LOAD_STEPS[0]}-{CIRCLE_LOAD_STEPS[1]}", mass)
+            for mass in masses_kg]
     for label, mass in runs:
         load = mass > 0
         scenario = ([TipMass(mass_kg=mass, start_s=CIRCLE_LOAD_STEPS[0] * SETTLE_S,
