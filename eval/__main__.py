@@ -501,6 +501,9 @@ CLAIMS_DESCRIPTION = (
 
 DOCS_LEDGER = Path(__file__).resolve().parents[1] / "docs" / "claims.md"
 """Where ``claims --docs`` writes the ledger of a full run (the repository's docs/claims.md)."""
+DOCS_RECORDS = DOCS_LEDGER.with_suffix("")
+"""``claims --docs``'s default ``--out``: docs/claims/, whose ``records/`` keep the experiments'
+summaries behind docs/claims.md, so ``--resume --docs`` continues the repository's ledger."""
 
 
 def _claims_parser(sub) -> argparse.ArgumentParser:
@@ -517,8 +520,9 @@ def _claims_parser(sub) -> argparse.ArgumentParser:
     claims.add_argument("--quick", action="store_true",
                         help="a small version of every experiment (minutes; verdicts marked "
                              "quick)")
-    claims.add_argument("--out", default="results/claims",
-                        help="output directory (made; must be writable)")
+    claims.add_argument("--out", default=None,
+                        help="output directory (made; must be writable); default: "
+                             "results/claims, or docs/claims with --docs")
     claims.add_argument("--resume", action="store_true",
                         help="read the experiment records already in --out instead of running "
                              "them again")
@@ -526,8 +530,8 @@ def _claims_parser(sub) -> argparse.ArgumentParser:
                         help="run nothing: judge each claim on the seeds whose records are in "
                              "--out (a claim with none is 'not run')")
     claims.add_argument("--docs", action="store_true",
-                        help="also write the ledger to docs/claims.md (a full run of every "
-                             "claim only)")
+                        help="also write the ledger to docs/claims.md, its records kept in "
+                             "docs/claims/records (a full run of every claim only)")
     _add_workers(claims)
     return claims
 
@@ -545,6 +549,9 @@ def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         parser.error("--docs writes the full ledger: every paper and claim, without --quick")
     if args.docs:
         check_output_dir(parser, "--docs", DOCS_LEDGER.parent)
+    if args.out is None:
+        args.out = str(DOCS_RECORDS if args.docs else Path("results") / "claims")
+        check_output_dir(parser, "--out", args.out)
     command = _claims_command(args)
     ledger = run_ledger(args.papers, args.seeds, quick=args.quick, out=args.out,
                         resume=args.resume, workers=args.workers, progress=True,
