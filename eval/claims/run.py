@@ -93,10 +93,10 @@ def run_ledger(papers: Sequence[str] | None = None, seeds: Sequence[int] = (0, 1
         raise ValueError(f"seeds must be distinct and at least one, got {seeds}")
     names = list(dict.fromkeys(claim.experiment for claim in chosen))
     summaries: dict[tuple[str, int], dict] = {}
-    seconds: dict[str, list[float]] = {name: [] for name in names}
-    for name in names:
-        experiment = EXPERIMENTS[name]
-        for seed in seeds:
+    times: dict[tuple[str, int], float] = {}
+    for seed in seeds:  # seed by seed: an interrupted run leaves whole seeds behind
+        for name in names:
+            experiment = EXPERIMENTS[name]
             path = record_file(out, name, seed, quick)
             record = read_record(path, name, seed, quick) if resume or report_only else None
             if record is None and report_only:
@@ -113,7 +113,9 @@ def run_ledger(papers: Sequence[str] | None = None, seeds: Sequence[int] = (0, 1
                 write_json(path, record)
                 record = json.loads(path.read_text(encoding="utf-8"))  # as a resume reads it
             summaries[name, seed] = record["summary"]
-            seconds[name].append(float(record["seconds"]))
+            times[name, seed] = float(record["seconds"])
+    seconds = {name: [times[name, seed] for seed in seeds if (name, seed) in times]
+               for name in names}  # in seed order
     entries = []
     for claim in chosen:
         judged = [seed for seed in seeds if (claim.experiment, seed) in summaries]
