@@ -288,7 +288,7 @@ CLAIMS = (
           "reproduced: body-push std at least 1.05 x the cap-push std; partly: larger",
           "wang2023.push", _body_push_noise,
           cause="F-emp's error scatters as much under the push on the cap as under the push on "
-                "the body (std 0.331-0.334 against 0.328-0.333 mm, seeds 0-1): the contact "
+                "the body (std 0.322-0.334 against 0.327-0.333 mm, seeds 0-2): the contact "
                 "strain the body push puts on the gratings under it does not show in F-emp's "
                 "estimate; whether the strain model is too weak or F-emp's online updates learn "
                 "it away is unknown"),
