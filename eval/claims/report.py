@@ -35,7 +35,8 @@ def ledger_table(ledger: dict[str, Any]) -> str:
         verdict = MARK[entry["verdict"]] + quick
         judged = [s["seed"] for s in entry["seeds"]]
         if entry["seeds"] and judged != every:
-            verdict += f" (seeds {', '.join(str(s) for s in judged)} only)"
+            verdict += (f" (seed{'s' if len(judged) > 1 else ''} "
+                        f"{', '.join(str(s) for s in judged)} only)")
         if entry["verdict"] != "reproduced" and entry["cause"]:
             verdict += f"<br>why: {entry['cause']}"
         lines.append(f"| **{entry['key']}** ({entry['where']}): {entry['statement']} | "

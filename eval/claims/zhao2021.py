@@ -151,8 +151,9 @@ def _heavy_circle(summary: dict) -> Outcome:
 
 
 NO_OSCILLATION = (
-    "the fixed 8 mm step does not oscillate here (its distance to the goal never rises: seed 0 "
-    "steps ASDM 7, d = 8 7, d = 2 28): the local IK network's steps land about where they are "
+    "the fixed 8 mm step does not oscillate here (its distance to the goal never rises; steps "
+    "ASDM / d = 8 / d = 2: 7 / 7 / 28 on seed 0, 9 / 10 / 37 on seed 1): the local IK network's "
+    "steps land about where they are "
     "planned, so ASDM's growing step saves nothing over d = 8 (the paper's network, trained "
     "with other settings, erred at 8 mm steps); the goal is also 72 mm from the paper's, the "
     "nearest point the preset reaches with 100 g")

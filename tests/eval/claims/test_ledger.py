@@ -256,7 +256,7 @@ def test_report_only_judges_the_seeds_on_record_and_runs_nothing(fake_claims, tm
     assert fake_claims == [(1, False)]
     entry = ledger["claims"][0]
     assert [s["seed"] for s in entry["seeds"]] == [1] and entry["verdict"] == "partly"
-    assert "partly (seeds 1 only)" in ledger_table(ledger)
+    assert "partly (seed 1 only)" in ledger_table(ledger)
 
 
 def test_the_markdown_shows_verdicts_numbers_criteria_and_causes(fake_claims, tmp_path):
