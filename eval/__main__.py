@@ -561,6 +561,8 @@ def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
     print(summary_line(ledger))
     if args.docs:
         DOCS_LEDGER.write_text(markdown_path.read_text(encoding="utf-8"), encoding="utf-8")
+        if Path(args.out).resolve() == DOCS_RECORDS.resolve():
+            markdown_path.unlink()  # docs/claims.md is its one copy in the repository
         print(f"ledger written to {DOCS_LEDGER}")
     print(f"output directory: {args.out}")
 
@@ -577,6 +579,8 @@ def _claims_command(args: argparse.Namespace) -> str:
         parts.append("--quick")
     if args.report_only:
         parts.append("--report-only")
+    if args.docs:
+        parts.append("--docs")
     return " ".join(parts)
 
 
