@@ -31,7 +31,7 @@ def _params():
         yield pytest.param(key, marks=marks, id=key)
 
 
-@pytest.mark.parametrize("key", _params())
+@pytest.mark.parametrize("key", list(_params()))
 def test_claim_reproduces_on_every_seed(key):
     claim = CLAIMS[key]
     outcomes = {seed: claim.judge(_summary(claim.experiment, seed)) for seed in SEEDS}
