@@ -20,6 +20,8 @@ from typing import Any, Callable, Literal, Sequence
 Verdict = Literal["reproduced", "partly", "not reproduced"]
 VERDICTS: tuple[Verdict, ...] = ("reproduced", "partly", "not reproduced")
 """The verdicts, best first."""
+NOT_RUN = "not run"
+"""A claim's place in a report when no seed of its experiment is on record."""
 
 
 @dataclass(frozen=True)

@@ -6,11 +6,11 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from eval.claims.ledger import VERDICTS
+from eval.claims.ledger import NOT_RUN, VERDICTS
 from eval.report import write_json
 
 MARK = {"reproduced": "reproduced", "partly": "partly", "not reproduced": "NOT reproduced",
-        "not run": "not run"}
+        NOT_RUN: NOT_RUN}
 
 
 def summary_line(ledger: dict[str, Any]) -> str:
@@ -18,7 +18,7 @@ def summary_line(ledger: dict[str, Any]) -> str:
     counts = Counter(entry["verdict"] for entry in ledger["claims"])
     seeds = ", ".join(str(seed) for seed in ledger["seeds"])
     mode = "quick" if ledger["quick"] else "full"
-    verdicts = list(VERDICTS) + (["not run"] if counts.get("not run") else [])
+    verdicts = list(VERDICTS) + ([NOT_RUN] if counts.get(NOT_RUN) else [])
     return (f"{len(ledger['claims'])} claims on seeds {seeds} ({mode}): "
             + ", ".join(f"{counts.get(verdict, 0)} {verdict}" for verdict in verdicts))
 
@@ -63,7 +63,7 @@ def markdown(ledger: dict[str, Any], command: str) -> str:
         what = experiment["description"]
         if ledger["quick"]:
             what += f"; quick: {experiment['quick_description']}"
-        seconds = ", ".join(f"{s:.0f}" for s in experiment["seconds"]) or "not run"
+        seconds = ", ".join(f"{s:.0f}" for s in experiment["seconds"]) or NOT_RUN
         lines.append(f"| `{name}` | {what} | {seconds} |")
     total = sum(sum(e["seconds"]) for e in ledger["experiments"].values())
     lines += ["", f"Total experiment time: {total / 60:.1f} minutes."]

@@ -14,12 +14,9 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from eval.claims import CLAIMS, EXPERIMENTS, PAPERS
-from eval.claims.ledger import Claim, Outcome, combine
+from eval.claims.ledger import NOT_RUN, Claim, Outcome, combine
 from eval.report import write_json
 from eval.suite.store import git_revision, library_versions
-
-NOT_RUN = "not run"
-"""The verdict of a claim with no record on any seed (``report_only``)."""
 
 RECORD_FORMAT = 1
 """The layout of a record file; a record of another format is run again."""

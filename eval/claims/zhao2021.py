@@ -52,9 +52,8 @@ def _run_sway(seed: int, quick: bool, workers: int, progress: bool) -> dict[str,
 
 
 def _run_circle(seed: int, quick: bool, workers: int, progress: bool) -> dict[str, Any]:
-    runs = experiments.run_circle(asdict(_config(seed, quick)), seed, progress,
-                                  masses_kg=(0.263,) if quick else (0.0,)
-                                  + experiments.CIRCLE_LOADS_KG)
+    only_heavy = {"masses_kg": experiments.CIRCLE_LOADS_KG[-1:]} if quick else {}
+    runs = experiments.run_circle(asdict(_config(seed, quick)), seed, progress, **only_heavy)
     return {label: {key: run[key] for key in ("points_reached", "path_error_mean_mm",
                                               "recovery_steps")}
             for label, run in runs.items()}

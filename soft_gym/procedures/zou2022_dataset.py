@@ -131,14 +131,12 @@ def split_by_command(pressures_pa: np.ndarray, train_fraction: float,
     _, group = np.unique(pressures_pa, axis=0, return_inverse=True)
     group = group.ravel()
     order = rng.permutation(int(group.max()) + 1)
-    sizes = np.bincount(group)[order]
-    ends = np.cumsum(sizes)
+    ends = np.empty(len(order), dtype=int)  # samples dealt out once each command is
+    ends[order] = np.cumsum(np.bincount(group)[order])
     n = len(group)
     n_train = int(round(train_fraction * n))
     n_validation = max(1, int(round(validation_fraction * n)))
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    position = ends[rank[group]]  # the running count at the end of each sample's command
+    position = ends[group]
     train = position <= n_train
     validation = ~train & (position <= n_train + n_validation)
     test = ~train & ~validation

@@ -24,14 +24,12 @@ def _summary(experiment: str, seed: int) -> dict:
     return EXPERIMENTS[experiment].run(seed, False, 2, False)
 
 
-def _params():
-    for key, claim in CLAIMS.items():
-        marks = ([pytest.mark.xfail(strict=True, reason=claim.cause)]
-                 if claim.cause is not None else [])
-        yield pytest.param(key, marks=marks, id=key)
+PARAMS = [pytest.param(key, id=key, marks=[pytest.mark.xfail(strict=True, reason=claim.cause)]
+                       if claim.cause is not None else [])
+          for key, claim in CLAIMS.items()]
 
 
-@pytest.mark.parametrize("key", list(_params()))
+@pytest.mark.parametrize("key", PARAMS)
 def test_claim_reproduces_on_every_seed(key):
     claim = CLAIMS[key]
     outcomes = {seed: claim.judge(_summary(claim.experiment, seed)) for seed in SEEDS}
