@@ -64,6 +64,7 @@ from eval.papers import estimation as estimation_module
 from eval.papers import ho2018 as ho2018_module
 from eval.papers import zhao2021 as zhao2021_module
 from eval.papers import zou2022 as zou2022_module
+from eval.papers import zou2022_levers
 from eval.papers.estimation import EXPERIMENTS, run_experiments
 from eval.palette import policy_color, policy_label
 from eval.report import (markdown_table, plot_error_time, plot_trajectory, write_records_csv,
@@ -254,8 +255,10 @@ def _paper_parser(sub, name: str, module, help_text: str,
     ``EXPERIMENTS`` (default all) and ``--seeds``; its description is the module's docstring."""
     paper = sub.add_parser(name, help=help_text, description=module.__doc__,
                            formatter_class=HelpFormatter)
-    paper.add_argument("--experiments", nargs="+", default=list(module.EXPERIMENTS),
-                       choices=list(module.EXPERIMENTS), help="which experiments")
+    default = list(getattr(module, "DEFAULT_EXPERIMENTS", module.EXPERIMENTS))
+    paper.add_argument("--experiments", nargs="+", default=default,
+                       choices=list(module.EXPERIMENTS),
+                       help="which experiments (default: " + " ".join(default) + ")")
     paper.add_argument("--seeds", type=seed_int, nargs="+", default=[0],
                        help=f"{seeds_help}; integers in [0, {SEED_MAX}]")
     return paper
@@ -473,6 +476,10 @@ def _zou2022_parser(sub) -> argparse.ArgumentParser:
                               "29791, ~25 min on one core, cached)")
     zou2022.add_argument("--epochs", type=positive_int, default=500,
                          help="DNN training epochs, >= 1 (paper: 500)")
+    zou2022.add_argument("--lever-samples", type=int_at_least(20), default=3000,
+                         help="exploration samples of the DNN trained at each lever of the "
+                              "'levers' experiment (Table 4 at braid-twist levers 0-5 mm), "
+                              ">= 20")
     zou2022.add_argument("--poses", type=positive_int, default=20,
                          help="random poses of the ASES fault experiment (>= 1)")
     zou2022.add_argument("--out", default="results/zou2022",
@@ -485,6 +492,9 @@ def _run_zou2022(parser: argparse.ArgumentParser, args: argparse.Namespace) -> N
     config = ShapeDNNConfig(n_samples=args.samples, epochs=args.epochs)
     zou2022_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
                                   n_poses=args.poses)
+    if "levers" in args.experiments:
+        zou2022_levers.run_and_report(args.seeds, args.out, ShapeDNNConfig(
+            n_samples=args.lever_samples, epochs=args.epochs))
     print(f"output directory: {args.out}")
 
 

@@ -60,14 +60,18 @@ from eval.report import package_version, save_figure, write_json
 from soft_gym.robots.presets import get_preset
 from soft_gym.sensing.zou2022.cc_shape import cc_shape_points
 from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
-from soft_gym.sensing.zou2022.shape_dnn import (STEREO_INTRINSICS, ShapeDNNConfig, axis_errors_mm,
-                                        default_stereo, true_shape_points)
+from soft_gym.sensing.zou2022.shape_dnn import (N_POINTS, STEREO_INTRINSICS, ShapeDNNConfig,
+                                                axis_errors_mm, default_stereo,
+                                                true_shape_points)
 from soft_gym.sensing.zou2022.stereo_shape import estimate_stereo_shape
 from soft_gym.sensors.encoder import ChamberEncoders
 from soft_gym.sensors.stereo import StereoCamera
 from soft_gym.engines import make_simulator
 
-EXPERIMENTS = ("table3", "table4", "faults", "control")
+EXPERIMENTS = ("table3", "table4", "faults", "control", "levers")
+DEFAULT_EXPERIMENTS = ("table3", "table4", "faults", "control")
+"""What ``python -m eval zou2022`` runs unless told: ``levers`` (Table 4 over the braid twist's
+lever, :mod:`eval.papers.zou2022_levers`) trains a DNN per lever, so it runs when asked."""
 PRESET = "zou2022"
 BAR_PA = 1e5
 
@@ -185,10 +189,17 @@ def bend_pressures_pa(time_s: float) -> np.ndarray:
     return pressures * BAR_PA
 
 
-def run_table4(dnn, seed: int = 0, progress: bool = True) -> dict:
+def run_table4(dnn, seed: int = 0, progress: bool = True, spec=None) -> dict:
     """Table 4 and Figs. 18-19: RSES and the DNN along the continuous bend, against ASES and the
-    true shape."""
-    spec = get_preset(PRESET)
+    true shape.
+
+    :param dnn: the shape DNN; ``None``: RSES only (the DNN's fields and ratios left out).
+    :param seed: sensor noise.
+    :param progress: a progress bar.
+    :param spec: the arm (default: the zou2022 preset; :mod:`eval.papers.zou2022_levers` varies
+        its braid twist).
+    """
+    spec = get_preset(PRESET) if spec is None else spec
     d_m = spec.segments[0].chamber_offset_m
     sim = make_simulator(spec)
     try:
@@ -220,7 +231,8 @@ def run_table4(dnn, seed: int = 0, progress: bool = True) -> dict:
             series["pressure_pa"].append(bend_pressures_pa(t))
             series["lengths_m"].append(lengths)
             series["rses"].append(cc_shape_points(lengths, d_m))
-            series["dnn"].append(dnn.predict(lengths))
+            series["dnn"].append(np.full((N_POINTS, 3), np.nan) if dnn is None
+                                 else dnn.predict(lengths))
             series["ases"].append(shape.points_m)
             series["truth"].append(true_shape_points(spec, sim.backbone()))
     finally:
@@ -228,7 +240,8 @@ def run_table4(dnn, seed: int = 0, progress: bool = True) -> dict:
     arrays = {k: np.asarray(v, dtype=float) for k, v in series.items()}
     result: dict[str, Any] = {"n_samples": n_samples, "ases_lost": lost,
                               "_series": arrays}
-    for method in ("rses", "dnn"):
+    methods = ("rses",) if dnn is None else ("rses", "dnn")
+    for method in methods:
         for reference in ("ases", "truth"):
             tip = _points_rmse(arrays[method][:, -1], arrays[reference][:, -1])
             every = _points_rmse(arrays[method], arrays[reference])
@@ -236,7 +249,7 @@ def run_table4(dnn, seed: int = 0, progress: bool = True) -> dict:
     result["ases_vs_truth"] = {"tip_rmse_mm": _points_rmse(arrays["ases"][:, -1],
                                                            arrays["truth"][:, -1]),
                                "points_rmse_mm": _points_rmse(arrays["ases"], arrays["truth"])}
-    for reference in ("ases", "truth"):
+    for reference in ("ases", "truth") if dnn is not None else ():
         for which in ("tip", "points"):
             rses = _norm(result[f"rses_vs_{reference}"][f"{which}_rmse_mm"])
             dnn_error = _norm(result[f"dnn_vs_{reference}"][f"{which}_rmse_mm"])
@@ -405,10 +418,14 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
                    config: ShapeDNNConfig | None = None, n_poses: int = 20,
                    control_options: dict | None = None, progress: bool = True) -> dict:
     """Run the experiments for every seed; write ``zou2022_seed<N>.md`` and the figures under
-    ``out``, and ``zou2022.json``; print the tables."""
+    ``out``, and ``zou2022.json``; print the tables. ``levers`` is
+    :func:`eval.papers.zou2022_levers.run_and_report`'s (the others are left to it)."""
     unknown = sorted(set(experiments) - set(EXPERIMENTS))
     if unknown:
         raise ValueError(f"experiments must be among {list(EXPERIMENTS)}, got {unknown}")
+    experiments = [name for name in experiments if name != "levers"]
+    if not experiments:
+        return {}
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     base = config or ShapeDNNConfig()

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.papers import zou2022
+from eval.papers import zou2022, zou2022_levers
 from eval.__main__ import main
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 
@@ -79,6 +79,7 @@ def test_ases_is_lost_in_darkness_and_accurate_when_clean():
     (["zou2022", "--samples", "5"], "--samples"),
     (["zou2022", "--epochs", "0"], "--epochs"),
     (["zou2022", "--poses", "0"], "--poses"),
+    (["zou2022", "--lever-samples", "5"], "--lever-samples"),
     (["zou2022", "--seeds", "-1"], "--seeds"),
     (["zou2022", "--experiments", "table9"], "--experiments"),
 ])
@@ -87,3 +88,45 @@ def test_bad_options_are_one_line_errors_before_any_work(argv, option, capsys):
         main(argv)
     assert error.value.code == 2
     assert option in capsys.readouterr().err
+
+
+def test_the_default_run_leaves_out_the_lever_sweep_and_a_lever_sets_every_segments_twist():
+    import argparse
+
+    from eval.__main__ import COMMANDS
+
+    parser = argparse.ArgumentParser()
+    COMMANDS["zou2022"].add_parser(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["zou2022"])
+    assert args.experiments == list(zou2022.DEFAULT_EXPERIMENTS)
+    assert "levers" in zou2022.EXPERIMENTS and "levers" not in args.experiments
+    spec = zou2022_levers.lever_spec(4.0)
+    assert [segment.braid_twist_m for segment in spec.segments] == [0.004] * len(spec.segments)
+    assert zou2022_levers.lever_spec(0.0).segments[0].braid_twist_m == 0.0
+    for bad in (-1.0, float("nan"), 25.0, "2.5", True):
+        with pytest.raises(ValueError, match="lever_mm must be a number in \\[0, 20\\] mm"):
+            zou2022_levers.lever_spec(bad)
+    with pytest.raises(ValueError, match="dnn_levers_mm must be among levers_mm"):
+        zou2022_levers.run_levers(levers_mm=(0.0,), dnn_levers_mm=(2.5,), progress=False)
+
+
+def test_the_fitted_lever_meets_the_papers_rses_error_between_the_levers_run():
+    paper = zou2022_levers.PAPER_RSES_3D_MM
+    assert paper == pytest.approx(np.linalg.norm([10.8861, 6.5395, 6.5560]))
+    rows = [{"lever_mm": 4.0, "rses_tip_rmse_3d_mm": paper + 6.0},
+            {"lever_mm": 0.0, "rses_tip_rmse_3d_mm": paper - 10.0},
+            {"lever_mm": 2.0, "rses_tip_rmse_3d_mm": paper - 2.0}]
+    assert zou2022_levers.fitted_lever_mm(rows) == pytest.approx(2.5)  # 2 + 2 * 2 / 8
+    below = [{"lever_mm": lever, "rses_tip_rmse_3d_mm": paper - 5.0 + lever}
+             for lever in (0.0, 1.0, 2.0)]
+    assert zou2022_levers.fitted_lever_mm(below) == 2.0  # never reached: the nearest
+
+
+@pytest.mark.slow
+def test_a_longer_lever_leads_constant_curvature_further_astray_on_the_bend():
+    """No twist: the bend is planar and RSES stays close; a lever twists it out of CC's plane."""
+    result = zou2022_levers.run_levers(levers_mm=(0.0, 5.0), dnn_levers_mm=(), progress=False)
+    straight, twisted = result["rows"]
+    assert straight["rses_tip_rmse_3d_mm"] < twisted["rses_tip_rmse_3d_mm"]
+    assert twisted["rses_halves_3d_mm"][0] < twisted["rses_halves_3d_mm"][1]  # error grows
+    assert "| 5 |" in zou2022_levers.levers_table(result)
