@@ -57,16 +57,21 @@ def markdown(ledger: dict[str, Any], command: str) -> str:
     for entry in ledger["claims"]:
         lines.append(f"- **{entry['key']}**: {entry['criterion']} (experiment "
                      f"`{entry['experiment']}`)")
-    lines += ["", "## Experiments", "", "| experiment | what runs | seconds per seed |",
-              "|---|---|---|"]
+    lines += ["", "## Experiments", "",
+              "| experiment | what runs | seconds per seed | CPU seconds per seed |",
+              "|---|---|---|---|"]
     for name, experiment in ledger["experiments"].items():
         what = experiment["description"]
         if ledger["quick"]:
             what += f"; quick: {experiment['quick_description']}"
         seconds = ", ".join(f"{s:.0f}" for s in experiment["seconds"]) or NOT_RUN
-        lines.append(f"| `{name}` | {what} | {seconds} |")
+        cpu = ", ".join("-" if s is None else f"{s:.0f}"
+                        for s in experiment.get("cpu_seconds", [])) or NOT_RUN
+        lines.append(f"| `{name}` | {what} | {seconds} | {cpu} |")
     total = sum(sum(e["seconds"]) for e in ledger["experiments"].values())
-    lines += ["", f"Total experiment time: {total / 60:.1f} minutes."]
+    lines += ["", f"Total experiment time: {total / 60:.1f} minutes (each experiment's wall "
+              "time; CPU seconds are its own process's, where recorded: '-' is a record "
+              "written before they were)."]
     return "\n".join(lines) + "\n"
 
 

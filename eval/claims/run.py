@@ -4,6 +4,11 @@ Each experiment's summary for one seed is written to ``<out>/records/<experiment
 (``..._quick.json`` for ``quick``) as soon as it is done, with the time it took and the versions
 that made it; ``resume=True`` reads the records already there instead of running them again, so
 an interrupted full run continues where it stopped.
+
+With ``workers > 1`` the papers' experiments run side by side: one job per paper and seed (its
+experiments in order, so the calibrations they share are built once and then read from the
+cache), in ``workers`` processes, each on one compute thread, so a record is the same whichever
+process or worker count made it.
 """
 
 from __future__ import annotations
@@ -14,8 +19,9 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from eval.claims import CLAIMS, EXPERIMENTS, PAPERS
-from eval.claims.ledger import NOT_RUN, Claim, Outcome, combine
+from eval.claims.ledger import NOT_RUN, Claim, ClaimExperiment, Outcome, combine
 from eval.report import write_json
+from eval.suite.run import one_compute_thread, process_map
 from eval.suite.store import git_revision, library_versions
 
 RECORD_FORMAT = 1
@@ -73,7 +79,9 @@ def run_ledger(papers: Sequence[str] | None = None, seeds: Sequence[int] = (0, 1
         quick: the small version of every experiment (verdicts marked quick).
         out: output directory (``records/`` of the experiments' summaries).
         resume: read the records already under ``out`` instead of running them again.
-        workers: processes for the experiments that run several independent episodes.
+        workers: processes: the papers' experiments side by side (one job per paper and
+            seed, see the module docstring), or, for one paper and seed, the episodes of the
+            experiments that run several independent ones.
         progress: progress bars.
         claims: only these claim keys.
         report_only: run nothing: judge each claim on the seeds whose records are under
@@ -81,38 +89,40 @@ def run_ledger(papers: Sequence[str] | None = None, seeds: Sequence[int] = (0, 1
 
     Returns:
         The ledger: ``{"quick", "seeds", "versions", "git_revision", "experiments": {name:
-        {"seconds": [...]}}, "claims": [{key, paper, where, statement, paper_figures,
+        {"seconds": [...], "cpu_seconds": [...]}}, "claims": [{key, paper, where, statement, paper_figures,
         criterion, experiment, cause, verdict, seeds: [{seed, verdict, measured}]}]}``.
     """
     chosen = select_claims(papers, claims)
     seeds = list(seeds)
     if not seeds or len(set(seeds)) != len(seeds):
         raise ValueError(f"seeds must be distinct and at least one, got {seeds}")
+    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     names = list(dict.fromkeys(claim.experiment for claim in chosen))
-    summaries: dict[tuple[str, int], dict] = {}
-    times: dict[tuple[str, int], float] = {}
-    for seed in seeds:  # seed by seed: an interrupted run leaves whole seeds behind
+    records: dict[tuple[str, int], dict] = {}
+    missing: list[tuple[str, int]] = []
+    for seed in seeds:
         for name in names:
-            experiment = EXPERIMENTS[name]
             path = record_file(out, name, seed, quick)
             record = read_record(path, name, seed, quick) if resume or report_only else None
-            if record is None and report_only:
-                continue
-            if record is None:
-                if progress:
-                    print(f"{name}, seed {seed}{' (quick)' if quick else ''}", flush=True)
-                start = time.perf_counter()
-                summary = experiment.run(seed, quick, workers, progress)
-                record = {"format": RECORD_FORMAT, "experiment": name, "seed": seed,
-                          "quick": quick, "seconds": time.perf_counter() - start,
-                          "versions": library_versions(), "git_revision": git_revision(),
-                          "summary": summary}
-                write_json(path, record)
-                record = json.loads(path.read_text(encoding="utf-8"))  # as a resume reads it
-            summaries[name, seed] = record["summary"]
-            times[name, seed] = float(record["seconds"])
-    seconds = {name: [times[name, seed] for seed in seeds if (name, seed) in times]
-               for name in names}  # in seed order
+            if record is not None:
+                records[name, seed] = record
+            elif not report_only:
+                missing.append((name, seed))
+    jobs = _jobs(missing)
+    if workers == 1 or len(jobs) <= 1:
+        for name, seed in missing:  # seed by seed: an interrupted run leaves whole seeds
+            records[name, seed] = run_record(EXPERIMENTS[name], seed, quick, out, workers,
+                                             progress)
+    else:
+        tasks = [(experiments, seed, quick, str(out), progress) for seed, experiments in jobs]
+        for done in process_map(_run_job, tasks, workers):
+            records.update(done)
+    summaries = {key: record["summary"] for key, record in records.items()}
+    def per_seed(name: str, field: str) -> list[float | None]:  # in seed order
+        return [None if records[name, seed].get(field) is None
+                else float(records[name, seed][field]) for seed in seeds
+                if (name, seed) in records]
     entries = []
     for claim in chosen:
         judged = [seed for seed in seeds if (claim.experiment, seed) in summaries]
@@ -123,9 +133,48 @@ def run_ledger(papers: Sequence[str] | None = None, seeds: Sequence[int] = (0, 1
             "experiments": {name: {"paper": EXPERIMENTS[name].paper,
                                    "description": EXPERIMENTS[name].description,
                                    "quick_description": EXPERIMENTS[name].quick_description,
-                                   "seconds": seconds[name]} for name in names},
+                                   "seconds": per_seed(name, "seconds"),
+                                   "cpu_seconds": per_seed(name, "cpu_seconds")}
+                           for name in names},
             "claims": entries}
 
+
+def run_record(experiment: ClaimExperiment, seed: int, quick: bool, out: str | Path,
+               workers: int = 1, progress: bool = True) -> dict[str, Any]:
+    """Run one experiment for one seed and write its record under ``out`` (as soon as it is
+    done); returns the record as a resume reads it back."""
+    if progress:
+        print(f"{experiment.name}, seed {seed}{' (quick)' if quick else ''}", flush=True)
+    start, cpu_start = time.perf_counter(), time.process_time()
+    summary = experiment.run(seed, quick, workers, progress)
+    path = record_file(out, experiment.name, seed, quick)
+    write_json(path, {"format": RECORD_FORMAT, "experiment": experiment.name, "seed": seed,
+                      "quick": quick, "seconds": time.perf_counter() - start,
+                      "cpu_seconds": time.process_time() - cpu_start,
+                      "versions": library_versions(), "git_revision": git_revision(),
+                      "summary": summary})
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+def _jobs(missing: list[tuple[str, int]]) -> list[tuple[int, list[ClaimExperiment]]]:
+    """The missing (experiment, seed) records as one job per paper and seed, in seed order and,
+    within a seed, the paper with the most experiments first (the longest job starts first)."""
+    grouped: dict[tuple[int, str], list[ClaimExperiment]] = {}
+    for name, seed in missing:
+        experiment = EXPERIMENTS[name]
+        grouped.setdefault((seed, experiment.paper), []).append(experiment)
+    order = sorted(grouped, key=lambda key: (key[0], -len(grouped[key])))
+    return [(seed, grouped[seed, paper]) for seed, paper in order]
+
+
+def _run_job(task: tuple[list[ClaimExperiment], int, bool, str, bool],
+             ) -> dict[tuple[str, int], dict]:
+    """A pool worker's job: one paper's experiments for one seed, in order, on one compute
+    thread (so the numbers do not depend on the worker count)."""
+    experiments, seed, quick, out, progress = task
+    with one_compute_thread():
+        return {(experiment.name, seed): run_record(experiment, seed, quick, out, 1, progress)
+                for experiment in experiments}
 
 def _entry(claim: Claim, seeds: list[int], outcomes: list[Outcome]) -> dict[str, Any]:
     return {"key": claim.key, "paper": claim.paper, "where": claim.where,

@@ -164,7 +164,9 @@ CLAIMS = (
           "The SFE-PD network predicts every key point within 3 mm of the measured one.",
           "errors of P1-P6: 1.31, 1.30, 2.14, 1.70, 1.45, 1.51 mm (all under 3 mm)",
           "reproduced: every key point under 3 mm; partly: their mean under 3 mm",
-          "zhao2021.shape", _key_points),
+          "zhao2021.shape", _key_points,
+          cause="seed 2's far tip P6 at 6.14 mm (P1-P5 under 1.7 mm on every seed; max 1.49 "
+                "and 1.15 mm on seeds 0-1): unknown"),
     Claim("zhao2021.table4_loads", "zhao2021", "Table IV, Section VI-B",
           "Tip loads up to 150 g change the reconstructed backbone's error only slightly.",
           "mean backbone error 5.75 mm at 0 g, 6.61 mm at 150 g (1.15 x)",

@@ -244,6 +244,52 @@ def test_run_ledger_judges_every_seed_writes_records_and_resumes(fake_claims, tm
         run_ledger(["wang2023"], seeds=[1, 1], out=tmp_path, claims=keys, progress=False)
 
 
+def _seeded_error(seed, quick, workers, progress):
+    """A fake experiment a spawned worker can import: its result depends on the seed only."""
+    import numpy as np
+    return {"error_mm": float(np.random.default_rng(seed).normal(1.0, 0.5))}
+
+
+@pytest.fixture
+def poolable_experiments():
+    """Two papers' fake experiments (module-level runs, so a pool worker can run them)."""
+    made = [ClaimExperiment(f"{paper}.pooled", paper, "a fake run", "shorter", _seeded_error)
+            for paper in ("wang2023", "ho2018")]
+    claims = [Claim(f"{e.paper}.pooled_small", e.paper, "Fig. 99", "The error is small.", "1 mm",
+                    "reproduced: under 1.5 mm", e.name,
+                    lambda s: graded(s["error_mm"] < 1.5, False, f"{s['error_mm']:.2f} mm"))
+              for e in made]
+    for experiment in made:
+        EXPERIMENTS.register(experiment.name, experiment)
+    for claim in claims:
+        CLAIMS.register(claim.key, claim)
+    yield [claim.key for claim in claims]
+    for experiment in made:
+        EXPERIMENTS.unregister(experiment.name)
+    for claim in claims:
+        CLAIMS.unregister(claim.key)
+
+
+def test_workers_run_the_papers_side_by_side_with_the_serial_records(poolable_experiments,
+                                                                     tmp_path):
+    keys = poolable_experiments
+    serial = run_ledger(["wang2023", "ho2018"], seeds=[0, 1], out=tmp_path / "serial",
+                        claims=keys, progress=False)
+    pooled = run_ledger(["wang2023", "ho2018"], seeds=[0, 1], out=tmp_path / "pooled",
+                        claims=keys, workers=2, progress=False)
+    assert pooled["claims"] == serial["claims"]
+    for experiment in ("wang2023.pooled", "ho2018.pooled"):
+        for seed in (0, 1):
+            records = [read_record(record_file(tmp_path / run, experiment, seed, False),
+                                   experiment, seed, False) for run in ("serial", "pooled")]
+            assert records[0]["summary"] == records[1]["summary"]
+            assert all(record["cpu_seconds"] >= 0.0 for record in records)
+        assert len(pooled["experiments"][experiment]["cpu_seconds"]) == 2
+    with pytest.raises(ValueError, match="workers must be an integer >= 1, got 0"):
+        run_ledger(["wang2023"], seeds=[0], out=tmp_path, claims=keys[:1], workers=0,
+                   progress=False)
+
+
 def test_report_only_judges_the_seeds_on_record_and_runs_nothing(fake_claims, tmp_path):
     keys = ["wang2023.fake_small"]
     empty = run_ledger(["wang2023"], seeds=[0, 1], out=tmp_path, claims=keys,
