@@ -12,13 +12,16 @@ QUICK_CYCLE_S = {"static": 20.0, "varying": 15.0}
 """``quick``: the cycle time of each experiment (s; the full protocol's 40 and 30 s)."""
 QUICK_LEAD_IN_S = 8.0
 """``quick``: the lead-in on the first corner (s; 15 s in full)."""
+QUICK_PRETRAIN_WAYPOINTS = {"static": 80, "varying": 160}
+"""``quick``: the pre-training walk's waypoints (the full protocol's 80 and 320: the filling
+experiment's offline model learns from half the paper's walk)."""
 
 
 def _runner(name: str):
     def run(seed: int, quick: bool, workers: int, progress: bool) -> dict[str, Any]:
         """Per-cycle means (mm) of every setting of ``name``."""
-        timing = ({"cycle_s": QUICK_CYCLE_S[name], "lead_in_s": QUICK_LEAD_IN_S} if quick
-                  else {})
+        timing = ({"cycle_s": QUICK_CYCLE_S[name], "lead_in_s": QUICK_LEAD_IN_S,
+                   "pretrain_waypoints": QUICK_PRETRAIN_WAYPOINTS[name]} if quick else {})
         results = experiments.run_experiment(name, seed=seed, progress=progress, **timing)
         return {label: {"cycle_mean_mm": record["cycle_mean_mm"],
                         "cycle_max_mm": record["cycle_max_mm"]}
@@ -31,13 +34,14 @@ EXPERIMENTS = (
         "ho2018.static", "ho2018",
         "lwpr_rwr tracks the 25 x 100 mm rectangle for 3 cycles of 40 s with EM feedback: "
         "offline without load, online under an unknown 14.2 g tip (eval.papers.ho2018)",
-        "20 s cycles and an 8 s lead-in", _runner("static")),
+        "20 s cycles and an 8 s lead-in", _runner("static"), cpu_minutes=(1.5, 2.5)),
     ClaimExperiment(
         "ho2018.varying", "ho2018",
         "lwpr_rwr tracks the 40 x 60 mm rectangle for 4 cycles of 30 s: offline with the empty "
         "14 g container, offline and online while it fills by 10 g from cycle 3 and 6 g from "
         "cycle 4 (eval.papers.ho2018)",
-        "15 s cycles and an 8 s lead-in", _runner("varying")),
+        "15 s cycles, an 8 s lead-in and 160 pre-training waypoints", _runner("varying"),
+        cpu_minutes=(2.2, 8.0)),
 )
 
 PLATEAU = ("the online learner levels off at a 2-3 mm floor (cycle 3 of Table 1: 2.59, 2.38, "

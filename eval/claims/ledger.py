@@ -75,6 +75,12 @@ class ClaimExperiment:
         quick_description: what ``quick`` shortens.
         run: ``run(seed, quick, workers, progress) -> summary``: a dict of JSON-able numbers
             (lists, floats, ints, strings, ``None``) that the claims' checks read.
+        shares: experiments of one paper with the same ``shares`` build the same calibration,
+            data set or model (cached after the first), so a parallel ledger runs them in one
+            job, in registry order, and builds it once; ``""`` (default): a job of its own.
+        cpu_minutes: roughly how long one seed takes on one core, ``(quick, full)`` (minutes,
+            measured: the records' ``cpu_seconds``). A parallel ledger starts the longest jobs
+            first; nothing else reads it.
     """
 
     name: str
@@ -82,6 +88,18 @@ class ClaimExperiment:
     description: str
     quick_description: str
     run: Callable[[int, bool, int, bool], dict[str, Any]]
+    shares: str = ""
+    cpu_minutes: tuple[float, float] = (1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        minutes = self.cpu_minutes
+        if (not isinstance(minutes, tuple) or len(minutes) != 2
+                or not all(isinstance(m, (int, float)) and not isinstance(m, bool) and m > 0
+                           for m in minutes)):
+            raise ValueError(f"cpu_minutes must be a (quick, full) pair of positive minutes, "
+                             f"got {minutes!r}")
+        if not isinstance(self.shares, str):
+            raise ValueError(f"shares must be a string, got {self.shares!r}")
 
 
 @dataclass(frozen=True)

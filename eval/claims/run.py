@@ -5,10 +5,11 @@ Each experiment's summary for one seed is written to ``<out>/records/<experiment
 that made it; ``resume=True`` reads the records already there instead of running them again, so
 an interrupted full run continues where it stopped.
 
-With ``workers > 1`` the papers' experiments run side by side: one job per paper and seed (its
-experiments in order, so the calibrations they share are built once and then read from the
-cache), in ``workers`` processes, each on one compute thread, so a record is the same whichever
-process or worker count made it.
+With ``workers > 1`` the experiments run side by side in ``workers`` processes, each on one
+compute thread, so a record is the same whichever process or worker count made it. A job is one
+experiment and seed, or several of one paper that share a build (``ClaimExperiment.shares``: run
+in order, so the calibration, data set or model they share is built once and then read from the
+cache); the longest jobs start first (``ClaimExperiment.cpu_minutes``).
 """
 
 from __future__ import annotations
@@ -79,9 +80,9 @@ def run_ledger(papers: Sequence[str] | None = None, seeds: Sequence[int] = (0, 1
         quick: the small version of every experiment (verdicts marked quick).
         out: output directory (``records/`` of the experiments' summaries).
         resume: read the records already under ``out`` instead of running them again.
-        workers: processes: the papers' experiments side by side (one job per paper and
-            seed, see the module docstring), or, for one paper and seed, the episodes of the
-            experiments that run several independent ones.
+        workers: processes: the experiments side by side (jobs as in the module docstring),
+            or, where there is one job, the episodes of the experiments that run several
+            independent ones.
         progress: progress bars.
         claims: only these claim keys.
         report_only: run nothing: judge each claim on the seeds whose records are under
@@ -109,7 +110,7 @@ def run_ledger(papers: Sequence[str] | None = None, seeds: Sequence[int] = (0, 1
                 records[name, seed] = record
             elif not report_only:
                 missing.append((name, seed))
-    jobs = _jobs(missing)
+    jobs = _jobs(missing, quick)
     if workers == 1 or len(jobs) <= 1:
         for name, seed in missing:  # seed by seed: an interrupted run leaves whole seeds
             records[name, seed] = run_record(EXPERIMENTS[name], seed, quick, out, workers,
@@ -156,20 +157,28 @@ def run_record(experiment: ClaimExperiment, seed: int, quick: bool, out: str | P
     return json.loads(path.read_text(encoding="utf-8"))
 
 
-def _jobs(missing: list[tuple[str, int]]) -> list[tuple[int, list[ClaimExperiment]]]:
-    """The missing (experiment, seed) records as one job per paper and seed, in seed order and,
-    within a seed, the paper with the most experiments first (the longest job starts first)."""
-    grouped: dict[tuple[int, str], list[ClaimExperiment]] = {}
+def _jobs(missing: list[tuple[str, int]], quick: bool
+          ) -> list[tuple[int, list[ClaimExperiment]]]:
+    """The missing (experiment, seed) records as jobs: per seed, one job for each group of a
+    paper's experiments that share a build (``ClaimExperiment.shares``; the others one job
+    each), its experiments in registry order; seed by seed, and within a seed the longest job
+    (``ClaimExperiment.cpu_minutes``, summed) first, so the pool's workers end close together."""
+    grouped: dict[tuple[int, str, str], list[ClaimExperiment]] = {}
     for name, seed in missing:
         experiment = EXPERIMENTS[name]
-        grouped.setdefault((seed, experiment.paper), []).append(experiment)
-    order = sorted(grouped, key=lambda key: (key[0], -len(grouped[key])))
-    return [(seed, grouped[seed, paper]) for seed, paper in order]
+        group = experiment.shares or experiment.name
+        grouped.setdefault((seed, experiment.paper, group), []).append(experiment)
+    which = 0 if quick else 1
+
+    def minutes(key: tuple[int, str, str]) -> float:
+        return sum(experiment.cpu_minutes[which] for experiment in grouped[key])
+    order = sorted(grouped, key=lambda key: (key[0], -minutes(key)))
+    return [(key[0], grouped[key]) for key in order]
 
 
 def _run_job(task: tuple[list[ClaimExperiment], int, bool, str, bool],
              ) -> dict[tuple[str, int], dict]:
-    """A pool worker's job: one paper's experiments for one seed, in order, on one compute
+    """A pool worker's job: experiments that share a build, for one seed, in order, on one compute
     thread (so the numbers do not depend on the worker count)."""
     experiments, seed, quick, out, progress = task
     with one_compute_thread():

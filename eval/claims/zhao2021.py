@@ -14,8 +14,8 @@ from eval.claims.ledger import Claim, ClaimExperiment, Outcome, graded, numbers
 from eval.papers import zhao2021 as experiments
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
-QUICK_MODEL = ReconstructionConfig(n_free=1200, n_loaded=600, max_iterations=300)
-"""``quick``: the SR model and IK network from 1800 exploration samples and 300 iterations (the
+QUICK_MODEL = ReconstructionConfig(n_free=800, n_loaded=400, max_iterations=300)
+"""``quick``: the SR model and IK network from 1200 exploration samples and 300 iterations (the
 paper's 6000 and 1000)."""
 QUICK_P2P_STEPS = 40
 """``quick``: controller steps a point-to-point run may take (100 in full; d = 2 needs ~30)."""
@@ -59,23 +59,26 @@ def _run_circle(seed: int, quick: bool, workers: int, progress: bool) -> dict[st
             for label, run in runs.items()}
 
 
-_QUICK = "the SR model and IK network from 1800 exploration samples instead of 6000"
+_QUICK = "the SR model and IK network from 1200 exploration samples instead of 6000"
+_MODELS = "the exploration, the SR model and the IK network"
 EXPERIMENTS = (
     ClaimExperiment("zhao2021.shape", "zhao2021",
                     "the SR model from the paper's 6000-sample exploration: Table III's "
                     "pressures, 11 random poses, Table IV's loads 0-150 g on 4 of them",
-                    _QUICK, _run_shape),
+                    _QUICK, _run_shape, shares=_MODELS, cpu_minutes=(3.5, 20.0)),
     ClaimExperiment("zhao2021.p2p", "zhao2021",
                     "local_ik_asdm from the paper's start to the goal: d = 8, d = 2, ASDM, ASDM "
                     "with 50 / 75 / 100 g (at most 100 one-second steps)",
-                    f"{_QUICK}, at most {QUICK_P2P_STEPS} steps", _run_p2p),
+                    f"{_QUICK}, at most {QUICK_P2P_STEPS} steps", _run_p2p, shares=_MODELS,
+                    cpu_minutes=(2.8, 7.0)),
     ClaimExperiment("zhao2021.sway", "zhao2021",
                     "ASDM to the goal with a swaying 119 g block, then a 1 N pull at the middle "
-                    "from step 7 to 12", _QUICK, _run_sway),
+                    "from step 7 to 12", _QUICK, _run_sway, shares=_MODELS,
+                    cpu_minutes=(0.5, 0.8)),
     ClaimExperiment("zhao2021.circle", "zhao2021",
                     "ASDM round the 100 mm circle (24 points) free, and with 50 g and 263 g on "
                     "the tip from step 29 to 60", f"{_QUICK}, the 263 g run only",
-                    _run_circle),
+                    _run_circle, shares=_MODELS, cpu_minutes=(0.3, 1.3)),
 )
 
 

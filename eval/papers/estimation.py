@@ -94,31 +94,35 @@ def _conditions(experiment: str, duration_s: float) -> tuple[object, object]:
     return None, None
 
 
-def _sensing(experiment: str, n_init: int) -> dict:
+def _sensing(experiment: str, n_init: int, explore_steps: int = max(INIT_SAMPLES)) -> dict:
     """Sensing-pipeline options of an experiment: F-emp initialised from ``n_init`` samples.
 
-    ``init`` explores ``max(INIT_SAMPLES)`` steps whatever ``n_init`` and labels F-emp with the
-    last ``n_init`` of them, and keeps F-emp out of the vision tracker's matching, so every
-    ``n_init`` sees the same camera estimates."""
+    ``init`` explores ``explore_steps`` steps (the largest initialisation size of its ladder)
+    whatever ``n_init`` and labels F-emp with the last ``n_init`` of them, and keeps F-emp out
+    of the vision tracker's matching, so every ``n_init`` sees the same camera estimates."""
     if experiment != "init":
         return {"n_init": n_init}
-    if not isinstance(n_init, int) or not 10 <= n_init <= max(INIT_SAMPLES):
-        raise ValueError(f"n_init must be an integer in [10, {max(INIT_SAMPLES)}] for the init "
+    if not isinstance(n_init, int) or isinstance(n_init, bool) \
+            or not 10 <= n_init <= explore_steps:
+        raise ValueError(f"n_init must be an integer in [10, {explore_steps}] for the init "
                          f"experiment, got {n_init!r}")
-    return {"n_init": n_init, "map_steps": max(INIT_SAMPLES) - n_init, "femp_prior": False}
+    return {"n_init": n_init, "map_steps": explore_steps - n_init, "femp_prior": False}
 
 
 def run_estimation(experiment: str, steps: int = 4000, n_init: int = 450, seed: int = 0,
-                   progress: bool = True,
-                   video_path: str | Path | None = None) -> dict[str, np.ndarray]:
+                   progress: bool = True, video_path: str | Path | None = None,
+                   init_samples: tuple[int, ...] = INIT_SAMPLES) -> dict[str, np.ndarray]:
     """One estimation run; returns the per-step record (see :mod:`eval.runner`). With
-    ``video_path``, also writes its video there (one frame after reset and one per step)."""
+    ``video_path``, also writes its video there (one frame after reset and one per step).
+    ``init_samples``: the ``init`` experiment's ladder of initialisation sizes (its largest
+    sets the exploration's length, so every size sees the same camera; default the paper's)."""
     if experiment not in EXPERIMENTS:
         raise ValueError(f"experiment must be one of {list(EXPERIMENTS)}, got {experiment!r}")
     duration_s = steps * 0.05
     faults, scenario = _conditions(experiment, duration_s)
     env = gym.make("SoftArmReach-v0", preset="wang2023", feedback="fused", faults=faults,
-                   scenario=scenario, episode_steps=steps, sensing=_sensing(experiment, n_init))
+                   scenario=scenario, episode_steps=steps,
+                   sensing=_sensing(experiment, n_init, max(init_samples)))
     unwrapped = env.unwrapped
     spec = unwrapped.arm
     actuation = Actuation.of_env(env)

@@ -15,7 +15,7 @@ from eval.__main__ import main
 from eval.claims import CLAIMS, EXPERIMENTS, PAPERS, ClaimExperiment, Outcome, combine, graded
 from eval.claims.ledger import Claim
 from eval.claims.report import ledger_table, markdown, summary_line
-from eval.claims.run import read_record, record_file, run_ledger, select_claims
+from eval.claims.run import _jobs, read_record, record_file, run_ledger, select_claims
 from eval.claims.wang2023 import PAPER_TRACKING, PATHS
 from eval.claims.zou2022 import PAPER_TABLE4_RATIO
 from eval.papers import zou2022
@@ -288,6 +288,33 @@ def test_workers_run_the_papers_side_by_side_with_the_serial_records(poolable_ex
     with pytest.raises(ValueError, match="workers must be an integer >= 1, got 0"):
         run_ledger(["wang2023"], seeds=[0], out=tmp_path, claims=keys[:1], workers=0,
                    progress=False)
+
+
+def test_jobs_keep_a_shared_build_in_one_job_and_start_the_longest_first():
+    missing = [(name, seed) for seed in (1, 0) for name in (
+        "wang2023.tracking", "wang2023.occlusion", "wang2023.push", "zhao2021.shape",
+        "zhao2021.p2p", "zou2022.dnn")]
+
+    def named(quick):
+        return [(seed, [e.name for e in job]) for seed, job in _jobs(missing, quick)]
+
+    # quick: the zhao2021 models (3.5 + 2.8 min) before zou2022's data set (2.2), the fused
+    # sensing's calibration (0.5 + 0.5) and the tracking (0.7) last; seed 0's jobs first
+    quick_seed0 = [(0, ["zhao2021.shape", "zhao2021.p2p"]), (0, ["zou2022.dnn"]),
+                   (0, ["wang2023.occlusion", "wang2023.push"]), (0, ["wang2023.tracking"])]
+    assert named(True) == quick_seed0 + [(1, names) for _, names in quick_seed0]
+    assert named(False)[:2] == [(0, ["zou2022.dnn"]), (0, ["zhao2021.shape", "zhao2021.p2p"])]
+    for experiment in EXPERIMENTS.values():  # a shared build stays within its paper
+        for other in EXPERIMENTS.values():
+            if experiment.shares and experiment.shares == other.shares:
+                assert experiment.paper == other.paper
+
+
+@pytest.mark.parametrize("minutes", [(1.0,), (0.0, 1.0), (1.0, -2.0), [1.0, 1.0], (True, 1.0)])
+def test_an_experiment_refuses_a_cost_that_is_no_pair_of_positive_minutes(minutes):
+    with pytest.raises(ValueError, match="cpu_minutes must be a \\(quick, full\\) pair"):
+        ClaimExperiment("wang2023.x", "wang2023", "a run", "shorter", lambda *a: {},
+                        cpu_minutes=minutes)
 
 
 def test_report_only_judges_the_seeds_on_record_and_runs_nothing(fake_claims, tmp_path):
