@@ -6,6 +6,9 @@
 ``suite``: the four-arm benchmark grid of a YAML spec; ``python -m eval suite small`` is the
 README's main job (the schema of a spec: docs/suite.md).
 
+``datasets``: the papers' exploration and calibration data as Minari datasets
+(``python -m eval datasets --help``; README.md, "Datasets").
+
 ``benchmark``: the wang2023 comparison on a loaded circle with fused feedback and a partly
 occluding hand (``python -m eval benchmark --help``).
 
@@ -55,8 +58,10 @@ import numpy as np
 from agents.policies import BASELINES, shipped_agents
 from eval import compare as compare_module
 from eval import runner  # runner.run_many, looked up at each call (tests stand in for it)
+from eval import datasets as datasets_module
 from eval import suite as suite_module
 from eval.claims import CLAIMS, PAPERS
+from eval.datasets import write as dataset_write
 from eval.claims.report import ledger_table, summary_line, write_ledger
 from eval.claims.run import run_ledger, select_claims
 from eval.metrics import add_improvement, improvement, summarize, summary_table
@@ -688,6 +693,9 @@ def _suite_parser(sub) -> argparse.ArgumentParser:
                        help="where the runs go: --workers spawned processes, this process, or "
                             "Ray tasks (a local Ray of --workers CPUs, or the cluster at "
                             "--address; optional extra: pip install \"soft-arm-gym[ray]\")")
+    suite.add_argument("--record", choices=["minari"], default=None,
+                       help="also write the runs as Minari datasets, one per arm and "
+                            "condition, in <out>/datasets (README: Datasets)")
     suite.add_argument("--address", default=None, metavar="ADDR",
                        help="with --backend ray: an existing Ray cluster (auto, "
                             "ray://host:10001, host:6379); the package must be importable on "
@@ -718,6 +726,8 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
                      f"{args.seeds}")
     if args.report_only and args.resume:
         parser.error("--resume runs the missing runs; --report-only runs none: give one")
+    if args.record is not None and args.report_only:
+        parser.error("--record records the runs; --report-only runs none: give one")
     try:
         suite_module.require_rliable()
     except ImportError as error:
@@ -750,10 +760,21 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
               flush=True)
         try:
             suite_module.run_suite(spec, out, workers=args.workers, resume=args.resume,
-                                   progress=True, check=False, backend=backend)
+                                   progress=True, check=False, backend=backend,
+                                   record=args.record is not None)
         except suite_module.SuiteRunError as error:
             failure = str(error)
     print(suite_module.write_report(spec, out, cells=cells))
+    if args.record is not None:
+        from eval.datasets.suite import write_suite_datasets
+
+        recorded = write_suite_datasets(spec.name, out, cells)
+        for dataset_id, episodes in recorded["datasets"].items():
+            print(f"{dataset_id}: {episodes} episode(s)")
+        if recorded["missing"]:
+            print(f"{len(recorded['missing'])} run(s) without a recorded episode (n/a, failed, "
+                  "or finished before --record): not in the datasets", file=sys.stderr)
+        print(f"datasets: {recorded['root']}")
     bad = [problem for cell in cells
            if (problem := suite_module.record_problem(out, cell.key)) is not None]
     if bad and failure is None:
@@ -766,6 +787,66 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
     print(f"output directory: {out}")
     if failure is not None:
         raise SystemExit(1)
+
+
+# ------------------------------------------------------------------------------------ datasets
+DATASETS_DESCRIPTION = (
+    "Write each paper's exploration or calibration data as a Minari dataset "
+    "(soft-arm/<paper>/<name>-v0): the commands, the raw readings the method learns from and "
+    "the ground truth, with the env that produced them recoverable "
+    "(dataset.recover_environment()). Ids: " + ", ".join(
+        f"{paper} {recipe.dataset_id}" for paper, recipe in datasets_module.PAPER_DATASETS.items())
+    + ". Load one with minari.load_dataset(ID) (with MINARI_DATASETS_PATH=OUT when --out is "
+    "given) or eval.datasets.load_dataset(ID, root=OUT). Fields, units and data cards: "
+    "README.md (Datasets) and docs/datasets.md; each dataset's card.md sits beside its data/.")
+
+
+def _datasets_parser(sub) -> argparse.ArgumentParser:
+    """The ``datasets`` subcommand's parser."""
+    datasets = sub.add_parser(
+        "datasets", help="the papers' exploration and calibration data as Minari datasets",
+        description=DATASETS_DESCRIPTION, formatter_class=HelpFormatter)
+    papers = list(datasets_module.PAPER_DATASETS)
+    datasets.add_argument("--papers", nargs="+", choices=papers, default=papers,
+                          help="papers whose datasets to write")
+    datasets.add_argument("--size", choices=list(dataset_write.SIZES), default="paper",
+                          help="the papers' sample counts (zhao2021 4000 + 2000, zou2022 29791,"
+                               " wang2023 450, ho2018 80 waypoints; minutes to an hour), or "
+                               "quick ones (seconds)")
+    datasets.add_argument("--seed", type=seed_int, default=0,
+                          help="the procedures' seed (0: the one the baselines calibrate with)")
+    datasets.add_argument("--out", default=None,
+                          help="datasets root (made; must be writable); default: Minari's "
+                               "(MINARI_DATASETS_PATH, else ~/.minari/datasets)")
+    datasets.add_argument("--force", action="store_true",
+                          help="replace datasets that exist (otherwise refused before any work)")
+    datasets.add_argument("--no-cache", action="store_true",
+                          help="collect afresh even where the calibration cache holds the "
+                               "collection (zhao2021, zou2022)")
+    return datasets
+
+
+def _run_datasets(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``datasets``: every target checked (nothing replaced without --force), then written."""
+    root = datasets_module.default_root() if args.out is None else Path(args.out)
+    if args.out is None:
+        check_output_dir(parser, "--out", root)
+    for paper in args.papers:
+        try:
+            dataset_write.check_target(paper, root, args.force)
+        except ValueError as error:
+            fail(parser, "--out", str(error))
+    rows = []
+    for paper in args.papers:
+        written = dataset_write.write_paper_dataset(paper, root, size=args.size, seed=args.seed,
+                                                    force=args.force, progress=True,
+                                                    use_cache=not args.no_cache)
+        rows.append(dataset_write.written_summary(written))
+        print(f"{written.dataset_id}: {written.n_samples} samples, "
+              f"{written.size_bytes / 1e6:.2f} MB, collected in {written.collect_s:.1f} s, "
+              f"written in {written.write_s:.2f} s", flush=True)
+    print(markdown_table(rows))
+    print(f"output directory: {root}")
 
 
 # ------------------------------------------------------------------------------------- dispatch
@@ -788,6 +869,7 @@ COMMANDS: dict[str, Command] = {
     "compare": Command(_compare_parser, _run_compare),
     "claims": Command(_claims_parser, _run_claims),
     "suite": Command(_suite_parser, _run_suite),
+    "datasets": Command(_datasets_parser, _run_datasets),
 }
 """Subcommand name -> its parser and its work, in the order ``--help`` lists them."""
 

@@ -21,6 +21,7 @@ from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
 from agents.policies import PolicyRefusal
+from eval.datasets.episodes import EpisodeRecorder
 from eval.runner import RunConfig, build, run_episode
 from eval.suite.check import check_suite
 from eval.suite.locks import LOCKS_DIR, claim, release
@@ -88,16 +89,32 @@ def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:
             except PolicyRefusal as error:  # the policy declines this arm or env: n/a
                 result.update(status="n/a", reason=" ".join(str(error).split()))
             else:
+                if task.get("record_episode"):  # changes nothing the env returns
+                    env = EpisodeRecorder(env)
                 try:
                     steps = run_episode(env, policy, seed=config["seed"], progress=False)
                 finally:
                     env.close()
                 result.update(metrics=cell_metrics(steps), steps=steps)
+                if isinstance(env, EpisodeRecorder):
+                    result["episode"] = recorded_episode(env)
     except Exception as error:  # noqa: BLE001 - reported, the other runs go on
         result.update(status="error", error=f"{type(error).__name__}: {error}",
                       traceback=traceback.format_exc())
     result["wall_s"] = time.perf_counter() - start
     return result
+
+
+def recorded_episode(recorder: EpisodeRecorder) -> dict[str, Any]:
+    """The run's episode with what a dataset needs of its env: ``env_id``, ``env_kwargs``,
+    ``obs_parts``, ``obs_format``, ``action_mode`` and the two spaces."""
+    spec, unwrapped = recorder.env.spec, recorder.unwrapped
+    return {**recorder.episode_arrays(0), "env_id": spec.id, "env_kwargs": dict(spec.kwargs),
+            "obs_parts": list(unwrapped.obs_parts),
+            "obs_format": unwrapped.config.obs_format,
+            "action_mode": unwrapped.config.action_mode,
+            "observation_space": recorder.observation_space,
+            "action_space": recorder.action_space}
 
 
 MapFunction = Callable[[Callable[[Any], Any], Sequence[Any], int], Iterator[Any]]
@@ -191,7 +208,8 @@ def order_cells(cells: Sequence[Cell]) -> list[Cell]:
 
 def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, workers: int = 1,
               resume: bool = False, backend: str | MapFunction = "process",
-              progress: bool = True, check: bool = True) -> dict[str, Any]:
+              progress: bool = True, check: bool = True,
+              record: bool = False) -> dict[str, Any]:
     """Run the suite's cells and write one record per run as it finishes.
 
     Args:
@@ -206,6 +224,9 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
             this module).
         progress: show a progress bar over the runs.
         check: run :func:`check_suite` first (the command line has already done so).
+        record: also keep each run's episode (observations, actions, rewards, terminations,
+            the info's ground truth and estimates) under ``out/episodes`` for
+            :func:`eval.datasets.suite.write_suite_datasets`; the records are the same.
 
     Returns:
         ``{"cells", "skipped", "done", "n/a", "bad", "claimed_elsewhere", "wall_s"}``: counts
@@ -257,7 +278,8 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
                        f"(see {Path(out) / LOCKS_DIR}/): left to it", file=sys.stderr)
         versions, revision = library_versions(), git_revision()
         tasks = [{"key": cell.key, "suite": spec.name, "labels": cell.labels,
-                  "config": cell.config, "versions": versions, "git_revision": revision}
+                  "config": cell.config, "versions": versions, "git_revision": revision,
+                  "record_episode": bool(record)}
                  for cell in order_cells(claimed)]
         failures = []
         bar = tqdm(total=len(tasks), desc=f"suite {spec.name}", unit="run",

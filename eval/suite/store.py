@@ -9,6 +9,7 @@ import hashlib
 import json
 import math
 import os
+import pickle
 import platform
 import subprocess
 import tempfile
@@ -316,12 +317,35 @@ def _atomic_write(path: Path, write: Callable[[Any], None], binary: bool) -> Non
         raise
 
 
+EPISODES_DIR = "episodes"
+"""Where ``run_suite(..., record=True)`` keeps each run's recorded episode (``<key>.pkl``, the
+arrays of :meth:`eval.datasets.episodes.EpisodeRecorder.episode_arrays` with the env's id,
+keyword arguments and observation layout), for the datasets of ``--record minari``."""
+
+
+def episode_path(out: str | os.PathLike, key: str) -> Path:
+    """The recorded episode of run ``key`` (see :data:`EPISODES_DIR`)."""
+    return Path(out) / EPISODES_DIR / f"{key}.pkl"
+
+
+def write_episode(out: str | os.PathLike, key: str, episode: Mapping[str, Any]) -> Path:
+    """Write run ``key``'s recorded episode atomically (pickle); returns its path."""
+    path = episode_path(out, key)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    _atomic_write(path, lambda f: pickle.dump(dict(episode), f, protocol=4), binary=True)
+    return path
+
+
 def write_record(out: str | os.PathLike, result: Mapping[str, Any]) -> Path:
-    """Write one finished run: its per-step arrays (if any) and then its JSON record, each
+    """Write one finished run: its per-step arrays (if any), its recorded episode (if any,
+    :func:`write_episode`; not part of the record) and then its JSON record, each
     atomically. Returns the JSON record's path."""
     key = result["key"]
     steps = result.get("steps")
-    record = {k: v for k, v in result.items() if k not in ("steps", "error", "traceback")}
+    if result.get("episode") is not None:
+        write_episode(out, key, result["episode"])
+    record = {k: v for k, v in result.items()
+              if k not in ("steps", "error", "traceback", "episode")}
     record["steps_file"], record["steps_sha256"] = None, None
     if steps is not None:
         arrays = {name: np.asarray(value) for name, value in steps.items()}

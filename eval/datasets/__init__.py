@@ -1,0 +1,26 @@
+"""Offline data as Minari datasets: the papers' exploration and calibration data, and the
+suite's runs.
+
+* :mod:`eval.datasets.papers`: each paper's data collection as a dataset
+  (:data:`PAPER_DATASETS`; ``python -m eval datasets``).
+* :mod:`eval.datasets.suite`: a suite's runs as one dataset per arm and condition
+  (``python -m eval suite SPEC --record minari``).
+* :mod:`eval.datasets.episodes`: episodes from env runs (:class:`EpisodeRecorder`) and from
+  procedures' samples.
+* :mod:`eval.datasets.store`: writing (never over an existing dataset without ``force``) and
+  loading with checks (:func:`load_dataset`: one ``ValueError`` for an unknown id, a corrupt or
+  truncated directory, or another env version).
+* :mod:`eval.datasets.cards`: the data card written next to each dataset.
+
+The ids, fields and units are in README.md ("Datasets"), the data cards in docs/datasets.md.
+"""
+
+from eval.datasets.episodes import EpisodeRecorder
+from eval.datasets.papers import PAPER_DATASETS, Collection, PaperDataset
+from eval.datasets.store import (default_root, list_datasets, load_dataset, recover_env,
+                                 write_dataset)
+from eval.datasets.write import write_paper_dataset
+
+__all__ = ["PAPER_DATASETS", "Collection", "EpisodeRecorder", "PaperDataset", "default_root",
+           "list_datasets", "load_dataset", "recover_env", "write_dataset",
+           "write_paper_dataset"]
