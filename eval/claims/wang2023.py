@@ -5,7 +5,8 @@ F-emp's initialisation size (Table VI) (Wang et al. 2023, Section IV; the experi
 
 from __future__ import annotations
 
-from typing import Any
+import functools
+from typing import Any, Callable
 
 from eval import runner
 from eval.claims.ledger import Claim, ClaimExperiment, Outcome, graded, numbers
@@ -77,20 +78,27 @@ def _phase_stats(errors: dict) -> dict[str, Any]:
             for name in estimation.ESTIMATORS}
 
 
-def _estimation_runner(experiment: str):
-    def run(seed: int, quick: bool, workers: int, progress: bool) -> dict[str, Any]:
-        steps = QUICK_ESTIMATION_STEPS if quick else ESTIMATION_STEPS
-        phases = estimation._phases(experiment, steps * 0.05)
-        if experiment != "init":
-            record = estimation.run_estimation(experiment, steps=steps, seed=seed,
-                                               progress=progress)
-            return _phase_stats(estimation_errors(record, phases=phases))
-        ladder = QUICK_INIT_SAMPLES if quick else estimation.INIT_SAMPLES
-        return {str(n_init): _phase_stats(estimation_errors(
-            estimation.run_estimation("init", steps=steps, n_init=n_init, seed=seed,
-                                      progress=progress, init_samples=ladder), phases=phases))
-            for n_init in ladder}
-    return run
+def _run_estimation(experiment: str, seed: int, quick: bool, workers: int,
+                    progress: bool) -> dict[str, Any]:
+    """Each estimator's errors (mm) over estimation experiment ``experiment`` and its phases;
+    for ``init``, per initialisation size."""
+    steps = QUICK_ESTIMATION_STEPS if quick else ESTIMATION_STEPS
+    phases = estimation._phases(experiment, steps * 0.05)
+    if experiment != "init":
+        record = estimation.run_estimation(experiment, steps=steps, seed=seed,
+                                           progress=progress)
+        return _phase_stats(estimation_errors(record, phases=phases))
+    ladder = QUICK_INIT_SAMPLES if quick else estimation.INIT_SAMPLES
+    return {str(n_init): _phase_stats(estimation_errors(
+        estimation.run_estimation("init", steps=steps, n_init=n_init, seed=seed,
+                                  progress=progress, init_samples=ladder), phases=phases))
+        for n_init in ladder}
+
+
+def _estimation_runner(experiment: str) -> Callable[[int, bool, int, bool], dict[str, Any]]:
+    """Experiment ``experiment``'s run (a partial of a module-level function: a pool worker
+    unpickles it)."""
+    return functools.partial(_run_estimation, experiment)
 
 
 _SCALED = "40 s instead of 200 s, every phase scaled"

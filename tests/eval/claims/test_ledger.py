@@ -8,6 +8,7 @@ was misread from it), and the measured results that prompted the ledger must not
 from __future__ import annotations
 
 import json
+import pickle
 
 import pytest
 
@@ -308,6 +309,15 @@ def test_jobs_keep_a_shared_build_in_one_job_and_start_the_longest_first():
         for other in EXPERIMENTS.values():
             if experiment.shares and experiment.shares == other.shares:
                 assert experiment.paper == other.paper
+
+
+@pytest.mark.parametrize("name", list(EXPERIMENTS))
+def test_every_experiment_reaches_a_pool_worker_as_itself(name):
+    """A parallel ledger sends each job's experiments to a spawned worker, pickled."""
+    experiment = EXPERIMENTS[name]
+    copy = pickle.loads(pickle.dumps(experiment))
+    assert copy.name == name and copy.shares == experiment.shares
+    assert pickle.dumps(copy.run) == pickle.dumps(experiment.run)
 
 
 @pytest.mark.parametrize("minutes", [(1.0,), (0.0, 1.0), (1.0, -2.0), [1.0, 1.0], (True, 1.0)])
