@@ -21,7 +21,11 @@ is one command held for ``settle_s`` (1 s, 20 env steps at the usual 0.05 s cont
 The network is trained on the same random exploration as the shape reconstruction
 (:func:`soft_gym.procedures.zhao2021_exploration.cached_reconstruction`, on a private copy of the arm
 with the env's gauge model; cached on disk), from pairs of consecutive samples with the ground
-truth tip of the exploration (the paper's RGB-D camera).
+truth tip of the exploration (the paper's RGB-D camera). With ``dataset=`` (the id of
+``python -m eval datasets``'s ``soft-arm/zhao2021/exploration-v0``, ``dataset_root=`` its root)
+the exploration is read from that dataset instead: it must have been collected with this arm, the
+env's gauge model and the ``exploration`` sizes and seed (a ``ValueError`` names the setting that
+differs), so the network is the one the collection gives.
 
 Needs ``pose``, ``target``, ``strain`` and ``pressure`` in the env's observation (``pressure``
 gives ``A_0`` where an episode starts from held pressures, e.g. ``start_m=``). Works on any preset
@@ -34,6 +38,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -49,7 +54,7 @@ from soft_gym._validation import (require_in_range, require_integer, require_lea
 from soft_gym.robots.actuation import Actuation
 from soft_gym.sensing.calibration_cache import cached, sensor_description
 from soft_gym.sensing.zhao2021.shape_exploration import GAUGE_SETTINGS
-from soft_gym.procedures.zhao2021_exploration import exploration_of
+from soft_gym.procedures.zhao2021_exploration import exploration_digest, exploration_of
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensors.strain_gauge import StrainGauges
 
@@ -89,6 +94,10 @@ class LocalIKASDMController(BaselinePolicy):
         progress: show tqdm bars while the first build explores and trains (about 9 minutes
             for the paper's exploration on zhao2021 on 2 busy cores, seconds with a quick
             ``exploration``; nothing when the network comes from the cache). Not saved.
+        dataset: id of a dataset of zhao2021's exploration (``python -m eval datasets``) to
+            train on instead of exploring (see the module docstring); ``None`` explores. Not
+            saved.
+        dataset_root: the datasets root of ``dataset`` (Minari's when ``None``).
     """
 
     name = "local_ik_asdm"
@@ -97,7 +106,8 @@ class LocalIKASDMController(BaselinePolicy):
                  tolerance_mm: float = 4.0, settle_s: float = 1.0, max_iterations: int = 1000,
                  batch_size: int = 64, learning_rate: float = 1e-2, skip: bool = True,
                  exploration: dict | None = None, seed: int = 0, cache: bool = True,
-                 progress: bool = True) -> None:
+                 progress: bool = True, dataset: str | None = None,
+                 dataset_root: str | os.PathLike | None = None) -> None:
         unwrapped = require_soft_arm_env(env, self.name)
         self.step_mm = require_in_range("step_mm", step_mm, MIN_STEP_MM, MAX_STEP_MM)
         for name, value in (("adaptive", adaptive), ("skip", skip), ("cache", cache),
@@ -118,6 +128,12 @@ class LocalIKASDMController(BaselinePolicy):
                              f"{exploration!r}")
         self.exploration = dict(exploration or {})
         self._config = ReconstructionConfig.from_options(self.exploration)
+        if dataset is not None and not isinstance(dataset, str):
+            raise ValueError(f"dataset must be a dataset id (str) or None, got {dataset!r}")
+        if dataset_root is not None and not isinstance(dataset_root, (str, os.PathLike)):
+            raise ValueError(f"dataset_root must be a directory (str or path) or None, got "
+                             f"{dataset_root!r}")
+        self.dataset, self.dataset_root = dataset, dataset_root
         self.env = unwrapped
         missing = [part for part in _REQUIRED_PARTS if part not in self.env.obs_parts]
         if missing:
@@ -205,10 +221,13 @@ class LocalIKASDMController(BaselinePolicy):
         training report."""
         spec = self.env.arm
         gauges = self._gauges()
+        recorded = None if self.dataset is None else exploration_of(
+            spec, gauges, self._config, self.cache, self.progress, self.dataset,
+            self.dataset_root)
 
         def compute() -> dict[str, Any]:
-            data = exploration_of(spec, gauges, self._config, self.cache,
-                                  progress=self.progress)
+            data = recorded if recorded is not None else exploration_of(
+                spec, gauges, self._config, self.cache, progress=self.progress)
             network = LocalIKNetwork(spec.n_chambers, data.readings.shape[1], spec.p_max_pa,
                                      skip=self.skip, seed=self.seed)
             training = network.fit(data.pressures_pa, data.key_points_m[:, -1], data.readings,
@@ -225,6 +244,8 @@ class LocalIKASDMController(BaselinePolicy):
                  "settings": {k: getattr(self, k) for k in ("max_iterations", "batch_size",
                                                              "learning_rate", "skip", "seed")},
                  "learner": _learner_source_digest()}
+        if recorded is not None:  # keyed on the data read; without a dataset the key is as was
+            parts["exploration data"] = exploration_digest(recorded)
         self.network, self.training = cached(
             parts, compute, use_cache=self.cache,
             use=lambda result: (LocalIKNetwork.from_state(result["network"]), result["training"]))

@@ -35,6 +35,12 @@ trained epoch by epoch and the epoch with the lowest test RMSE is kept (Fig. 4; 
 ``max_epochs``); the inverse is fitted on all pre-training transitions. The pre-trained model is
 kept in the user's cache directory (``SOFT_GYM_CACHE=off`` disables it), keyed on everything
 that changes it; a cached file that does not load is rebuilt with a warning, never used.
+With ``dataset=`` (the id of ``python -m eval datasets``'s ``soft-arm/ho2018/pretraining-v0``,
+``dataset_root=`` its root) the walk's observations are read from that recording instead of
+driving the copy; the dataset must have been walked with this controller's arm, env settings,
+``seed``, ``pretrain_waypoints``, ``leg_decisions``, ``hold_steps``, ``waypoint_range`` and
+``rest_actuation`` (:meth:`LWPRRWRController.walk_key`; a ``ValueError`` names the one that
+differs), so the transitions and the model equal those of the walk.
 
 Works on any preset: two segments (ho2018, zhao2021) are redundant for the 3-D tip, one segment
 (wang2023, zou2022) is not and the attractor then only biases the solution. Needs ``pose`` and
@@ -49,6 +55,8 @@ import functools
 import hashlib
 import io
 import json
+import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -79,6 +87,11 @@ _PRETRAINING_SETTINGS = ("pretrain_waypoints", "leg_decisions", "max_epochs", "i
                          "waypoint_range", "seed", "hold_steps", "attractor_gain", "rest_actuation",
                          "ridge")
 """Settings that change the pre-trained model (and so its cache entry)."""
+_WALK_SETTINGS = ("pretrain_waypoints", "leg_decisions", "waypoint_range", "seed", "hold_steps",
+                  "rest_actuation")
+"""Settings that change the pre-training walk (what a recorded walk must match)."""
+SETTLE_STEPS = 20
+"""Control steps at the rest actuation before the walk's first decision."""
 
 
 @functools.lru_cache(maxsize=1)
@@ -118,6 +131,10 @@ class LWPRRWRController(BaselinePolicy):
         progress: show tqdm bars while pre-training drives the waypoints and trains the LWPR
             epochs (about 30 s for 80 waypoints; nothing when the model comes from the cache).
             Not saved.
+        dataset: id of a recorded pre-training walk (``python -m eval datasets``, ho2018) to
+            pre-train on instead of walking (see the module docstring); ``None`` walks. Not
+            saved.
+        dataset_root: the datasets root of ``dataset`` (Minari's when ``None``).
     """
 
     name = "lwpr_rwr"
@@ -127,7 +144,9 @@ class LWPRRWRController(BaselinePolicy):
                  rest_actuation: float = 0.2, ridge: float = 20.0, pretrain_waypoints: int = 80,
                  leg_decisions: int = 30, max_epochs: int = 15, init_d: float = 0.25,
                  w_gen: float = 0.2, waypoint_range: float = 0.6, min_step_mm: float = 1.0,
-                 seed: int = 0, cache: bool = True, progress: bool = True) -> None:
+                 seed: int = 0, cache: bool = True, progress: bool = True,
+                 dataset: str | None = None,
+                 dataset_root: str | os.PathLike | None = None) -> None:
         unwrapped = require_soft_arm_env(env, self.name)
         for name, value in (("online", online), ("progress", progress)):
             if not isinstance(value, (bool, np.bool_)):
@@ -161,6 +180,12 @@ class LWPRRWRController(BaselinePolicy):
         if not isinstance(cache, (bool, np.bool_)):
             raise ValueError(f"cache must be True or False, got {cache!r}")
         self.cache = bool(cache)
+        if dataset is not None and not isinstance(dataset, str):
+            raise ValueError(f"dataset must be a dataset id (str) or None, got {dataset!r}")
+        if dataset_root is not None and not isinstance(dataset_root, (str, os.PathLike)):
+            raise ValueError(f"dataset_root must be a directory (str or path) or None, got "
+                             f"{dataset_root!r}")
+        self.dataset, self.dataset_root = dataset, dataset_root
         self.env = unwrapped
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:
@@ -251,8 +276,10 @@ class LWPRRWRController(BaselinePolicy):
     def pretrain(self) -> dict[str, Any]:
         """Pre-train (or take the cached pre-training) as the module docstring describes;
         returns its report (samples, test RMSE per epoch, best epoch, receptive fields)."""
+        recorded = None if self.dataset is None else self._read_pretraining_data()
+
         def compute() -> dict[str, Any]:
-            data = self._collect_pretraining_data()
+            data = self._collect_pretraining_data() if recorded is None else recorded
             forward, report = self._train_forward(data)
             self.forward = forward
             inverse = self._new_inverse()
@@ -267,8 +294,12 @@ class LWPRRWRController(BaselinePolicy):
                                 f"{type(inverse).__name__}, not an LWPR model and its inverse")
             return forward, inverse, result["report"], result["tips_mm"]
 
+        parts = self._cache_parts()
+        if recorded is not None:  # keyed on the data read; without a dataset the key is as was
+            parts["recorded walk"] = hashlib.sha256(b"".join(
+                np.ascontiguousarray(array).tobytes() for array in recorded)).hexdigest()
         self.forward, self.inverse, self.pretraining, self._pretraining_tips_mm = cached(
-            self._cache_parts(), compute, use_cache=self.cache, use=use)
+            parts, compute, use_cache=self.cache, use=use)
         self.inverse.window = self.window  # the window plays no part in pre-training
         self._fields_seen = self.forward.fields_per_output
         return self.pretraining
@@ -279,9 +310,45 @@ class LWPRRWRController(BaselinePolicy):
             self.pretrain()
         return self._pretraining_tips_mm.copy()
 
-    def _collect_pretraining_data(self) -> tuple[np.ndarray, ...]:
-        """Transitions ``(p, u, du, dp)`` along straight lines between random actuator-space
-        waypoints, on an unloaded, fault-free copy of the env."""
+    def _collect_pretraining_data(
+            self, wrap_env: Callable[[gym.Env], gym.Env] | None = None,
+    ) -> tuple[np.ndarray, ...]:
+        """Transitions ``(p, u, du, dp)`` (mm, fractions of the range) along straight lines
+        between random actuator-space waypoints, on an unloaded, fault-free copy of the env.
+
+        :param wrap_env: applied to the copy once made, before its reset (e.g. a recorder of the
+            walk, :class:`eval.datasets.episodes.EpisodeRecorder`); it must pass observations
+            and actions through unchanged. The wrapped env is closed after the walk.
+        """
+        env = self.pretraining_env()
+        if wrap_env is not None:
+            env = wrap_env(env)
+        schedule = self._actuation_schedule()
+        try:
+            actuation = Actuation.of_env(env.unwrapped)
+            observation, _ = env.reset(seed=self.seed)
+            u = schedule[0]
+            for _ in range(SETTLE_STEPS):  # settle at the rest configuration first
+                observation, *_ = env.step(actuation.action(self.p_low + u * (self.p_high
+                                                                              - self.p_low)))
+            poses = [env.unwrapped.observation_part(observation, "pose")[:3] * _MM]
+            bar = tqdm(total=self.pretrain_waypoints, desc=f"{self.name} pre-training waypoints",
+                       disable=not self.progress, leave=False)
+            for k, u_next in enumerate(schedule[1:], start=1):
+                pressures = self.p_low + u_next * (self.p_high - self.p_low)
+                for _ in range(self.hold_steps):
+                    observation, *_ = env.step(actuation.action(pressures))
+                poses.append(env.unwrapped.observation_part(observation, "pose")[:3] * _MM)
+                if k % self.leg_decisions == 0:
+                    bar.update(1)
+            bar.close()
+        finally:
+            env.close()
+        return self._transitions(poses, schedule)
+
+    def pretraining_env(self) -> gym.Env:
+        """A new unloaded, fault-free copy of the env that the pre-training walks (reach task,
+        flat ``pose`` + ``target`` observation, absolute actions)."""
         if self.env.spec is None:
             raise ValueError("env has no spec (it was not made by gymnasium.make), so "
                              f"{self.name} cannot pre-train on a copy of it")
@@ -292,35 +359,58 @@ class LWPRRWRController(BaselinePolicy):
                       action_mode="absolute")
         for key in ("path", "cycles", "speed_m_s", "waypoints_m"):
             kwargs.pop(key, None)
-        env = gym.make(self.env.spec.id, **kwargs)
-        try:
-            rng = np.random.default_rng(self.seed)
-            actuation = Actuation.of_env(env.unwrapped)
-            observation, _ = env.reset(seed=self.seed)
-            waypoints = rng.uniform(0.0, self.waypoint_range,
-                                    (self.pretrain_waypoints, self.n_chambers))
-            u = np.full(self.n_chambers, self.rest_actuation)
-            for _ in range(20):  # settle at the rest configuration first
-                observation, *_ = env.step(actuation.action(self.p_low + u * (self.p_high
-                                                                              - self.p_low)))
-            samples = []
-            p = env.unwrapped.observation_part(observation, "pose")[:3] * _MM
-            for waypoint in tqdm(waypoints, desc=f"{self.name} pre-training waypoints",
-                                 disable=not self.progress, leave=False):
-                start = u.copy()
-                for j in range(1, self.leg_decisions + 1):
-                    u_next = start + (waypoint - start) * j / self.leg_decisions
-                    pressures = self.p_low + u_next * (self.p_high - self.p_low)
-                    for _ in range(self.hold_steps):
-                        observation, *_ = env.step(actuation.action(pressures))
-                    p_next = env.unwrapped.observation_part(observation, "pose")[:3] * _MM
-                    samples.append(np.concatenate([p, u, u_next - u, p_next - p]))
-                    p, u = p_next, u_next
-        finally:
-            env.close()
-        samples = np.array(samples)
+        return gym.make(self.env.spec.id, **kwargs)
+
+    def _actuation_schedule(self) -> list[np.ndarray]:
+        """``u`` at the rest configuration, then after each of the walk's decisions (fractions
+        of each chamber's range): ``pretrain_waypoints * leg_decisions + 1`` rows."""
+        rng = np.random.default_rng(self.seed)
+        waypoints = rng.uniform(0.0, self.waypoint_range,
+                                (self.pretrain_waypoints, self.n_chambers))
+        u = np.full(self.n_chambers, self.rest_actuation)
+        schedule = [u]
+        for waypoint in waypoints:
+            start = u.copy()
+            for j in range(1, self.leg_decisions + 1):
+                u = start + (waypoint - start) * j / self.leg_decisions
+                schedule.append(u)
+        return schedule
+
+    def _transitions(self, poses_mm: list[np.ndarray],
+                     schedule: list[np.ndarray]) -> tuple[np.ndarray, ...]:
+        """The transitions ``(p, u, du, dp)`` of the tip positions (mm) read after the settling
+        and after each decision, and the actuation schedule."""
+        samples = np.array([np.concatenate([poses_mm[k], schedule[k],
+                                            schedule[k + 1] - schedule[k],
+                                            poses_mm[k + 1] - poses_mm[k]])
+                            for k in range(len(schedule) - 1)])
         c = self.n_chambers
         return samples[:, :3], samples[:, 3:3 + c], samples[:, 3 + c:3 + 2 * c], samples[:, -3:]
+
+    def walk_key(self) -> dict[str, Any]:
+        """What the pre-training walk depends on: the arm (``preset`` and the whole spec), the
+        env's settings the copy keeps (not the preset's spelling) and the walk's settings. A
+        recorded walk (``dataset=``) must match it."""
+        parts = self._cache_parts()
+        env = {key: value for key, value in parts["env"].items()
+               if key not in ("preset", "alias_preset")}
+        return {"preset": self.env.arm.name, "arm": repr(self.env.arm), "env": env,
+                **{key: getattr(self, key) for key in _WALK_SETTINGS}}
+
+    def _read_pretraining_data(self) -> tuple[np.ndarray, ...]:
+        """The transitions of the walk recorded in :attr:`dataset` (checked against
+        :meth:`walk_key`), equal to those :meth:`_collect_pretraining_data` takes."""
+        from eval.datasets.training import read_pretraining_walk
+
+        observations = read_pretraining_walk(self.dataset, self.dataset_root, self.walk_key())
+        schedule = self._actuation_schedule()
+        steps = SETTLE_STEPS + self.hold_steps * np.arange(len(schedule))
+        if len(observations) <= steps[-1]:
+            raise ValueError(f"dataset {self.dataset!r} holds {len(observations) - 1} steps; "
+                             f"the walk takes {steps[-1]}")
+        # the copy's flat observation starts with the pose (obs=("pose", "target"))
+        poses = [observations[step][:3] * _MM for step in steps]
+        return self._transitions(poses, schedule)
 
     def _train_forward(self, data) -> tuple[LWPR, dict[str, Any]]:
         """LWPR epochs on 80 % of the transitions; the epoch with the lowest RMSE on the other

@@ -11,6 +11,9 @@ suite's runs.
   loading with checks (:func:`load_dataset`: one ``ValueError`` for an unknown id, a corrupt or
   truncated directory, or another env version).
 * :mod:`eval.datasets.cards`: the data card written next to each dataset.
+* :mod:`eval.datasets.training`: a paper's dataset read back as the data its method trains on
+  (``local_ik_asdm``, ``strain_sr``, ``encoder_dnn``, ``lwpr_rwr``; ``dataset=<id>``), checked
+  against the method's settings.
 
 The ids, fields and units are in README.md ("Datasets"), the data cards in docs/datasets.md.
 """

@@ -15,15 +15,15 @@ data card needs. :data:`PAPER_DATASETS` names them:
 zhao2021, zou2022 and wang2023 hold commands to equilibrium on a private simulator, so their
 samples are stored as :func:`~eval.datasets.episodes.procedure_episode` (one episode); ho2018's
 walk is a Gymnasium episode of a copy of the env and is recorded as it ran
-(:class:`~eval.datasets.episodes.EpisodeRecorder`), so replaying its actions in the recovered env
-gives its observations back bit for bit.
+(:class:`~eval.datasets.episodes.EpisodeRecorder`, handed to the walk through its ``wrap_env``
+seam), so replaying its actions in the recovered env gives its observations back bit for bit.
+Each collection also stores ``match``, the settings its method checks before it trains from the
+dataset (:mod:`eval.datasets.training`).
 """
 
 from __future__ import annotations
 
-import contextlib
-import types
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -48,6 +48,8 @@ class Collection:
         procedure: the function that collected the samples (dotted name).
         settings: the procedure's settings (sizes, seed, ...), for the metadata and the card.
         raw: what the procedure itself returned (for tests and further use).
+        match: what the method that trains on the data checks before it does (its arm, sensor
+            models, sizes, seed; :mod:`eval.datasets.training`), stored as metadata.
     """
 
     episodes: list[dict[str, Any]]
@@ -58,6 +60,7 @@ class Collection:
     procedure: str
     settings: dict[str, Any]
     raw: Any = None
+    match: dict[str, Any] = field(default_factory=dict)
 
     def buffers(self) -> list:
         """The episodes as Minari episode buffers."""
@@ -136,7 +139,7 @@ def collect_zhao2021(size: dict[str, int], seed: int = 0, progress: bool = True,
     :param use_cache: take the exploration from the calibration cache where ``strain_sr`` or
         ``local_ik_asdm`` already ran it (the same record), and keep it there.
     """
-    from soft_gym.procedures.zhao2021_exploration import exploration_of
+    from soft_gym.procedures.zhao2021_exploration import exploration_key, exploration_of
     from soft_gym.sensing import make_feedback_source
 
     seed = require_seed("seed", seed)
@@ -145,8 +148,8 @@ def collect_zhao2021(size: dict[str, int], seed: int = 0, progress: bool = True,
     context = _private_context(env_id, env_kwargs)
     config = make_feedback_source("strain_sr", {"n_free": n_free, "n_loaded": n_loaded,
                                                 "seed": seed}).config
-    data = exploration_of(context.spec, context.make_sensor("strain"), config,
-                          use_cache=use_cache, progress=progress)
+    gauges = context.make_sensor("strain")
+    data = exploration_of(context.spec, gauges, config, use_cache=use_cache, progress=progress)
     observations = {"strain": data.readings}
     episode = procedure_episode(
         _actions(context.spec, data.pressures_pa), observations,
@@ -157,7 +160,9 @@ def collect_zhao2021(size: dict[str, int], seed: int = 0, progress: bool = True,
                       _action_space(context.spec),
                       "soft_gym.procedures.zhao2021_exploration.collect_exploration",
                       {"n_free": n_free, "n_loaded": n_loaded, "load_kg": config.load_kg,
-                       "seed": seed, "settle_s": 1.0}, raw=data)
+                       "seed": seed, "settle_s": 1.0}, raw=data,
+                      match=exploration_key(context.spec, gauges, config.n_free, config.n_loaded,
+                                            config.load_kg, config.seed))
 
 
 # ------------------------------------------------------------------------------------- zou2022
@@ -178,7 +183,7 @@ def collect_zou2022(size: dict[str, int], seed: int = 0, progress: bool = True,
     :param use_cache: take the data set from the calibration cache where ``encoder_dnn``
         already built it, and keep it there.
     """
-    from soft_gym.procedures.zou2022_dataset import cached_dataset
+    from soft_gym.procedures.zou2022_dataset import cached_dataset, dataset_key
     from soft_gym.sensing import make_feedback_source
     from soft_gym.sensors.stereo import StereoCamera
 
@@ -188,8 +193,9 @@ def collect_zou2022(size: dict[str, int], seed: int = 0, progress: bool = True,
     context = _private_context(env_id, env_kwargs)
     source = make_feedback_source("encoder_dnn", {"n_samples": n_samples, "seed": seed})
     stereo = StereoCamera(**source.labelling_stereo_options())
-    data = cached_dataset(context.spec, context.make_sensor("encoder"), stereo, source.config,
-                          use_cache=use_cache, progress=progress)
+    encoders = context.make_sensor("encoder")
+    data = cached_dataset(context.spec, encoders, stereo, source.config, use_cache=use_cache,
+                          progress=progress)
     split = np.full(len(data), -1.0)
     for index, name in enumerate(SPLITS):
         split[getattr(data, name)] = index
@@ -204,7 +210,8 @@ def collect_zou2022(size: dict[str, int], seed: int = 0, progress: bool = True,
                       "soft_gym.procedures.zou2022_dataset.collect_dataset",
                       {"n_samples": n_samples, "seed": seed, "n_lost": int(data.n_lost),
                        "settle_s": source.config.settle_s,
-                       "pressure_step_pa": source.config.pressure_step_pa}, raw=data)
+                       "pressure_step_pa": source.config.pressure_step_pa}, raw=data,
+                      match=dataset_key(context.spec, encoders, stereo, source.config))
 
 
 # ------------------------------------------------------------------------------------ wang2023
@@ -304,29 +311,6 @@ def collect_wang2023(size: dict[str, int], seed: int = 0, progress: bool = True,
 HO2018_ENV = ("SoftArmTrackHo2018-v0", {"feedback": "em"})
 
 
-@contextlib.contextmanager
-def _recording_make(module: types.ModuleType, sink: list) -> Iterator[None]:
-    """While open, the envs that ``module`` makes through its ``gym.make`` are wrapped in an
-    :class:`EpisodeRecorder` appended to ``sink`` (only ``module``'s name ``gym`` changes)."""
-    real = module.gym
-
-    class _Gym:
-        def __getattr__(self, name: str) -> Any:
-            return getattr(real, name)
-
-        @staticmethod
-        def make(*args, **kwargs):
-            recorder = EpisodeRecorder(real.make(*args, **kwargs))
-            sink.append(recorder)
-            return recorder
-
-    module.gym = _Gym()
-    try:
-        yield
-    finally:
-        module.gym = real
-
-
 def collect_ho2018(size: dict[str, int], seed: int = 0, progress: bool = True,
                    use_cache: bool = True) -> Collection:
     """ho2018 Section 3.2's pre-training walk of ``lwpr_rwr``: straight lines between random
@@ -337,7 +321,6 @@ def collect_ho2018(size: dict[str, int], seed: int = 0, progress: bool = True,
     :param progress: show the walk's progress bar.
     :param use_cache: unused (the pre-training caches its model, not its walk).
     """
-    import agents.controllers.lwpr_rwr as lwpr_module
     from agents.policies import make_policy
 
     import soft_gym  # noqa: F401 - registers the env ids
@@ -350,12 +333,11 @@ def collect_ho2018(size: dict[str, int], seed: int = 0, progress: bool = True,
     try:
         controller = make_policy("lwpr_rwr", env=env, pretrain_waypoints=waypoints, seed=seed,
                                  cache=False, progress=progress)
-        with _recording_make(lwpr_module, sink):
-            transitions = controller._collect_pretraining_data()
+        transitions = controller._collect_pretraining_data(
+            wrap_env=lambda walk_env: sink.append(EpisodeRecorder(walk_env)) or sink[-1])
+        match = controller.walk_key()
     finally:
         env.close()
-    if len(sink) != 1:
-        raise RuntimeError(f"lwpr_rwr's pre-training made {len(sink)} envs; expected one")
     recorder = sink[0]
     walk_spec = recorder.env.spec
     episode = recorder.episode_arrays(0)
@@ -368,7 +350,7 @@ def collect_ho2018(size: dict[str, int], seed: int = 0, progress: bool = True,
                        "waypoint_range": controller.waypoint_range,
                        "rest_actuation": controller.rest_actuation,
                        "transitions": int(len(transitions[0]))},
-                      raw=transitions)
+                      raw=transitions, match=match)
 
 
 PAPER_DATASETS: Registry[PaperDataset] = Registry("paper dataset")

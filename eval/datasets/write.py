@@ -97,7 +97,8 @@ def write_paper_dataset(paper: str, root: str | os.PathLike | None = None,
         action_space=collection.action_space,
         description=f"{paper}: {recipe.summary} ({collection.n_samples} samples).",
         algorithm_name=collection.procedure, card=card,
-        info={"paper": paper, "settings": collection.settings, "collect_s": collect_s},
+        info={"paper": paper, "settings": collection.settings, "collect_s": collect_s,
+              "match": collection.match},
         episode_metadata=[{"procedure": collection.procedure, "paper": paper, "seed": seed}
                           for _ in collection.episodes],
         root=root, force=force)

@@ -12,6 +12,10 @@ recalibrating leaves its episodes as they were.
 | `fused`, `camera`, `fbg`     | wang2023: vision map at rest, F-emp from the spiral exploration  |
 | `strain_sr`                  | zhao2021: random exploration, SFE-PD networks' training          |
 | `encoder_dnn`                | zou2022: ASES-labelled data set, the DNN's training              |
+
+``strain_sr`` and ``encoder_dnn`` given ``sensing={"dataset": <id>}`` (and ``"dataset_root"``)
+train on that dataset of ``python -m eval datasets`` instead of collecting (checked against the
+settings they would collect with; see :mod:`eval.datasets.training`).
 """
 
 from __future__ import annotations
@@ -78,6 +82,15 @@ def calibrate_wang2023_pipeline(source: FeedbackSource, context: CalibrationCont
     source.set_calibration((pipeline, cached(key, compute, use_cache=use_cache)))
 
 
+def _dataset_options(source: FeedbackSource) -> dict[str, Any]:
+    """``dataset`` and ``dataset_root`` of a source given a dataset to train on (its
+    ``sensing={"dataset": id}``), else nothing (the procedure collects)."""
+    dataset = getattr(source, "dataset", None)
+    if dataset is None:
+        return {}
+    return {"dataset": dataset, "dataset_root": getattr(source, "dataset_root", None)}
+
+
 def calibrate_zhao2021_reconstruction(source: FeedbackSource, context: CalibrationContext,
                                       use_cache: bool = True) -> None:
     """``strain_sr``: zhao2021's exploration with the env's gauge model, then the networks."""
@@ -85,7 +98,7 @@ def calibrate_zhao2021_reconstruction(source: FeedbackSource, context: Calibrati
     # (nothing is shown when the model comes from the cache)
     source.set_calibration(cached_reconstruction(context.spec, context.make_sensor("strain"),
                                                  source.config, use_cache=use_cache,
-                                                 progress=True))
+                                                 progress=True, **_dataset_options(source)))
 
 
 def calibrate_zou2022_dnn(source: FeedbackSource, context: CalibrationContext,
@@ -100,7 +113,8 @@ def calibrate_zou2022_dnn(source: FeedbackSource, context: CalibrationContext,
     # the paper-sized data set takes ~25 minutes on one core: show the bars (nothing is
     # shown when the data set and network come from the cache)
     source.set_calibration(cached_shape_dnn(context.spec, context.make_sensor("encoder"), stereo,
-                                            source.config, use_cache=use_cache, progress=True))
+                                            source.config, use_cache=use_cache, progress=True,
+                                            **_dataset_options(source)))
 
 
 CALIBRATIONS: Registry[Calibration] = Registry("calibration")

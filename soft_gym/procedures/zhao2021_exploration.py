@@ -115,42 +115,85 @@ def cached_exploration(spec: ArmSpec, gauges, n_free: int = 4000, n_loaded: int 
     calibration cache: the shape reconstruction and the local-IK controller learn from the same
     record."""
     parts = {"what": "zhao2021 exploration", "arm": repr(spec),
-             "gauges": sensor_description(gauges, GAUGE_SETTINGS), "n_free": n_free,
-             "n_loaded": n_loaded, "load_kg": load_kg, "seed": seed}
+             **exploration_key(spec, gauges, n_free, n_loaded, load_kg, seed)}
+    del parts["preset"]  # the cache key as it always was
     return cached(parts, lambda: collect_exploration(spec, gauges, n_free=n_free,
                                                      n_loaded=n_loaded, load_kg=load_kg,
                                                      seed=seed, progress=progress),
                   use_cache=use_cache)
+def exploration_key(spec: ArmSpec, gauges, n_free: int, n_loaded: int, load_kg: float,
+                    seed: int) -> dict[str, Any]:
+    """What the exploration's record depends on: the arm (its ``preset`` name and the whole
+    spec), the gauge model, the sample counts, the tip mass (kg) and the seed. The calibration
+    cache keys on it, and a dataset of the exploration must match it
+    (:func:`eval.datasets.training.read_exploration`)."""
+    return {"preset": spec.name, "arm": repr(spec),
+            "gauges": sensor_description(gauges, GAUGE_SETTINGS), "n_free": n_free,
+            "n_loaded": n_loaded, "load_kg": load_kg, "seed": seed}
+
+
 def exploration_of(spec: ArmSpec, gauges, config: ReconstructionConfig, use_cache: bool = True,
-                   progress: bool = True):
-    """The exploration record ``config`` asks for (:func:`cached_exploration`)."""
+                   progress: bool = True, dataset: str | None = None, dataset_root=None):
+    """The exploration record ``config`` asks for: :func:`cached_exploration`, or, given
+    ``dataset`` (an id written by ``python -m eval datasets``, under ``dataset_root``, Minari's
+    root when ``None``), that dataset's record, which must have been collected with the same
+    arm, gauge model, sizes and seed (equal bit for bit to the collection; ``ValueError``
+    naming the dataset and the setting otherwise)."""
+    if dataset is not None:
+        from eval.datasets.training import read_exploration
+
+        return read_exploration(dataset, dataset_root, exploration_key(
+            spec, gauges, config.n_free, config.n_loaded, config.load_kg, config.seed))
     return cached_exploration(spec, gauges, n_free=config.n_free, n_loaded=config.n_loaded,
                               load_kg=config.load_kg, seed=config.seed, use_cache=use_cache,
                               progress=progress)
 
 
 def train_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig = ReconstructionConfig(),
-                         use_cache: bool = True,
-                         progress: bool = True) -> tuple[ShapeReconstructor, dict[str, Any]]:
-    """Explore ``spec`` with ``gauges`` on (or take the cached exploration) and train the SFE-PD
-    networks (zhao2021 VI-A; :func:`~soft_gym.sensing.zhao2021.shape_reconstruction.fit_reconstruction`).
+                         use_cache: bool = True, progress: bool = True,
+                         data: ShapeDataset | None = None,
+                         ) -> tuple[ShapeReconstructor, dict[str, Any]]:
+    """Explore ``spec`` with ``gauges`` on (or take the cached exploration, or ``data`` where
+    given, e.g. read from a dataset by :func:`exploration_of`) and train the SFE-PD networks
+    (zhao2021 VI-A; :func:`~soft_gym.sensing.zhao2021.shape_reconstruction.fit_reconstruction`).
     """
-    return fit_reconstruction(spec, exploration_of(spec, gauges, config, use_cache, progress),
-                              config, progress)
+    if data is None:
+        data = exploration_of(spec, gauges, config, use_cache, progress)
+    return fit_reconstruction(spec, data, config, progress)
+
+
+def exploration_digest(data: ShapeDataset) -> str:
+    """SHA-256 of an exploration record's arrays (the cache key of a model trained on data read
+    from a dataset)."""
+    from eval.datasets.training import data_digest
+
+    return data_digest(data.pressures_pa, data.readings, data.key_points_m, data.backbone_m,
+                       data.tip_load_kg)
 
 
 def cached_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig,
                           key: dict[str, Any] | None = None, use_cache: bool = True,
-                          progress: bool = True) -> tuple[ShapeReconstructor, dict[str, Any]]:
+                          progress: bool = True, dataset: str | None = None,
+                          dataset_root=None) -> tuple[ShapeReconstructor, dict[str, Any]]:
     """:func:`train_reconstruction`, from the calibration cache where it has been run before
-    with the same arm, gauges, configuration and ``key`` (anything else that matters)."""
+    with the same arm, gauges, configuration and ``key`` (anything else that matters).
+
+    With ``dataset`` (an id of ``python -m eval datasets``, under ``dataset_root``) the
+    exploration is that dataset's (:func:`exploration_of`: checked against the arm, gauges,
+    sizes and seed), not collected; the cache key then holds the record's digest."""
+    data = None if dataset is None else exploration_of(spec, gauges, config, use_cache, progress,
+                                                       dataset, dataset_root)
+
     def compute() -> dict[str, Any]:
-        reconstructor, report = train_reconstruction(spec, gauges, config, use_cache, progress)
+        reconstructor, report = train_reconstruction(spec, gauges, config, use_cache, progress,
+                                                     data)
         return {"state": reconstructor.state(), "report": report}
 
     parts = {"what": "zhao2021 shape reconstruction", "arm": repr(spec),
              "gauges": sensor_description(gauges, GAUGE_SETTINGS), "config": asdict(config),
              **(key or {})}
+    if data is not None:
+        parts["exploration"] = exploration_digest(data)
     return cached(parts, compute, use_cache=use_cache,
                   use=lambda result: (ShapeReconstructor.from_state(result["state"]),
                                       result["report"]))

@@ -158,30 +158,71 @@ _STEREO_SETTINGS = ("intrinsics", "baseline_m", "distance_m", "target_m", "backd
 _ENCODER_SETTINGS = ("resolution_m", "noise_std_m")
 
 
+def dataset_key(spec: ArmSpec, encoders, stereo=None, config: ShapeDNNConfig = ShapeDNNConfig(),
+                ases_config=None) -> dict[str, Any]:
+    """What the data set depends on: the arm (its ``preset`` name and the whole spec), the
+    encoder and stereo models, ASES's settings and the recipe (samples, grid step, settling,
+    augmentation, split, seed). The calibration cache keys on it, and a dataset of the data set
+    must match it (:func:`eval.datasets.training.read_zou_dataset`)."""
+    stereo = default_stereo() if stereo is None else stereo
+    ases_config = ASESConfig() if ases_config is None else ases_config
+    return {"preset": spec.name, "arm": repr(spec),
+            "encoders": sensor_description(encoders, _ENCODER_SETTINGS),
+            "stereo": sensor_description(stereo, _STEREO_SETTINGS),
+            "ases": ases_config.describe(), "recipe": config.dataset_recipe()}
+
+
 def cached_dataset(spec: ArmSpec, encoders, stereo=None,
                    config: ShapeDNNConfig = ShapeDNNConfig(), ases_config=None,
                    use_cache: bool = True, progress: bool = True) -> ZouDataset:
     """:func:`collect_dataset`, built once per recipe and kept in the calibration cache."""
     stereo = default_stereo() if stereo is None else stereo
     ases_config = ASESConfig() if ases_config is None else ases_config
-    parts = {"what": "zou2022 shape data set", "arm": repr(spec),
-             "encoders": sensor_description(encoders, _ENCODER_SETTINGS),
-             "stereo": sensor_description(stereo, _STEREO_SETTINGS),
-             "ases": ases_config.describe(), "recipe": config.dataset_recipe()}
+    parts = {"what": "zou2022 shape data set",
+             **dataset_key(spec, encoders, stereo, config, ases_config)}
+    del parts["preset"]  # the cache key as it always was
     return cached(parts, lambda: collect_dataset(spec, encoders, stereo, config, ases_config,
                                                  progress), use_cache=use_cache)
 
 
+def dataset_of(spec: ArmSpec, encoders, stereo=None, config: ShapeDNNConfig = ShapeDNNConfig(),
+               ases_config=None, use_cache: bool = True, progress: bool = True,
+               dataset: str | None = None, dataset_root=None) -> ZouDataset:
+    """The data set ``config`` asks for: :func:`cached_dataset`, or, given ``dataset`` (an id
+    written by ``python -m eval datasets``, under ``dataset_root``, Minari's root when
+    ``None``), that dataset's samples and split, which must have been collected with the same
+    arm, sensors, ASES settings and recipe (equal bit for bit to the collection; ``ValueError``
+    naming the dataset and the setting otherwise)."""
+    if dataset is not None:
+        from eval.datasets.training import read_zou_dataset
+
+        return read_zou_dataset(dataset, dataset_root,
+                                dataset_key(spec, encoders, stereo, config, ases_config))
+    return cached_dataset(spec, encoders, stereo, config, ases_config, use_cache, progress)
+
+
+def data_set_digest(data: ZouDataset) -> str:
+    """SHA-256 of a data set's arrays and split (the cache key of a DNN trained on data read
+    from a dataset)."""
+    from eval.datasets.training import data_digest
+
+    return data_digest(data.pressures_pa, data.lengths_m, data.labels_m, data.truth_m,
+                       data.augmented, np.array(data.n_lost), data.train, data.validation,
+                       data.test)
+
+
 def train_shape_dnn(spec: ArmSpec, encoders, stereo=None,
                     config: ShapeDNNConfig = ShapeDNNConfig(), ases_config=None,
-                    use_cache: bool = True,
-                    progress: bool = True) -> tuple[ShapeDNN, dict[str, Any]]:
-    """The data set (from the cache where built before) and the DNN trained on it.
+                    use_cache: bool = True, progress: bool = True,
+                    data: ZouDataset | None = None) -> tuple[ShapeDNN, dict[str, Any]]:
+    """The data set (from the cache where built before, or ``data`` where given, e.g. read
+    from a dataset by :func:`dataset_of`) and the DNN trained on it.
 
     Returns the DNN and a report: the data set (:class:`ZouDataset`), the training's
     per-epoch MSE (m^2) and the epoch kept.
     """
-    data = cached_dataset(spec, encoders, stereo, config, ases_config, use_cache, progress)
+    if data is None:
+        data = cached_dataset(spec, encoders, stereo, config, ases_config, use_cache, progress)
     dnn = ShapeDNN(spec.n_chambers, config.hidden_widths, config.seed)
     report = dnn.fit(data.lengths_m, data.labels_m, data.train, data.validation,
                      epochs=config.epochs, batch_size=config.batch_size,
@@ -192,16 +233,23 @@ def train_shape_dnn(spec: ArmSpec, encoders, stereo=None,
 
 def cached_shape_dnn(spec: ArmSpec, encoders, stereo=None,
                      config: ShapeDNNConfig = ShapeDNNConfig(), ases_config=None,
-                     use_cache: bool = True,
-                     progress: bool = True) -> tuple[ShapeDNN, dict[str, Any]]:
+                     use_cache: bool = True, progress: bool = True,
+                     dataset: str | None = None,
+                     dataset_root=None) -> tuple[ShapeDNN, dict[str, Any]]:
     """:func:`train_shape_dnn`, from the calibration cache where run before with the same arm,
-    sensors and configuration."""
+    sensors and configuration.
+
+    With ``dataset`` (an id of ``python -m eval datasets``, under ``dataset_root``) the data
+    set is that dataset's (:func:`dataset_of`: checked against the arm, sensors and recipe),
+    not collected; the cache key then holds the data's digest."""
     stereo = default_stereo() if stereo is None else stereo
     ases_config = ASESConfig() if ases_config is None else ases_config
+    data = None if dataset is None else dataset_of(spec, encoders, stereo, config, ases_config,
+                                                   use_cache, progress, dataset, dataset_root)
 
     def compute() -> dict[str, Any]:
         dnn, report = train_shape_dnn(spec, encoders, stereo, config, ases_config, use_cache,
-                                      progress)
+                                      progress, data)
         return {"state": dnn.state(), "report": report}
 
     parts = {"what": "zou2022 shape DNN", "arm": repr(spec),
@@ -209,5 +257,7 @@ def cached_shape_dnn(spec: ArmSpec, encoders, stereo=None,
              "stereo": sensor_description(stereo, _STEREO_SETTINGS),
              "ases": ases_config.describe(), "config": asdict(config),
              "recipe": config.dataset_recipe()}
+    if data is not None:
+        parts["data set"] = data_set_digest(data)
     return cached(parts, compute, use_cache=use_cache,
                   use=lambda result: (ShapeDNN.from_state(result["state"]), result["report"]))

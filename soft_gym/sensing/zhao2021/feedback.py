@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import numpy as np
@@ -10,6 +11,19 @@ from soft_gym._validation import require_positive
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.measurement import Measurement
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
+
+
+def dataset_option(options: dict[str, Any]) -> tuple[str | None, str | os.PathLike | None]:
+    """Pop ``dataset`` (a dataset id, or ``None``) and ``dataset_root`` (a directory, or
+    ``None``) from a source's ``options``; ``ValueError`` for another type."""
+    dataset, root = options.pop("dataset", None), options.pop("dataset_root", None)
+    if dataset is not None and not isinstance(dataset, str):
+        raise ValueError(f"dataset must be a dataset id (str) or None, got {dataset!r}")
+    if root is not None and not isinstance(root, (str, os.PathLike)):
+        raise ValueError(f"dataset_root must be a directory (str or path) or None, got {root!r}")
+    if root is not None and dataset is None:
+        raise ValueError("dataset_root is given without a dataset")
+    return dataset, root
 
 
 class StrainShapeFeedback(FeedbackSource):
@@ -26,7 +40,12 @@ class StrainShapeFeedback(FeedbackSource):
 
     Options (the env's ``sensing=``): the fields of
     :class:`~soft_gym.sensing.zhao2021.shape_reconstruction.ReconstructionConfig` (e.g. ``n_free``,
-    ``n_loaded``, ``max_iterations`` for a quick model) and ``history_step_s`` (s, > 0).
+    ``n_loaded``, ``max_iterations`` for a quick model), ``history_step_s`` (s, > 0), and
+    ``dataset`` (with ``dataset_root``, Minari's root when left out): the id of a dataset written
+    by ``python -m eval datasets`` (``"soft-arm/zhao2021/exploration-v0"``) to train on instead of
+    exploring. It must hold the exploration this source would take (same arm, gauge model,
+    ``n_free``, ``n_loaded``, ``load_kg`` and ``seed``; a ``ValueError`` names the setting that
+    differs when the env calibrates), so the networks are those of the collection.
     """
 
     name = "strain_sr"
@@ -39,6 +58,7 @@ class StrainShapeFeedback(FeedbackSource):
         options = dict(options or {})
         self.history_step_s = require_positive("history_step_s",
                                                options.pop("history_step_s", 1.0))
+        self.dataset, self.dataset_root = dataset_option(options)
         self.config = ReconstructionConfig.from_options(options)
         self.reconstructor: Any = None
         self.report: dict[str, Any] = {}

@@ -27,8 +27,13 @@ private copy of the arm, labelled by ASES on a private stereo pair in a clear vi
 network's training, both in the calibration cache. At run time it reads only the encoders, so it keeps
 working when the env's stereo pair is blind. Options: the fields of
 :class:`~soft_gym.sensing.zou2022.shape_dnn.ShapeDNNConfig` (e.g. ``n_samples=300`` for a quick model;
-the default is the paper's 29791) and ``stereo`` (keyword arguments of the labelling
-:class:`~soft_gym.sensors.stereo.StereoCamera`).
+the default is the paper's 29791), ``stereo`` (keyword arguments of the labelling
+:class:`~soft_gym.sensors.stereo.StereoCamera`) and ``dataset`` (with ``dataset_root``, Minari's
+root when left out): the id of a dataset written by ``python -m eval datasets``
+(``"soft-arm/zou2022/stereo-labels-v0"``) to train on instead of collecting. It must hold the
+data set this source would collect (same arm, encoder and stereo models, ASES settings,
+``n_samples``, grid, settling, split and ``seed``; a ``ValueError`` names the setting that differs
+when the env calibrates), so the DNN is that of the collection.
 
 Registration: :mod:`soft_gym.sensing`'s ``__init__`` registers these classes with the others.
 
@@ -53,6 +58,7 @@ from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing.zou2022.cc_shape import cc_shape
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensing.zhao2021.feedback import dataset_option
 from soft_gym.sensing.zou2022.shape_dnn import STEREO_INTRINSICS, ShapeDNNConfig
 from soft_gym.sensing.zou2022.stereo_shape import N_POINTS, ASESConfig, estimate_stereo_shape
 from soft_gym.sensors.stereo import StereoCamera
@@ -182,6 +188,7 @@ class EncoderDNNFeedback(FeedbackSource):
         if unknown:
             raise ValueError(f"stereo: unknown StereoCamera option {unknown[0]!r}; allowed: "
                              f"{allowed}")
+        self.dataset, self.dataset_root = dataset_option(options)
         self.spec: ArmSpec | None = None
         self.stereo_options = dict(stereo or {})
         self.config = ShapeDNNConfig.from_options(options)
