@@ -7,11 +7,11 @@ suite's runs.
   (``python -m eval suite SPEC --record minari``).
 * :mod:`eval.datasets.episodes`: episodes from env runs (:class:`EpisodeRecorder`) and from
   procedures' samples.
-* :mod:`eval.datasets.store`: writing (never over an existing dataset without ``force``) and
+* :mod:`soft_gym.datasets.store`: writing (never over an existing dataset without ``force``) and
   loading with checks (:func:`load_dataset`: one ``ValueError`` for an unknown id, a corrupt or
   truncated directory, or another env version).
 * :mod:`eval.datasets.cards`: the data card written next to each dataset.
-* :mod:`eval.datasets.training`: a paper's dataset read back as the data its method trains on
+* :mod:`soft_gym.datasets.training`: a paper's dataset read back as the data its method trains on
   (``local_ik_asdm``, ``strain_sr``, ``encoder_dnn``, ``lwpr_rwr``; ``dataset=<id>``), checked
   against the method's settings.
 
@@ -20,8 +20,8 @@ The ids, fields and units are in README.md ("Datasets"), the data cards in docs/
 
 from eval.datasets.episodes import EpisodeRecorder
 from eval.datasets.papers import PAPER_DATASETS, Collection, PaperDataset
-from eval.datasets.store import (default_root, list_datasets, load_dataset, recover_env,
-                                 write_dataset)
+from soft_gym.datasets.store import (default_root, list_datasets, load_dataset, recover_env,
+                                     write_dataset)
 from eval.datasets.write import write_paper_dataset
 
 __all__ = ["PAPER_DATASETS", "Collection", "EpisodeRecorder", "PaperDataset", "default_root",

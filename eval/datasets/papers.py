@@ -18,7 +18,7 @@ walk is a Gymnasium episode of a copy of the env and is recorded as it ran
 (:class:`~eval.datasets.episodes.EpisodeRecorder`, handed to the walk through its ``wrap_env``
 seam), so replaying its actions in the recovered env gives its observations back bit for bit.
 Each collection also stores ``match``, the settings its method checks before it trains from the
-dataset (:mod:`eval.datasets.training`).
+dataset (:mod:`soft_gym.datasets.training`).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ class Collection:
         settings: the procedure's settings (sizes, seed, ...), for the metadata and the card.
         raw: what the procedure itself returned (for tests and further use).
         match: what the method that trains on the data checks before it does (its arm, sensor
-            models, sizes, seed; :mod:`eval.datasets.training`), stored as metadata.
+            models, sizes, seed; :mod:`soft_gym.datasets.training`), stored as metadata.
     """
 
     episodes: list[dict[str, Any]]

@@ -11,7 +11,7 @@ from typing import Any
 
 from eval.datasets.cards import paper_card
 from eval.datasets.papers import PAPER_DATASETS
-from eval.datasets.store import dataset_dir, write_dataset
+from soft_gym.datasets.store import dataset_dir, write_dataset
 
 SIZES = ("paper", "quick")
 """Named sizes of :func:`write_paper_dataset` (each paper's ``paper_size`` / ``quick_size``)."""

@@ -15,7 +15,7 @@ recalibrating leaves its episodes as they were.
 
 ``strain_sr`` and ``encoder_dnn`` given ``sensing={"dataset": <id>}`` (and ``"dataset_root"``)
 train on that dataset of ``python -m eval datasets`` instead of collecting (checked against the
-settings they would collect with; see :mod:`eval.datasets.training`).
+settings they would collect with; see :mod:`soft_gym.datasets.training`).
 """
 
 from __future__ import annotations

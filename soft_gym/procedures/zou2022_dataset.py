@@ -163,7 +163,7 @@ def dataset_key(spec: ArmSpec, encoders, stereo=None, config: ShapeDNNConfig = S
     """What the data set depends on: the arm (its ``preset`` name and the whole spec), the
     encoder and stereo models, ASES's settings and the recipe (samples, grid step, settling,
     augmentation, split, seed). The calibration cache keys on it, and a dataset of the data set
-    must match it (:func:`eval.datasets.training.read_zou_dataset`)."""
+    must match it (:func:`soft_gym.datasets.training.read_zou_dataset`)."""
     stereo = default_stereo() if stereo is None else stereo
     ases_config = ASESConfig() if ases_config is None else ases_config
     return {"preset": spec.name, "arm": repr(spec),
@@ -194,7 +194,7 @@ def dataset_of(spec: ArmSpec, encoders, stereo=None, config: ShapeDNNConfig = Sh
     arm, sensors, ASES settings and recipe (equal bit for bit to the collection; ``ValueError``
     naming the dataset and the setting otherwise)."""
     if dataset is not None:
-        from eval.datasets.training import read_zou_dataset
+        from soft_gym.datasets.training import read_zou_dataset
 
         return read_zou_dataset(dataset, dataset_root,
                                 dataset_key(spec, encoders, stereo, config, ases_config))
@@ -204,7 +204,7 @@ def dataset_of(spec: ArmSpec, encoders, stereo=None, config: ShapeDNNConfig = Sh
 def data_set_digest(data: ZouDataset) -> str:
     """SHA-256 of a data set's arrays and split (the cache key of a DNN trained on data read
     from a dataset)."""
-    from eval.datasets.training import data_digest
+    from soft_gym.datasets.training import data_digest
 
     return data_digest(data.pressures_pa, data.lengths_m, data.labels_m, data.truth_m,
                        data.augmented, np.array(data.n_lost), data.train, data.validation,

@@ -12,7 +12,7 @@ import pytest
 
 import eval.suite as suite
 import soft_gym  # noqa: F401 - registers the ids
-from eval.datasets.store import load_dataset
+from soft_gym.datasets.store import load_dataset
 from eval.datasets.suite import write_suite_datasets
 from eval.suite.store import read_steps, record_path
 from tests.suite_specs import assert_suite_cli_error, tiny_suite

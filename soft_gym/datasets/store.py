@@ -1,4 +1,4 @@
-"""Writing and reading the Minari datasets of :mod:`eval.datasets` under a datasets root.
+"""Writing and reading the Minari datasets of the arms (:mod:`eval.datasets`) under a root.
 
 A dataset ``soft-arm/<group>/<name>-v<N>`` lives in ``<root>/soft-arm/<group>/<name>-v<N>/``
 exactly as Minari lays it out (``data/`` in Minari's ``arrow`` format, read with pyarrow), plus
@@ -10,6 +10,8 @@ another root, :func:`load_dataset` or ``MINARI_DATASETS_PATH=<root>`` does.
 into a temporary sibling directory first, so a failed write leaves the old dataset (or nothing)
 behind. :func:`load_dataset` turns every bad input (an unknown id, a corrupt or truncated
 directory, a dataset recorded on another env version) into one ``ValueError`` naming it.
+The env ids it checks and recovers are registered by importing :mod:`soft_gym`, which
+importing this module does first.
 """
 
 from __future__ import annotations
@@ -125,7 +127,6 @@ def write_dataset(dataset_id: str, episodes: Iterable[Any], *, env_id: str,
     from minari import __version__ as minari_version
     from minari.dataset.minari_storage import MinariStorage
 
-    import soft_gym  # noqa: F401 - registers the env ids
 
     target = dataset_dir(dataset_id, root)
     spec = env_spec(env_id, env_kwargs)
@@ -214,7 +215,6 @@ def load_dataset(dataset_id: str, root: str | os.PathLike | None = None):
     """
     import minari
 
-    import soft_gym  # noqa: F401 - registers the env ids
 
     directory = dataset_dir(dataset_id, root)
     if not (directory / "data").is_dir():
@@ -271,7 +271,6 @@ def check_dataset(dataset, dataset_id: str, directory: Path) -> None:
 
 def recover_env(dataset, **kwargs) -> gym.Env:
     """``dataset.recover_environment(**kwargs)`` with this package's ids registered."""
-    import soft_gym  # noqa: F401 - registers the env ids
 
     return dataset.recover_environment(**kwargs)
 

@@ -2,7 +2,7 @@
 dataset (``dataset=<id>``) skips its own collection.
 
 Each reader loads a dataset written by ``python -m eval datasets``
-(:func:`~eval.datasets.store.load_dataset`), checks that it holds the right paper's data and that
+(:func:`~soft_gym.datasets.store.load_dataset`), checks that it holds the right paper's data and that
 it was collected with the settings the method would collect with (:func:`check_settings`: the
 arm, the sensor models, the sizes and the seed, as stored in the dataset's ``match`` metadata),
 and rebuilds the procedure's own data object, equal bit for bit to what the collection returns
@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from eval.datasets.store import dataset_info, load_dataset
+from soft_gym.datasets.store import dataset_info, load_dataset
 
 DatasetRoot = str | os.PathLike | None
 
@@ -122,7 +122,7 @@ def read_exploration(dataset_id: str, root: DatasetRoot, expected: dict[str, Any
     :param root: its datasets root (Minari's default when ``None``).
     :param expected: the method's collection settings
         (:func:`~soft_gym.procedures.zhao2021_exploration.exploration_key`).
-    :raises ValueError: see :func:`check_settings` and :func:`~eval.datasets.store.load_dataset`.
+    :raises ValueError: see :func:`check_settings` and :func:`~soft_gym.datasets.store.load_dataset`.
     """
     from soft_gym.sensing.zhao2021.shape_exploration import ShapeDataset
 
@@ -143,7 +143,7 @@ def read_zou_dataset(dataset_id: str, root: DatasetRoot, expected: dict[str, Any
     :param root: its datasets root (Minari's default when ``None``).
     :param expected: the method's collection settings
         (:func:`~soft_gym.procedures.zou2022_dataset.dataset_key`).
-    :raises ValueError: see :func:`check_settings` and :func:`~eval.datasets.store.load_dataset`.
+    :raises ValueError: see :func:`check_settings` and :func:`~soft_gym.datasets.store.load_dataset`.
     """
     from soft_gym.sensing.zou2022.shape_dnn import ZouDataset
 
@@ -168,7 +168,7 @@ def read_pretraining_walk(dataset_id: str, root: DatasetRoot,
     :param expected: the controller's walk settings
         (:meth:`~agents.controllers.lwpr_rwr.LWPRRWRController.walk_key`).
     :returns: ``(steps + 1, n_obs)`` flat observations in the env's dtype.
-    :raises ValueError: see :func:`check_settings` and :func:`~eval.datasets.store.load_dataset`.
+    :raises ValueError: see :func:`check_settings` and :func:`~soft_gym.datasets.store.load_dataset`.
     """
     episode, _ = _episode(dataset_id, root, "ho2018", expected)
     return np.asarray(episode.observations)

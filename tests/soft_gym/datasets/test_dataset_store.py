@@ -1,4 +1,4 @@
-"""eval.datasets.store and episodes: a round trip of a recorded episode (write, load, recover
+"""soft_gym.datasets.store and episodes: a round trip of a recorded episode (write, load, recover
 the env, replay the actions, the observations back bit for bit), and every bad input as one
 ValueError naming it."""
 
@@ -16,7 +16,7 @@ import pytest
 import soft_gym  # noqa: F401 - registers the ids
 from eval.__main__ import main
 from eval.datasets.episodes import EpisodeRecorder
-from eval.datasets.store import list_datasets, load_dataset, write_dataset
+from soft_gym.datasets.store import list_datasets, load_dataset, write_dataset
 from tests.cli_errors import assert_one_line_error
 
 ENV_ID = "SoftArmReachWang2023-v0"

@@ -1,4 +1,4 @@
-"""eval.datasets.training: each method trained from its paper's dataset equals the method
+"""soft_gym.datasets.training: each method trained from its paper's dataset equals the method
 trained on a fresh collection with the same seed (bit for bit), and a dataset that does not fit
 the method is refused by one ValueError naming it."""
 
