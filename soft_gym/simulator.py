@@ -114,7 +114,13 @@ class Simulator(Protocol):
 
     # ------------------------------------------------------------------ commands and stepping
     def set_pressures(self, pressures_pa: np.ndarray) -> None:
-        """Command chamber pressures (Pa, (n_chambers,)); the supply's lag follows."""
+        """Command chamber pressures (Pa, (n_chambers,)); the supply's lag follows. Refused
+        (``ValueError``) on a volume-actuated arm (``spec.cylinders`` set)."""
+
+    def set_cylinder_strokes(self, strokes_m: np.ndarray) -> None:
+        """Command the cylinders' strokes (m, (n_chambers,), each in ``[0, max_stroke_m]``) of a
+        volume-actuated arm (``spec.cylinders`` set; ho2018 Section 3.1); the chamber pressures
+        follow from the gas law. Refused (``ValueError``) on a pressure-actuated arm."""
 
     def step_physics(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole physics steps)."""
@@ -134,6 +140,10 @@ class Simulator(Protocol):
     @property
     def pressures_pa(self) -> np.ndarray:
         """Chamber pressures now (Pa, (n_chambers,))."""
+
+    @property
+    def cylinder_strokes_m(self) -> np.ndarray | None:
+        """The cylinders' strokes now (m, (n_chambers,)); ``None`` on a pressure-actuated arm."""
 
     @property
     def n_links(self) -> int:

@@ -10,6 +10,7 @@ deep copy of its config.
 from __future__ import annotations
 
 import copy
+import dataclasses
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -18,7 +19,7 @@ from soft_gym._validation import (require_choice, require_integer, require_names
 from soft_gym.engines import DEFAULT_ENGINE, ENGINES
 from soft_gym.envs.observations import OBSERVATION_PARTS, STATE_PARTS
 from soft_gym.envs.rendering import check_render_size
-from soft_gym.robots.presets import get_preset
+from soft_gym.robots.presets import get_preset, volume_actuated
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing import FEEDBACK_SOURCES
 from soft_gym.sensors import PUBLIC_SENSORS
@@ -33,6 +34,9 @@ is then 10^4-10^5 times a 10 mm tracking error; larger weights only swamp the re
 
 OBS_FORMATS = ("flat", "dict")
 TASKS = ("reach", "track")
+ACTUATIONS = ("pressure", "volume")
+"""How actions drive the chambers: pressures (every preset's default) or cylinder strokes (the
+papers that drive volumes, :data:`soft_gym.robots.presets.CYLINDERS`)."""
 _TRACK_ONLY = (("path", "circle"), ("cycles", 1), ("speed_m_s", None), ("waypoints_m", None))
 
 
@@ -64,6 +68,7 @@ class EnvConfig:
     randomization: Any = None
     action_mode: str = "absolute"
     delta_fraction: float = 0.1
+    actuation: str = "pressure"
     action_rate_weight: float = 0.001
     episode_steps: int = 100
     settle_s: float = 0.5
@@ -78,6 +83,20 @@ class EnvConfig:
             raise ValueError(f"preset must be a preset name or an ArmSpec, got {self.preset!r} "
                              f"({type(self.preset).__name__})")
         self.arm = self.preset if isinstance(self.preset, ArmSpec) else get_preset(self.preset)
+        require_choice("actuation", self.actuation, ACTUATIONS)
+        # the same arm driven by pressures: its workspace stands for the volume-driven arm's
+        self.pressure_arm = (self.arm if self.arm.cylinders is None
+                             else dataclasses.replace(self.arm, cylinders=None))
+        if self.actuation == "volume":
+            self.arm = volume_actuated(self.arm)
+            for name, default in (("action_mode", "absolute"), ("start_m", None)):
+                if not _is_default(getattr(self, name), default):
+                    raise ValueError(f"{name}={getattr(self, name)!r} needs pressure actuation: "
+                                     f"actuation='volume' takes {name}={default!r}")
+        elif self.arm.cylinders is not None:
+            raise ValueError(f"actuation='pressure' needs an arm without cylinders; the "
+                             f"{self.arm.name} arm given has ArmSpec.cylinders set: pass "
+                             f"actuation='volume'")
         require_choice("engine", self.engine, ENGINES)
         require_choice("task", self.task, TASKS)
         if self.task == "reach":

@@ -172,6 +172,12 @@ class SoftArmEnv(gym.Env):
             or ``encoder_dnn``'s (:mod:`soft_gym.sensing.zou2022.feedback`).
         action_mode: ``"absolute"`` or ``"delta"``.
         delta_fraction: pressure change per unit action in delta mode, as a fraction of p_max.
+        actuation: ``"pressure"`` (default) or ``"volume"``: each action drives a cylinder's
+            stroke, ``s = (a + 1) / 2 max_stroke_m``, and the chamber pressure follows from the
+            gas law with the chamber's present length (ho2018 Section 3.1, the paper's mode;
+            :func:`soft_gym.robots.presets.volume_actuated`). Volume actuation takes
+            ``action_mode="absolute"`` and no ``start_m``; ``pressure`` observations still
+            report the chamber pressures, and the measurement carries no pressure command.
         action_rate_weight: weight of the action-rate penalty, in [0, ``MAX_ACTION_RATE_WEIGHT``].
         episode_steps: reach episode length in control steps (an integer >= 1).
         settle_s: simulated time the arm rests before each episode (s, in [0, ``MAX_SETTLE_S``]).
@@ -280,7 +286,8 @@ class SoftArmEnv(gym.Env):
         """One task per path (the reach task has one), sharing the arm's reachable tips."""
         config = self.config
         needs_tips = config.task == "track" or config.target_m is None
-        tips = reachable_tips(self.arm) if needs_tips else None
+        # a volume-driven arm's targets: its pressure-driven twin's workspace
+        tips = reachable_tips(self.config.pressure_arm) if needs_tips else None
         if config.task == "reach":
             return [ReachTask(self.arm, config.episode_steps, target_m=config.target_m,
                               tolerance_mm=config.tolerance_mm, reachable_tips_m=tips,
@@ -461,6 +468,8 @@ class SoftArmEnv(gym.Env):
             sensor.reset(self.sim, self.np_random)
         self._command = (self.actuation.initial_command_pa.copy() if start_pressures is None
                          else start_pressures)
+        if self.arm.cylinders is not None:  # strokes, not pressures, are commanded
+            self._command = None
         self._sense()
         self.step_count = 0
         self._last_action = np.zeros(self.arm.n_chambers)
@@ -505,6 +514,10 @@ class SoftArmEnv(gym.Env):
         :meth:`check_action`; the physics (one ``control_period_s``) comes next, then
         :meth:`finish_step`. A batch of envs (:class:`~soft_gym.envs.vector.SoftArmVectorEnv`)
         steps their arms' physics together in between."""
+        if self.arm.cylinders is not None:  # volume actuation: a stroke per chamber
+            self._command = None
+            self.sim.set_cylinder_strokes((action + 1.0) / 2.0 * self.arm.cylinders.max_stroke_m)
+            return
         self._command = self.actuation.pressure(action, self._command)
         self.sim.set_pressures(self._command)
 
@@ -543,7 +556,7 @@ class SoftArmEnv(gym.Env):
         """A :class:`~soft_gym.envs.rendering.SceneRenderer` of ``render_size`` framing this
         arm's reachable tips and every task's targets and path (``overlays=False``: the scene,
         floor and grid only)."""
-        points = [reachable_tips(self.arm)]
+        points = [reachable_tips(self.config.pressure_arm)]
         down = self.arm.gravity_base / max(np.linalg.norm(self.arm.gravity_base), 1e-9)
         for load in self.sim.loads:  # a swaying mass hangs below the tip
             if isinstance(load, SwayingMass):

@@ -15,6 +15,8 @@ stays linear in the *effective pressure* ``p_i (1 + g p_i / p_max)``
 from __future__ import annotations
 
 import math
+import warnings
+from typing import Callable
 
 import numpy as np
 
@@ -126,3 +128,187 @@ def twist_of_effective_pressure(spec: ArmSpec, effective_pa: np.ndarray) -> np.n
     lever = np.array([segment.braid_twist_m * segment.chamber_area_m2
                       for segment in spec.segments])
     return lever * pressure.sum(axis=1)
+
+
+class VolumeSupply:
+    """Chambers driven by cylinder strokes (ho2018 Section 3.1), each a closed gas volume.
+
+    Chamber ``i``, its cylinder and the dead volume hold a fixed amount of gas at one temperature
+    (isothermal ideal gas; docs/architecture.md, "Volume actuation"):
+
+        (p_i + p_atm) (A_c L_i + A_b (S - s_i) + V_d) = K_i
+        K_i = (p_pre + p_atm) (A_c L_rest_i + A_b S + V_d)
+
+    with ``p_i`` the gauge pressure (Pa), ``L_i`` the chamber's current length (m, from the arm's
+    deformation), ``s_i`` the piston's stroke (m, 0 at rest), ``A_b``, ``S``, ``V_d`` and
+    ``p_atm`` from :class:`~soft_gym.robots.spec.CylinderSpec` and ``L_rest`` the chamber's length
+    with the arm at rest at the pre-pressure (weightless equilibrium). A load that shortens a
+    chamber raises its pressure, so the arm is stiffer against it than at a held pressure.
+
+    The stroke follows its command with the first-order lag of :class:`PneumaticSupply` (the
+    stepper's motion), integrated exactly over each update; the pressure is then the gas law's at
+    the chamber lengths of that update. Strokes outside ``[0, S]`` are refused; a pressure the gas
+    law puts outside ``[0, p_max]`` (a chamber crushed at a long stroke, or stretched far at a
+    short one) is held at the bound, counted in :attr:`saturated_updates` and warned about once
+    per episode.
+
+    It answers what the simulators ask of :class:`PneumaticSupply` (``pressure_pa``,
+    ``time_constant_s``, ``set_time_constant_scale``) and takes strokes instead of pressures.
+
+    Args:
+        spec: the arm; ``spec.cylinders`` must be set.
+        rest_lengths_m: every chamber's length at rest at the pre-pressure (m), (n_chambers,).
+
+    Raises:
+        ValueError: ``spec.cylinders`` missing, or a full stroke that would put a chamber at rest
+            above its ``p_max_pa``.
+    """
+
+    def __init__(self, spec: ArmSpec, rest_lengths_m: np.ndarray) -> None:
+        if spec.cylinders is None:
+            raise ValueError(f"spec.cylinders must be a CylinderSpec for volume actuation, got "
+                             f"None on the {spec.name} arm")
+        self.spec = spec
+        self.cylinders = cylinders = spec.cylinders
+        n = spec.n_chambers
+        self.p_max_pa = spec.p_max_pa
+        self.chamber_area_m2 = np.repeat([s.chamber_area_m2 for s in spec.segments], 3).astype(float)
+        self.rest_lengths_m = as_finite_array("rest_lengths_m", rest_lengths_m, shape=(n,)).copy()
+        self.max_stroke_m = float(cylinders.max_stroke_m)
+        self.atmospheric_pa = float(cylinders.atmospheric_pa)
+        # the gas amount of each chamber, as (absolute pressure) x (volume) (Pa m^3 = J)
+        self.gas_pa_m3 = (spec.p_pre_pa + self.atmospheric_pa) * self.volume_m3(
+            self.rest_lengths_m, np.zeros(n))
+        full = self.pressure_at(self.rest_lengths_m, np.full(n, self.max_stroke_m))
+        if np.any(full > self.p_max_pa * (1 + 1e-9)):
+            raise ValueError(
+                f"max_stroke_m={self.max_stroke_m} would put chambers at rest at "
+                f"{np.round(full).tolist()} Pa, above p_max_pa={self.p_max_pa.tolist()}: "
+                f"allowed max_stroke_m <= {self.stroke_for(self.p_max_pa, self.rest_lengths_m).min():.6g}"
+                f" m for these cylinders")
+        self.time_constant_s = spec.pneumatic_time_constant_s
+        self.saturated_updates = 0
+        self._warned = False
+        self.reset()
+
+    # ------------------------------------------------------------------ the gas law
+    def volume_m3(self, lengths_m: np.ndarray, strokes_m: np.ndarray) -> np.ndarray:
+        """Gas volume of chamber + cylinder + dead volume (m^3):
+        ``A_c L + A_b (S - s) + V_d``."""
+        c = self.cylinders
+        return (self.chamber_area_m2 * np.asarray(lengths_m, dtype=float)
+                + c.bore_area_m2 * (self.max_stroke_m - np.asarray(strokes_m, dtype=float))
+                + c.dead_volume_m3)
+
+    def pressure_at(self, lengths_m: np.ndarray, strokes_m: np.ndarray) -> np.ndarray:
+        """Gauge pressure (Pa) the gas law gives at chamber lengths (m) and strokes (m),
+        ``K / V - p_atm``, not limited to ``[0, p_max]``."""
+        return self.gas_pa_m3 / self.volume_m3(lengths_m, strokes_m) - self.atmospheric_pa
+
+    def stroke_for(self, pressure_pa: np.ndarray, lengths_m: np.ndarray) -> np.ndarray:
+        """Stroke (m) that holds gauge ``pressure_pa`` (Pa) at chamber lengths ``lengths_m``
+        (m): ``S - (K / (p + p_atm) - A_c L - V_d) / A_b``, the inverse of
+        :meth:`pressure_at`; not limited to the cylinder's range."""
+        c = self.cylinders
+        gas_volume = self.gas_pa_m3 / (np.asarray(pressure_pa, dtype=float) + self.atmospheric_pa)
+        cylinder = (gas_volume - self.chamber_area_m2 * np.asarray(lengths_m, dtype=float)
+                    - c.dead_volume_m3)
+        return self.max_stroke_m - cylinder / c.bore_area_m2
+
+    # ------------------------------------------------------------------ commands
+    def check_strokes(self, strokes_m: np.ndarray, name: str = "strokes_m") -> np.ndarray:
+        """Validate a stroke command: shape (n_chambers,), finite, within ``[0, max_stroke_m]``
+        (m)."""
+        strokes = as_finite_array(name, strokes_m, shape=(self.spec.n_chambers,))
+        if np.any(strokes < 0) or np.any(strokes > self.max_stroke_m * (1 + 1e-9)):
+            raise ValueError(
+                f"{name} must lie within the cylinders' range [0, max_stroke_m="
+                f"{self.max_stroke_m:.6g}] m, got {strokes.tolist()}")
+        return np.minimum(strokes, self.max_stroke_m)
+
+    def command_strokes(self, strokes_m: np.ndarray) -> None:
+        """Set the commanded strokes (m)."""
+        self.command_stroke_m = self.check_strokes(strokes_m)
+
+    def command(self, pressure_pa: np.ndarray) -> None:
+        """Refused: a volume-driven arm takes strokes (:meth:`command_strokes`)."""
+        raise ValueError(
+            f"pressures_pa cannot be commanded on the volume-actuated {self.spec.name} arm "
+            f"(ArmSpec.cylinders is set): command cylinder strokes with "
+            f"set_cylinder_strokes(strokes_m), in [0, {self.max_stroke_m:.6g}] m")
+
+    @property
+    def command_pa(self) -> np.ndarray:
+        """The pressure (Pa) each commanded stroke gives at the chambers' rest lengths."""
+        return self.pressure_at(self.rest_lengths_m, self.command_stroke_m)
+
+    def set_time_constant_scale(self, scale: float) -> None:
+        """Make the stroke's lag ``scale`` times the arm's nominal time constant."""
+        scale = require_positive("scale", scale)
+        self.time_constant_s = self.spec.pneumatic_time_constant_s * scale
+
+    def check_pressures(self, pressure_pa: np.ndarray) -> np.ndarray:
+        """Validate pressures (Pa) to start from: shape (n_chambers,), finite, within
+        ``[0, p_max]``."""
+        return PneumaticSupply.check_command(self, pressure_pa)
+
+    def reset(self, pressure_pa: np.ndarray | None = None,
+              lengths_m: np.ndarray | None = None) -> None:
+        """Strokes and their commands at rest (0; the pressures the gas law gives at chamber
+        lengths ``lengths_m``, m, default the pre-pressure), or at the strokes that hold
+        ``pressure_pa`` (Pa, each in ``[0, p_max]``) at chamber lengths ``lengths_m`` (m).
+
+        Raises:
+            ValueError: pressures out of ``[0, p_max]``, or ones that need a stroke outside the
+                cylinders' range.
+        """
+        n = self.spec.n_chambers
+        self.saturated_updates = 0
+        self._warned = False
+        if pressure_pa is None:
+            self.stroke_m = np.zeros(n)
+            self.pressure_pa = (self.spec.p_pre_pa.copy() if lengths_m is None else np.clip(
+                self.pressure_at(lengths_m, self.stroke_m), 0.0, self.p_max_pa))
+        else:
+            pressure = self.check_pressures(pressure_pa)
+            lengths = as_finite_array("lengths_m", lengths_m, shape=(n,))
+            strokes = self.stroke_for(pressure, lengths)
+            tolerance = 1e-9 * self.max_stroke_m
+            if np.any(strokes < -tolerance) or np.any(strokes > self.max_stroke_m + tolerance):
+                raise ValueError(
+                    f"pressure_pa={pressure.tolist()} needs strokes {strokes.tolist()} m, outside "
+                    f"the cylinders' range [0, max_stroke_m={self.max_stroke_m:.6g}] m, at the "
+                    f"chamber lengths of that shape")
+            self.stroke_m = np.clip(strokes, 0.0, self.max_stroke_m)
+            self.pressure_pa = np.array(pressure, dtype=float)
+        self.command_stroke_m = self.stroke_m.copy()
+
+    def advance(self, dt_s: float, lengths_m: np.ndarray) -> np.ndarray:
+        """Advance the strokes' lag by ``dt_s`` seconds and return the chamber pressures (Pa)
+        the gas law gives at chamber lengths ``lengths_m`` (m)."""
+        alpha = 1.0 - math.exp(-dt_s / self.time_constant_s)
+        self.stroke_m = self.stroke_m + (self.command_stroke_m - self.stroke_m) * alpha
+        pressure = self.pressure_at(lengths_m, self.stroke_m)
+        outside = (pressure < 0.0) | (pressure > self.p_max_pa)
+        if np.any(outside):
+            self.saturated_updates += 1
+            if not self._warned:
+                self._warned = True
+                warnings.warn(
+                    f"the gas law puts chambers {np.flatnonzero(outside).tolist()} of the "
+                    f"{self.spec.name} arm at {np.round(pressure[outside]).tolist()} Pa, outside "
+                    f"[0, p_max]; held at the bound (counted in saturated_updates)",
+                    RuntimeWarning, stacklevel=2)
+            pressure = np.clip(pressure, 0.0, self.p_max_pa)
+        self.pressure_pa = pressure
+        return pressure
+
+
+def make_supply(spec: ArmSpec, rest_lengths_m: Callable[[], np.ndarray]
+                ) -> PneumaticSupply | VolumeSupply:
+    """The arm's supply: :class:`PneumaticSupply` for pressure actuation, :class:`VolumeSupply`
+    (with the chambers' rest lengths, m, from ``rest_lengths_m()``) where ``spec.cylinders`` is
+    set."""
+    if spec.cylinders is None:
+        return PneumaticSupply(spec)
+    return VolumeSupply(spec, rest_lengths_m())

@@ -30,9 +30,12 @@ spring chain would need about 0.5 ms at four links (measured: it diverges at 1 m
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 import numpy as np
 
-from soft_gym.robots.spec import ArmSpec, SegmentSpec
+from soft_gym.robots.spec import ArmSpec, CylinderSpec, SegmentSpec
 
 _WANG_SEGMENT = SegmentSpec(
     length_m=0.090, outer_radius_m=0.010, chamber_offset_m=5.1e-3, chamber_area_m2=1.6e-5,
@@ -234,6 +237,47 @@ HO2018 = ArmSpec(
                      "the paper's; the learners see pressures where the paper's saw volumes"})
 
 PRESETS: dict[str, ArmSpec] = {spec.name: spec for spec in (WANG2023, ZHAO2021, ZOU2022, HO2018)}
+
+HO2018_CYLINDERS = CylinderSpec(bore_area_m2=math.pi * 0.010**2, max_stroke_m=0.0695,
+                                dead_volume_m3=2.0e-6)
+"""ho2018's stepper-driven cylinders (Section 3.1), one per chamber: a 20 mm bore, 69.5 mm of
+stroke (21.8 mL), 2 mL of dead volume. The paper's dimensions are not in this repository; these
+are assumed (:data:`CYLINDER_NOTES`)."""
+
+CYLINDERS: dict[str, CylinderSpec] = {"ho2018": HO2018_CYLINDERS}
+"""The presets whose papers drive chamber volumes, and their cylinders
+(:func:`volume_actuated`)."""
+
+CYLINDER_NOTES: dict[str, dict[str, str]] = {"ho2018": {
+    "cylinders": "ho2018 Section 3.1 drives each chamber's volume with a stepper-driven cylinder "
+                 "(a closed volume: a load that shortens a chamber raises its pressure). Assumed, "
+                 "the paper stating no bore, stroke or tubing: a 20 mm bore (a 30 mL syringe's) and "
+                 "2 mL of dead volume (about 1 m of 1.6 mm tubing); the stroke, 69.5 mm, is the "
+                 "longest that keeps a chamber of the straight arm at rest (80.8 mm, 8.6 mL) "
+                 "within p_max = 330 kPa from the 0.04 MPa pre-pressure, so the preset's pressure "
+                 "range is the cylinders' range at rest. A bent chamber is longer, so one "
+                 "cylinder at full stroke bends its segment less than p_max does",
+    "action": "the paper's: each action drives a cylinder's stroke, [-1, 1] to [0, 69.5 mm]; "
+              "the chamber pressure follows from the gas law with the chamber's present length"}}
+"""Where :data:`CYLINDERS`' numbers come from, merged into the volume-actuated arm's notes."""
+
+
+def volume_actuated(spec: ArmSpec) -> ArmSpec:
+    """``spec`` driven by cylinder volumes as its paper did (ho2018 Section 3.1): its preset's
+    :data:`CYLINDERS` set as :attr:`ArmSpec.cylinders`, the notes told. A spec that already has
+    cylinders is returned as it is.
+
+    Raises:
+        ValueError: a preset whose paper drives pressures (no entry in :data:`CYLINDERS`).
+    """
+    if spec.cylinders is not None:
+        return spec
+    if spec.name not in CYLINDERS:
+        raise ValueError(f"actuation='volume' needs an arm with cylinders (ArmSpec.cylinders) or "
+                         f"a preset whose paper drives volumes, one of {sorted(CYLINDERS)}, got "
+                         f"{spec.name!r}")
+    return dataclasses.replace(spec, cylinders=CYLINDERS[spec.name],
+                               notes={**spec.notes, **CYLINDER_NOTES[spec.name]})
 
 
 def get_preset(name: str) -> ArmSpec:

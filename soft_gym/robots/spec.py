@@ -14,7 +14,7 @@ silicone cylinder with three chamber bores at distance ``chamber_offset_m`` from
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -217,6 +217,48 @@ class SegmentSpec:
         return CHAMBER_ANGLES_RAD
 
 
+ATMOSPHERIC_PA = 101_325.0
+"""Standard atmospheric pressure (Pa): gauge pressures plus this are absolute."""
+
+
+@dataclass(frozen=True)
+class CylinderSpec:
+    """The gas cylinders that drive chamber volumes (ho2018 Section 3.1: stepper-driven
+    cylinders), one per chamber, all alike (docs/architecture.md, "Volume actuation").
+
+    Each chamber, its cylinder and the dead volume between them hold a closed amount of gas at
+    one temperature. The piston's stroke ``s`` (m, in ``[0, max_stroke_m]``) leaves
+    ``V_cyl(s) = bore_area_m2 (max_stroke_m - s)`` of gas in the cylinder: ``s = 0`` is the rest
+    stroke (cylinder full, every chamber at the pre-pressure with the arm at rest), a longer stroke
+    pushes gas into the chamber. The gas law then gives the chamber's pressure from its current
+    volume (:class:`soft_gym.robots.pneumatics.VolumeSupply`).
+
+    Attributes:
+        bore_area_m2: the piston's area ``A_b`` (m^2).
+        max_stroke_m: the longest stroke ``S`` (m); a command outside ``[0, S]`` is refused.
+            With the arm at rest, ``S`` must not raise a chamber above its ``p_max_pa``.
+        dead_volume_m3: gas volume ``V_d`` (m^3) no stroke displaces (tubing, fittings, the
+            cylinder's end clearance).
+        atmospheric_pa: ambient pressure ``p_atm`` (Pa) that turns gauge into absolute
+            pressures.
+    """
+
+    bore_area_m2: float
+    max_stroke_m: float
+    dead_volume_m3: float = 0.0
+    atmospheric_pa: float = ATMOSPHERIC_PA
+
+    def __post_init__(self) -> None:
+        for name in ("bore_area_m2", "max_stroke_m", "atmospheric_pa"):
+            require_positive(name, getattr(self, name))
+        require_non_negative("dead_volume_m3", self.dead_volume_m3)
+
+    @property
+    def displacement_m3(self) -> float:
+        """Gas volume a full stroke pushes out of the cylinder, ``A_b S`` (m^3)."""
+        return self.bore_area_m2 * self.max_stroke_m
+
+
 @dataclass(frozen=True)
 class ArmSpec:
     """A whole arm: segments from base to tip plus mounting, pneumatics and timing.
@@ -235,6 +277,12 @@ class ArmSpec:
             (docs/architecture.md, "The MuJoCo engine"); ``actuation_update_s`` must be a whole
             multiple of it.
         description: where the numbers come from.
+        cylinders: ``None`` (default): the chambers are driven by pressure (the commands are
+            chamber pressures). A :class:`CylinderSpec`: volume actuation (ho2018 Section 3.1),
+            each chamber a closed gas volume driven by a cylinder's stroke, its pressure
+            following from the gas law (:class:`soft_gym.robots.pneumatics.VolumeSupply`).
+            Shown in the repr (the calibration cache key) only when set, so pressure-driven
+            arms keep their keys.
     """
 
     name: str
@@ -248,8 +296,12 @@ class ArmSpec:
     mujoco_physics_dt_s: float | None = field(default=None, repr=False)
     description: str = ""
     notes: dict = field(default_factory=dict, compare=False)
+    cylinders: CylinderSpec | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
+        if self.cylinders is not None and not isinstance(self.cylinders, CylinderSpec):
+            raise ValueError(f"cylinders must be None or a CylinderSpec, got "
+                             f"{type(self.cylinders).__name__}")
         if not self.segments:
             raise ValueError("segments must hold at least one SegmentSpec, got an empty tuple")
         for i, segment in enumerate(self.segments):
@@ -271,6 +323,19 @@ class ArmSpec:
                 if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
                     raise ValueError(
                         f"{name}={value} must be a whole multiple of {step_name}={step}")
+
+    def __repr__(self) -> str:
+        # the dataclass repr, with ``cylinders`` appended only when set
+        text = _dataclass_repr(self)
+        if self.cylinders is None:
+            return text
+        return f"{text[:-1]}, cylinders={self.cylinders!r})"
+
+    @property
+    def actuation(self) -> str:
+        """``"pressure"`` (commands are chamber pressures) or ``"volume"`` (cylinder strokes,
+        :attr:`cylinders`)."""
+        return "pressure" if self.cylinders is None else "volume"
 
     @property
     def n_segments(self) -> int:
@@ -341,3 +406,10 @@ class ArmSpec:
         g = GRAVITY_M_S2
         return {"hanging": np.array([0.0, 0.0, g]), "upright": np.array([0.0, 0.0, -g]),
                 "horizontal": np.array([-g, 0.0, 0.0])}[self.mount]
+
+
+def _dataclass_repr(spec: ArmSpec) -> str:
+    """What the dataclass's own repr gives: every field shown in the repr, in order."""
+    return (f"{type(spec).__name__}(" + ", ".join(
+        f"{f.name}={getattr(spec, f.name)!r}" for f in fields(spec) if f.repr) + ")")
+

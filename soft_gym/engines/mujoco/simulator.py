@@ -27,7 +27,7 @@ from soft_gym.engines.mujoco.model import ArmModel, build_arm_model
 from soft_gym.engines.mujoco.stepping import step_arms
 from soft_gym.engines.mujoco.world import MujocoWorld
 from soft_gym.robots.chain import build_chain, pressure_to_rest_matrix, weightless_equilibrium
-from soft_gym.robots.pneumatics import PneumaticSupply, chamber_area_growth, effective_pressure_pa
+from soft_gym.robots.pneumatics import chamber_area_growth, effective_pressure_pa, make_supply
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.simulator import Load
 
@@ -46,7 +46,7 @@ class MujocoArmSimulator(CommonArm):
         chain: the arm's :class:`~soft_gym.robots.chain.Chain`.
         model, data: MuJoCo's ``MjModel`` and ``MjData``.
         world: :class:`MujocoWorld` (no bodies beside the arm, no cameras).
-        supply: the pneumatic supply (lag).
+        supply: the pneumatic supply (pressure lag, or the cylinders' strokes and gas law).
         time_s: simulated time since the last reset (s).
     """
 
@@ -74,7 +74,6 @@ class MujocoArmSimulator(CommonArm):
         self._readout = ChainReadout(spec, self.chain)
         self._bodies = self._arm.body_ids
         self._station_bodies = self._arm.station_body_ids
-        self.supply = PneumaticSupply(spec)
         self.area_growth = chamber_area_growth(spec)
         self.area_grows = bool(np.any(self.area_growth))
         self._nominal_stiffness = self.model.jnt_stiffness.copy()
@@ -88,9 +87,12 @@ class MujocoArmSimulator(CommonArm):
         # stiffness scale leaves unchanged (k0 scales up as q_rest scales down)
         stiffness = 1.0 / self.chain.compliance
         self.moments = (stiffness[:, None] * self._pressure_to_rest_nominal).T.copy()
+        # pressure (default) or volume actuation (spec.cylinders, VolumeSupply)
+        self.supply = make_supply(spec, self._rest_chamber_lengths)
         # arms with equal keys can share one actuation update (stepping.step_arms)
         self.lockstep_key = (self.physics_dt_s, self.per_actuation, self.moments.tobytes(),
-                             self.area_growth.tobytes(), spec.p_max_pa.tobytes())
+                             self.area_growth.tobytes(), spec.p_max_pa.tobytes(),
+                             spec.cylinders)
         self._held = HeldForceTable(self.chain)
         self.joint_force = self.joint_force_previous = np.zeros(self.model.nv)
         self.wrench: np.ndarray | None = None  # body wrenches of the held forces, (n_bodies, 6)
@@ -116,10 +118,13 @@ class MujocoArmSimulator(CommonArm):
         """Set pressures (Pa; ``None``: the pre-pressure), put the arm at rest (straight without
         ``pressure_pa``, else in the shape those pressures hold against its springs alone), and
         optionally let it settle under gravity and its loads for ``settle_s`` (s)."""
-        self.supply.reset(pressure_pa)
-        if pressure_pa is None:
+        if self.spec.cylinders is not None:  # the strokes that hold these pressures in this shape
+            start = self._volume_start(pressure_pa)
+        elif pressure_pa is None:
+            self.supply.reset()
             start = np.zeros(self.chain.n_joints)
         else:
+            self.supply.reset(pressure_pa)
             effective = effective_pressure_pa(self.spec, self.supply.pressure_pa)
             start = weightless_equilibrium(self._pressure_to_rest @ effective, self.chain)
         mujoco.mj_resetData(self.model, self.data)

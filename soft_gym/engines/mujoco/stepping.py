@@ -20,7 +20,7 @@ from typing import Protocol, Sequence
 import mujoco
 import numpy as np
 
-from soft_gym.robots.pneumatics import PneumaticSupply
+from soft_gym.robots.pneumatics import PneumaticSupply, VolumeSupply
 from soft_gym.robots.spec import ArmSpec
 
 
@@ -31,7 +31,7 @@ class MujocoArm(Protocol):
     spec: ArmSpec
     model: mujoco.MjModel
     data: mujoco.MjData
-    supply: PneumaticSupply
+    supply: PneumaticSupply | VolumeSupply
     loads: list
     physics_dt_s: float
     per_actuation: int      # substeps per actuation update
@@ -61,6 +61,8 @@ class MujocoArm(Protocol):
     def forget_reads(self) -> None: ...
 
     def check_within_stops(self) -> None: ...
+
+    def chamber_lengths(self) -> np.ndarray: ...
 
 
 STOP_LOOKAHEAD_UPDATES = 4
@@ -144,7 +146,9 @@ def _substeps(sims: Sequence[MujocoArm], pieces: int, at_update: bool) -> None:
 
 def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
     """One actuation update of every arm: loads, the pneumatic lag (exactly integrated over the
-    update, ``p <- p + (p_cmd - p) (1 - exp(-dt / tau))``), the pressure moments and the held
+    update, ``p <- p + (p_cmd - p) (1 - exp(-dt / tau))``; with volume actuation the strokes'
+    lag and the gas law at the chambers' present lengths,
+    :class:`~soft_gym.robots.pneumatics.VolumeSupply`), the pressure moments and the held
     forces."""
     first = sims[0]
     interval_s = first.per_actuation * first.physics_dt_s
@@ -153,10 +157,15 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
             now_s = sim.substep * sim.physics_dt_s
             for load in sim.loads:
                 load.update(sim, now_s)
-    pressure = np.array([sim.supply.pressure_pa for sim in sims])
-    command = np.array([sim.supply.command_pa for sim in sims])
-    alpha = np.array([[1.0 - math.exp(-interval_s / sim.supply.time_constant_s)] for sim in sims])
-    pressure = pressure + (command - pressure) * alpha
+    if first.spec.cylinders is not None:  # lockstep arms share their actuation
+        pressure = np.array([sim.supply.advance(interval_s, sim.chamber_lengths())
+                             for sim in sims])
+    else:
+        pressure = np.array([sim.supply.pressure_pa for sim in sims])
+        command = np.array([sim.supply.command_pa for sim in sims])
+        alpha = np.array([[1.0 - math.exp(-interval_s / sim.supply.time_constant_s)]
+                          for sim in sims])
+        pressure = pressure + (command - pressure) * alpha
     effective = pressure
     if first.area_grows:
         effective = pressure * (1.0 + first.area_growth * pressure / first.spec.p_max_pa)

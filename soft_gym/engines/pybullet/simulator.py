@@ -23,7 +23,7 @@ from soft_gym.engines.pybullet.external_loads import HeldForces, TipPayload
 from soft_gym.engines.pybullet.mass_matrix import LinkInertias
 from soft_gym.engines.pybullet.springs import STIFFNESS_MARGIN, SpringGains, tangent_stiffness_at
 from soft_gym.engines.pybullet.world import PyBulletWorld
-from soft_gym.robots.pneumatics import PneumaticSupply, chamber_area_growth, effective_pressure_pa
+from soft_gym.robots.pneumatics import chamber_area_growth, effective_pressure_pa, make_supply
 from soft_gym.robots.chain import pressure_to_rest_matrix, weightless_equilibrium
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.simulator import Load
@@ -85,7 +85,6 @@ class ArmSimulator(CommonArm):
                                       on_change=self._gains.invalidate)
         self._held = HeldForces(self.client, self.arm)
         self._payload = TipPayload(self.arm, self._inertias, self._held)
-        self.supply = PneumaticSupply(spec)
         self._area_growth = chamber_area_growth(spec)
         self._area_grows = bool(np.any(self._area_growth))
         self._joints = list(range(self.arm.n_joints))
@@ -111,6 +110,9 @@ class ArmSimulator(CommonArm):
         self._refinement = 1  # pieces per substep (see _refinement_for)
         self._pressure_to_rest_nominal = pressure_to_rest_matrix(spec, self.arm)
         self._pressure_to_rest = self._pressure_to_rest_nominal
+        # pressure (default) or volume actuation (spec.cylinders, VolumeSupply)
+        self.supply = make_supply(spec, self._rest_chamber_lengths)
+        self._volume = spec.cylinders is not None
         self._substeps_per_gain_update = self._substeps_per_actuation * max(
             1, int(round(spec.control_period_s / spec.actuation_update_s)))
         self.gravity = spec.gravity_base.copy()
@@ -291,10 +293,13 @@ class ArmSimulator(CommonArm):
         jolt of the whole pressure load at once (an extensible arm such as zou2022's, stepped from
         straight to 2-3 bar, can tear its joints apart in the first milliseconds).
         """
-        self.supply.reset(pressure_pa)
-        if pressure_pa is None:
+        if self._volume:  # the strokes that hold these pressures in this shape
+            start = self._volume_start(pressure_pa)
+        elif pressure_pa is None:
+            self.supply.reset()
             start = np.zeros(len(self._joints))
         else:  # where the springs balance the pressure load alone
+            self.supply.reset(pressure_pa)
             effective = effective_pressure_pa(self.spec, self.supply.pressure_pa)
             start = weightless_equilibrium(self._pressure_to_rest @ effective, self.arm)
         for joint, position in zip(self._joints, start):
@@ -397,7 +402,11 @@ class ArmSimulator(CommonArm):
         if self.loads and pybullet.getNumBodies(
                 physicsClientId=self._client_id) != self._contacts.body_count:
             self._contacts.sync()  # a load added or removed a body
-        pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
+        if self._volume:  # the gas law at the chambers' present lengths
+            pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s,
+                                           self._readout.chamber_lengths(q))
+        else:
+            pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
         if self._area_grows:  # effective_pressure_pa, with the growth looked up once
             pressure = pressure * (1.0 + self._area_growth * pressure / self.spec.p_max_pa)
         self._load_torque = self._stiffness0 * (self._pressure_to_rest @ pressure)
