@@ -22,12 +22,18 @@ samples moving the actuators towards a rest configuration ``u_0``:
 The global inverse blends the local ones by their weights at the current configuration,
 ``du = sum_i w_i(z) x_i^T beta_i / sum_i w_i(z)`` (eq. (5)).
 
-Two choices the paper leaves open, written down here:
+Choices the paper leaves open, and corrections of its printed equations (docs/architecture.md,
+"Errata"), written down here:
 
 * eq. (10) as printed, ``sigma_i exp(-0.5 sigma_i^2 C_k)``, multiplies by the mean cost where the
   reward-weighted regression it follows divides by it (the reward's temperature is the mean
   cost, so that the reward is dimensionless); the constant factor ``sigma_i`` cancels in
   eq. (13). The division is used.
+* eq. (8) as printed, ``du_0 = K_a (u - u_0)``, would make the attractor reward moving away
+  from the rest configuration; the code uses ``du_0 = K_a (u_0 - u)``, towards rest, as the
+  text's "attractor" says. tests/agents/controllers/test_lwpr_rwr.py
+  (``test_inverse_of_a_redundant_linear_map_reaches_the_task_and_pulls_to_rest``) shows it:
+  on a redundant linear map the inverse's null-space motion points along ``u_0 - u``.
 * the regression is centred on the field (``p - c_p``, ``u - c_u``) and has a bias column, so a
   field's inverse is a local linearisation about its centre; columns are scaled to comparable
   sizes (``task_scale``, ``actuation_scale``) and a ridge ``lambda`` pulls each field towards

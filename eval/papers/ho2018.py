@@ -44,7 +44,7 @@ from agents.policies import make_policy
 from eval.report import package_version, write_json
 from eval.runner import agent_error
 from soft_gym.scenarios import FillingLoad, TipMass
-from soft_gym.tasks.paths import PathSpec, make_reference_trajectory
+from soft_gym.tasks.paths import PathSpec, make_reference_trajectory, workspace_surface
 
 EXPERIMENTS = ("static", "varying")
 
@@ -91,14 +91,6 @@ EXPERIMENT_SPECS = {
 """The experiments, with the paper's per-cycle mean errors (mm, Tables 1 and 2)."""
 
 
-def workspace_surface(tips_mm: np.ndarray) -> np.ndarray:
-    """Least-squares coefficients ``(a, b, c, d, e, f)`` of ``z = a + b x + c y + d x^2 + e x y +
-    f y^2`` through tip positions (mm)."""
-    x, y, z = tips_mm.T
-    basis = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=1)
-    return np.linalg.lstsq(basis, z, rcond=None)[0]
-
-
 def workspace_rectangle(surface: np.ndarray, width_mm: float, height_mm: float,
                         points_per_mm: float = 1.0) -> np.ndarray:
     """The closed rectangle ``width x height`` (mm, long side along x) centred on the axis,
@@ -111,7 +103,7 @@ def workspace_rectangle(surface: np.ndarray, width_mm: float, height_mm: float,
         points.extend(a + (b - a) * t for t in np.arange(n) / n)
     xy = np.array(points)
     x, y = xy.T
-    z = surface @ np.stack([np.ones_like(x), x, y, x * x, x * y, y * y])
+    z = surface @ np.stack([np.ones_like(x), x, y, x * x, x * y, y * y])  # as recorded: same bits
     return np.column_stack([xy, z]) / 1000.0
 
 

@@ -14,7 +14,9 @@ itself, with the episode's loads in place:
   chambers' range ``[p_pre, p_max]``;
 * it stops when the tip is within ``tolerance_m`` or after ``max_trials``.
 
-It reads the simulator's true tip: a set-up step that no controller sees.
+It reads the simulator's true tip: a set-up step that no controller sees. :func:`follow_path`
+continues the same search along a sequence of points (how far a path lies from the reachable
+set, :func:`soft_gym.procedures.workspace.reach_distances`).
 """
 
 from __future__ import annotations
@@ -92,3 +94,122 @@ def drive_tip_to(sim: Simulator, start_m: np.ndarray, hold_s: float = 1.0, toler
         tip = settle(best[1])
         fraction = best[1]
     return low + fraction * span, float(np.linalg.norm(tip - start_m))
+
+
+def follow_path(sim: Simulator, points_m: np.ndarray, hold_s: float = 1.0,
+                tolerance_m: float = 1e-3, max_trials: int = 8, damping: float = 1e-3,
+                n_candidates: int = 16) -> tuple[np.ndarray, np.ndarray]:
+    """Drive the tip through ``points_m`` in order and return, for each, the closest tip found.
+
+    The pressure search of :func:`drive_tip_to`, continued along a path: the first point gets
+    the full search (candidate patterns, a finite-difference Jacobian, damped least-squares
+    trials); every next point starts from the previous point's pressures and Jacobian and takes
+    at most ``max_trials`` damped least-squares trials (Broyden updates between them). A point
+    left ``tolerance_m`` or more away gets the Jacobian estimated afresh there and
+    ``max_trials`` more trials; if it is still that far, and farther than the previous point
+    was, the continuation has lost the path and the point gets the full search afresh, keeping
+    the better of the two (a path outside the reachable set, followed at a steady or shrinking
+    distance, is not searched afresh at every point). Each trial holds its pressures for ``hold_s``, so
+    every tip read is a quasi-static equilibrium of the arm as the simulator holds it (its loads
+    stay as they are).
+
+    Args:
+        sim: the simulator (a private one: the search moves its arm).
+        points_m: wanted tip positions (m, base frame), shape (n, 3), in the order to visit
+            them (consecutive points close together make the continuation cheap).
+        hold_s: time each trial pressure is held before the tip is read (s).
+        tolerance_m: distance at which the search for a point stops (m).
+        max_trials: most continuation trials per point before the full search.
+        damping, n_candidates: as for :func:`drive_tip_to`.
+
+    Returns:
+        ``(pressures_pa, distances_m)``: for every point the pressures (Pa, shape (n,
+        n_chambers)) whose held tip came closest to it, and that tip's distance from it (m,
+        shape (n,)).
+
+    Raises:
+        ValueError: ``points_m`` not finite points of shape (n >= 1, 3), or a bad setting.
+    """
+    points = as_finite_array("points_m", points_m)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 1:
+        raise ValueError(f"points_m must be tip positions (m), shape (n >= 1, 3), got shape "
+                         f"{points.shape}")
+    hold_s = require_positive("hold_s", hold_s)
+    tolerance_m = require_positive("tolerance_m", tolerance_m)
+    max_trials = require_integer("max_trials", max_trials, 1)
+    spec = sim.spec
+    low, span = spec.p_pre_pa, spec.p_max_pa - spec.p_pre_pa
+    pressures = np.empty((len(points), spec.n_chambers))
+    distances = np.empty(len(points))
+
+    def settle(fraction: np.ndarray) -> np.ndarray:
+        sim.set_pressures(low + fraction * span)
+        sim.step_physics(hold_s)
+        return sim.tip_pose()[0]
+
+    def restart(point: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        found, distance = drive_tip_to(sim, point, hold_s=hold_s, tolerance_m=tolerance_m,
+                                       damping=damping, n_candidates=n_candidates)
+        fraction = (found - low) / span
+        return fraction, sim.tip_pose()[0], _jacobian(settle, fraction, sim.tip_pose()[0]), \
+            distance
+
+    fraction, tip, jacobian, _ = restart(points[0])
+    tip = settle(fraction)
+    previous = 0.0
+    for k, point in enumerate(points):
+        fraction, tip, distance = _damped_search(settle, point, fraction, tip, jacobian,
+                                                 tolerance_m, max_trials, damping)
+        if distance >= tolerance_m:  # a stale Jacobian: estimate it afresh here and go on
+            tip = settle(fraction)
+            jacobian = _jacobian(settle, fraction, tip)
+            fraction, tip, distance = _damped_search(settle, point, fraction, tip, jacobian,
+                                                     tolerance_m, max_trials, damping)
+        if distance >= tolerance_m and distance > previous:  # lost the path: search afresh
+            again, again_tip, again_jacobian, again_distance = restart(point)
+            if again_distance < distance:
+                fraction, tip, jacobian, distance = again, again_tip, again_jacobian, \
+                    again_distance
+            else:
+                tip = settle(fraction)
+        pressures[k] = low + fraction * span
+        distances[k] = previous = distance
+    return pressures, distances
+
+
+def _jacobian(settle, fraction: np.ndarray, tip: np.ndarray) -> np.ndarray:
+    """``d tip / d fraction`` (m per unit of the chamber range) by one-sided differences of
+    0.1 of the range, probing inwards, away from the limits; the arm is left at ``fraction``."""
+    probe = 0.1 * np.where(fraction > 0.5, -1.0, 1.0)
+    jacobian = np.empty((3, len(fraction)))
+    for chamber in range(len(fraction)):
+        trial = fraction.copy()
+        trial[chamber] += probe[chamber]
+        jacobian[:, chamber] = (settle(trial) - tip) / probe[chamber]
+    settle(fraction)
+    return jacobian
+
+
+def _damped_search(settle, point: np.ndarray, fraction: np.ndarray, tip: np.ndarray,
+                   jacobian: np.ndarray, tolerance_m: float, max_trials: int,
+                   damping: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Damped least-squares trials from ``fraction`` (tip at ``tip``) towards ``point``, the
+    Jacobian updated in place by Broyden's rule; returns the best ``(fraction, tip, distance)``
+    seen (the arm is left at the last trial)."""
+    best = (float(np.linalg.norm(tip - point)), fraction.copy(), tip.copy())
+    for _ in range(max_trials):
+        error = point - tip
+        if np.linalg.norm(error) < tolerance_m:
+            break
+        scale = damping * max(np.linalg.norm(jacobian, 2) ** 2, 1e-12)
+        step = jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + scale * np.eye(3), error)
+        trial = np.clip(fraction + step, 0.0, 1.0)
+        new_tip = settle(trial)
+        moved, change = new_tip - tip, trial - fraction
+        if change @ change > 1e-12:
+            jacobian += np.outer(moved - jacobian @ change, change) / (change @ change)
+        fraction, tip = trial, new_tip
+        distance = float(np.linalg.norm(tip - point))
+        if distance < best[0]:
+            best = (distance, fraction.copy(), tip.copy())
+    return best[1], best[2], best[0]

@@ -2,13 +2,17 @@
 
 Built once per process and arm (keyed by the ArmSpec) on a private simulator and reused by every
 environment: the reach task draws its targets from them and the track task places its paths.
+:func:`reach_distances` tells how far given points (a track path's targets) lie from what the
+arm reaches, by the pressure search of :mod:`soft_gym.procedures.positioning`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from soft_gym._validation import as_finite_array, require_positive
 from soft_gym.engines import make_simulator
+from soft_gym.procedures.positioning import follow_path
 from soft_gym.robots.spec import ArmSpec
 
 _CACHE: dict[ArmSpec, np.ndarray] = {}
@@ -36,3 +40,42 @@ def reachable_tips(spec: ArmSpec, n_samples: int = 96, hold_s: float = 0.4,
         sim.close()
         _CACHE[key] = tips
     return _CACHE[key].copy()
+
+
+def reach_distances(spec: ArmSpec, points_m: np.ndarray, hold_s: float = 1.0,
+                    tolerance_m: float = 1e-3) -> np.ndarray:
+    """Distance (m) from each point to the closest tip the pressure search finds for it on the
+    unloaded arm: a measure of how far the points lie outside the reachable set.
+
+    A private reference-engine (PyBullet) simulator of ``spec``, rested 0.3 s, is driven
+    through ``points_m`` in order by :func:`~soft_gym.procedures.positioning.follow_path` (each
+    trial pressure held ``hold_s``, the search for a point stopping within ``tolerance_m``).
+    A point the arm reaches gets a distance below ``tolerance_m`` (or a little above, where the
+    search stalls); one outside the reachable set at least its distance from that set (the
+    search may stop short of the closest reachable tip, so more far from it).
+
+    Args:
+        spec: the arm.
+        points_m: points (m, base frame), shape (n, 3); consecutive points close together
+            (a path's targets) make the search cheap.
+        hold_s: time each trial pressure is held (s).
+        tolerance_m: distance at which the search for a point stops (m).
+
+    Returns:
+        Distances (m), shape (n,).
+
+    Raises:
+        ValueError: ``points_m`` not of shape (n >= 1, 3) or not finite, or a bad setting.
+    """
+    points = as_finite_array("points_m", points_m)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 1:
+        raise ValueError(f"points_m must be points (m), shape (n >= 1, 3), got shape "
+                         f"{points.shape}")
+    hold_s = require_positive("hold_s", hold_s)
+    tolerance_m = require_positive("tolerance_m", tolerance_m)
+    sim = make_simulator(spec, "pybullet")
+    try:
+        sim.reset(settle_s=0.3)
+        return follow_path(sim, points, hold_s=hold_s, tolerance_m=tolerance_m)[1]
+    finally:
+        sim.close()

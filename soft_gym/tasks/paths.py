@@ -14,7 +14,10 @@ This module provides:
 * the per-control-step target sequence (:func:`make_reference_trajectory`,
   :func:`cycle_index`);
 * the dense closed path in 3D and point-to-path distances for path-deviation
-  metrics (:func:`path_polyline`, :func:`path_deviation`).
+  metrics (:func:`path_polyline`, :func:`path_deviation`);
+* the quadratic surface fitted to an arm's reachable tips (:func:`workspace_surface`,
+  :func:`surface_height`), onto which a path can be lifted (:attr:`PathSpec.lift_m`), as
+  Ho et al. 2018 project their rectangle onto the workspace (ho2018 Section 3.4).
 
 Units are SI throughout: positions and lengths in metres (m), speeds in
 metres per second (m/s), times in seconds (s). Unit shapes are dimensionless.
@@ -46,7 +49,9 @@ __all__ = [
     "path_polyline",
     "plane_basis",
     "resample_constant_speed",
+    "surface_height",
     "unit_shape",
+    "workspace_surface",
 ]
 
 #: Names of the built-in unit shapes accepted by :func:`unit_shape`.
@@ -346,6 +351,64 @@ def resample_constant_speed(
 
 
 # ---------------------------------------------------------------------------
+# Workspace surface
+# ---------------------------------------------------------------------------
+
+
+def _quadratic_basis(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Columns ``1, x, y, x^2, x y, y^2`` of the quadratic surface, shape (n, 6)."""
+    return np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=1)
+
+
+def workspace_surface(tips: np.ndarray) -> np.ndarray:
+    """Least-squares coefficients ``(a, b, c, d, e, f)`` of the surface
+    ``z = a + b x + c y + d x^2 + e x y + f y^2`` through tip positions.
+
+    ho2018 Section 3.4 approximates the robot's 3D workspace by such a surface fitted to the
+    pre-training tip positions and projects its rectangle onto it. The fit works in the unit of
+    ``tips`` (m or mm): the coefficients are for that unit (``a`` in it, ``b, c``
+    dimensionless, ``d, e, f`` in its inverse).
+
+    Args:
+        tips: tip positions (x, y, z), shape (n, 3), n >= 6, finite.
+
+    Returns:
+        Array of the 6 coefficients.
+
+    Raises:
+        ValueError: ``tips`` not finite points of shape (n >= 6, 3).
+    """
+    try:
+        arr = np.asarray(tips, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"tips must be a numeric array of shape (n, 3), got {tips!r}") from None
+    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] < 6:
+        raise ValueError(f"tips must have shape (n, 3) with n >= 6 (one point per coefficient), "
+                         f"got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("tips must contain only finite values")
+    x, y, z = arr.T
+    return np.linalg.lstsq(_quadratic_basis(x, y), z, rcond=None)[0]
+
+
+def surface_height(coefficients: object, x: object, y: object) -> np.ndarray:
+    """Height ``a + b x + c y + d x^2 + e x y + f y^2`` of a quadratic surface
+    (:func:`workspace_surface`) at ``(x, y)`` (arrays of one shape, the coefficients' unit).
+
+    Raises:
+        ValueError: ``coefficients`` not 6 finite numbers, or ``x`` and ``y`` of other shapes.
+    """
+    coeffs = np.asarray(coefficients, dtype=float)
+    if coeffs.shape != (6,) or not np.all(np.isfinite(coeffs)):
+        raise ValueError(f"coefficients must be 6 finite numbers, got {coefficients!r}")
+    xs, ys = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if xs.shape != ys.shape:
+        raise ValueError(f"x and y must have one shape, got {xs.shape} and {ys.shape}")
+    flat = _quadratic_basis(xs.ravel(), ys.ravel()) @ coeffs
+    return flat.reshape(xs.shape)
+
+
+# ---------------------------------------------------------------------------
 # Path specification
 # ---------------------------------------------------------------------------
 
@@ -391,7 +454,9 @@ class PathSpec:
 
     For a built-in shape the unit shape (:func:`unit_shape`) is scaled by
     ``radius_m`` and placed in the plane through ``center_m`` with normal
-    ``plane_normal`` using the basis from :func:`plane_basis`.  For
+    ``plane_normal`` using the basis from :func:`plane_basis`; with ``lift_m`` each point is
+    then moved along the normal by the quadratic height ``lift_m`` gives at its in-plane
+    coordinates (a path lifted onto a curved workspace surface).  For
     ``shape="waypoints"`` the closed polyline through ``waypoints_m`` is used
     as given (not scaled, centred or projected; ``radius_m``,
     ``center_m`` and ``plane_normal`` are still validated but do not affect
@@ -410,6 +475,11 @@ class PathSpec:
         cycles: Number of times the path is traversed (>= 1).
         waypoints_m: For ``shape="waypoints"``: at least 2 finite 3D points
             in metres, used as a closed polyline; must be None otherwise.
+        lift_m: None (the path lies in its plane), or the 6 coefficients
+            ``(a, b, c, d, e, f)`` of the height ``h(s, t) = a + b s + c t + d s^2 + e s t +
+            f t^2`` (m) along ``plane_normal`` of the point at in-plane coordinates
+            ``(s, t) = radius_m * (x, y)`` (m) about ``center_m`` (``a`` in m, ``b, c``
+            dimensionless, ``d, e, f`` in 1/m); built-in shapes only.
 
     Raises:
         ValueError: On construction, naming the offending field and value.
@@ -422,6 +492,7 @@ class PathSpec:
     plane_normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     cycles: int = 1
     waypoints_m: Optional[tuple[tuple[float, float, float], ...]] = None
+    lift_m: Optional[tuple[float, float, float, float, float, float]] = None
 
     def __post_init__(self) -> None:
         allowed = PATH_SHAPES + (WAYPOINTS_SHAPE,)
@@ -472,6 +543,19 @@ class PathSpec:
                 f"waypoints_m must be None unless shape='waypoints' (shape={self.shape!r}), "
                 f"got {self.waypoints_m!r}"
             )
+        if self.lift_m is not None:
+            if self.shape == WAYPOINTS_SHAPE:
+                raise ValueError(
+                    f"lift_m must be None for shape='waypoints' (waypoints are used as given), "
+                    f"got {self.lift_m!r}"
+                )
+            try:
+                lift = np.asarray(self.lift_m, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"lift_m must be 6 finite numbers, got {self.lift_m!r}") from None
+            if lift.shape != (6,) or not np.all(np.isfinite(lift)):
+                raise ValueError(f"lift_m must be 6 finite numbers, got {self.lift_m!r}")
+            object.__setattr__(self, "lift_m", tuple(float(c) for c in lift))
 
 
 # ---------------------------------------------------------------------------
@@ -483,7 +567,8 @@ def path_polyline(spec: PathSpec, n_points: int = _DEFAULT_DENSE_POINTS) -> np.n
     """Dense closed path of ``spec`` in 3D, in metres.
 
     For built-in shapes this is ``center_m + radius_m * (x u + y v)`` for the
-    points (x, y) of ``unit_shape(spec.shape, n_points)``.  For waypoints it
+    points (x, y) of ``unit_shape(spec.shape, n_points)``, plus ``h(s, t) n`` with
+    ``(s, t) = radius_m * (x, y)`` when ``spec.lift_m`` gives the height ``h``.  For waypoints it
     is the closed waypoint polyline sampled with ``max(n_points, number of
     distinct waypoints)`` points, keeping every waypoint.  The first point is
     not repeated at the end.
@@ -502,9 +587,13 @@ def path_polyline(spec: PathSpec, n_points: int = _DEFAULT_DENSE_POINTS) -> np.n
         wp = _drop_repeated(np.asarray(spec.waypoints_m, dtype=float), closed=True)
         return _sample_closed_polygon(wp, max(n, wp.shape[0]))
     uv = unit_shape(spec.shape, n)
-    u, v, _ = plane_basis(spec.plane_normal)
+    u, v, normal = plane_basis(spec.plane_normal)
     center = np.asarray(spec.center_m, dtype=float)
-    return center + spec.radius_m * (uv[:, :1] * u + uv[:, 1:2] * v)
+    points = center + spec.radius_m * (uv[:, :1] * u + uv[:, 1:2] * v)
+    if spec.lift_m is not None:
+        st = spec.radius_m * uv
+        points = points + surface_height(spec.lift_m, st[:, 0], st[:, 1])[:, None] * normal
+    return points
 
 
 def path_length(spec: PathSpec, n_points: int = _DEFAULT_DENSE_POINTS) -> float:

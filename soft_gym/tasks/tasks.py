@@ -19,10 +19,14 @@ import numpy as np
 from soft_gym._validation import as_finite_array, require_integer, require_positive
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.tasks.paths import (PATH_SHAPES, PathSpec, make_reference_trajectory, path_length,
-                                  path_polyline)
+                                  path_polyline, surface_height, workspace_surface)
 
 MAX_TRACK_STEPS = 72_000
 """Longest track episode (control steps): an hour of simulated time at 20 Hz."""
+
+MIN_SURFACE_TIPS = 12
+"""Fewest reachable tips a workspace surface is fitted to (two per coefficient of the quadratic
+:func:`~soft_gym.tasks.paths.workspace_surface`); with fewer, paths stay in the plane."""
 
 
 @runtime_checkable
@@ -152,13 +156,26 @@ def within_reach(spec: ArmSpec, name: str, point_m: Any) -> np.ndarray:
 class TrackTask(_TrackingReward):
     """Follow a path whose target advances one point per control step.
 
+    Placement on the arm's workspace, from its reachable tips alone (deterministic): a built-in
+    shape of radius ``scale`` x the 75th percentile of the tips' lateral distance from the arm
+    axis is centred on the axis, in the plane normal to it at the tips' median height
+    (``placement == "plane"``) when that plane stays within the tips' RMS scatter about the
+    quadratic surface fitted to them (:func:`~soft_gym.tasks.paths.workspace_surface`) over the
+    whole disk the path occupies. Otherwise the plane misses the workspace (an upright arm's
+    workspace is a dome whose median-height plane lies below it far from the axis) and the
+    shape, seen along the axis, is lifted onto that surface (``placement == "surface"``), as
+    ho2018 Section 3.4 projects its rectangle "to the 3D workspace of the robot, which was
+    approximated from the pre-training data". With fewer than :data:`MIN_SURFACE_TIPS` tips no
+    surface is fitted and the plane is used. ``waypoints_m`` are used as given.
+
     Args:
         spec: the arm.
         reachable_tips_m: tip positions the arm reaches (m, (n, 3)), which place and size the
             path (:func:`soft_gym.procedures.workspace.reachable_tips`).
         path: one of ``PATH_SHAPES`` or ``"waypoints"``.
         cycles: how many times the path is traversed.
-        speed_m_s: target speed (m/s); default: one cycle of a circle in 20 s.
+        speed_m_s: target speed (m/s); default: ``2 pi radius / 20 s``, one cycle of a planar
+            circle in 20 s (a lifted circle, slightly longer, takes a little more).
         scale: path radius as a fraction of the workspace's lateral radius.
         waypoints_m: user points (m, base frame) for ``path="waypoints"``.
         action_rate_weight: weight of the action-rate penalty in the reward.
@@ -179,6 +196,13 @@ class TrackTask(_TrackingReward):
         radius = float(scale * np.percentile(lateral, 75))
         # a plane across the workspace, normal to the arm axis, at the reachable set's mid height
         center = (0.0, 0.0, float(np.median(tips[:, 2])))
+        self.surface = workspace_lift(tips, radius)
+        self.placement = "plane" if self.surface is None or path == "waypoints" else "surface"
+        lift = None
+        if self.placement == "surface":
+            # the surface about the path's centre on the axis: (s, t) = (x, y), height along z
+            center = (0.0, 0.0, float(self.surface[0]))
+            lift = (0.0,) + tuple(float(c) for c in self.surface[1:])
         if speed_m_s is None:
             speed_m_s = 2 * np.pi * radius / 20.0
         if waypoints_m is not None:
@@ -195,7 +219,8 @@ class TrackTask(_TrackingReward):
         self.spec = spec
         self.path_spec = PathSpec(
             shape=path, center_m=center, radius_m=radius, speed_m_s=speed_m_s, cycles=cycles,
-            waypoints_m=None if waypoints_m is None else tuple(map(tuple, waypoints_m)))
+            waypoints_m=None if waypoints_m is None else tuple(map(tuple, waypoints_m)),
+            lift_m=lift)
         self.path_m = path_polyline(self.path_spec)
         length_m = path_length(self.path_spec)  # closed: the last point back to the first
         steps = self.path_spec.cycles * length_m / (self.path_spec.speed_m_s
@@ -231,3 +256,40 @@ class TrackTask(_TrackingReward):
     def is_reached(self, error_m: float) -> bool:
         """A tracked path is never "reached": track episodes end by truncation only."""
         return False
+
+
+def workspace_lift(reachable_tips_m: Any, radius_m: float) -> np.ndarray | None:
+    """The workspace surface a path of radius ``radius_m`` about the arm axis is lifted onto, or
+    ``None`` when the plane normal to the axis at the tips' median height will do.
+
+    The quadratic ``z = q(x, y)`` (m) fitted to the reachable tips
+    (:func:`~soft_gym.tasks.paths.workspace_surface`, ho2018 Section 3.4) is compared with the
+    median-height plane over the disk of radius ``radius_m`` about the axis (a polar grid of
+    points): where the largest gap between them exceeds the RMS distance of the tips from the
+    surface, the plane leaves the band the reachable tips occupy and the surface is returned.
+
+    Args:
+        reachable_tips_m: reachable tip positions (m, base frame), shape (n, 3).
+        radius_m: the path's radius (m, >= 0).
+
+    Returns:
+        The surface's 6 coefficients (:func:`~soft_gym.tasks.paths.surface_height`, in m), or
+        ``None`` (the plane; also with fewer than :data:`MIN_SURFACE_TIPS` tips).
+
+    Raises:
+        ValueError: tips not of shape (n >= 1, 3) or not finite, or a negative radius.
+    """
+    tips = _checked_tips(reachable_tips_m)
+    radius = float(radius_m)
+    if not np.isfinite(radius) or radius < 0.0:
+        raise ValueError(f"radius_m must be a finite distance >= 0 (m), got {radius_m!r}")
+    if len(tips) < MIN_SURFACE_TIPS:
+        return None
+    surface = workspace_surface(tips)
+    scatter = float(np.sqrt(np.mean((tips[:, 2] - surface_height(surface, tips[:, 0],
+                                                                  tips[:, 1])) ** 2)))
+    rho, angle = np.meshgrid(np.linspace(0.0, radius, 9),
+                             np.linspace(0.0, 2.0 * np.pi, 36, endpoint=False))
+    gap = np.abs(surface_height(surface, rho * np.cos(angle), rho * np.sin(angle))
+                 - float(np.median(tips[:, 2])))
+    return surface if float(gap.max()) > scatter else None
