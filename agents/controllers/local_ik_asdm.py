@@ -48,6 +48,7 @@ import agents.learners.local_ik
 from agents.controllers.saturation import SaturationWatch
 from agents.learners.local_ik import LocalIKNetwork
 from agents.policies.base import BaselinePolicy, PolicyRefusal, require_soft_arm_env
+from soft_gym.datasets.training import check_dataset_options
 from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import (require_in_range, require_integer, require_learning_rate,
                                   require_positive, require_seed)
@@ -128,12 +129,7 @@ class LocalIKASDMController(BaselinePolicy):
                              f"{exploration!r}")
         self.exploration = dict(exploration or {})
         self._config = ReconstructionConfig.from_options(self.exploration)
-        if dataset is not None and not isinstance(dataset, str):
-            raise ValueError(f"dataset must be a dataset id (str) or None, got {dataset!r}")
-        if dataset_root is not None and not isinstance(dataset_root, (str, os.PathLike)):
-            raise ValueError(f"dataset_root must be a directory (str or path) or None, got "
-                             f"{dataset_root!r}")
-        self.dataset, self.dataset_root = dataset, dataset_root
+        self.dataset, self.dataset_root = check_dataset_options(dataset, dataset_root)
         self.env = unwrapped
         missing = [part for part in _REQUIRED_PARTS if part not in self.env.obs_parts]
         if missing:

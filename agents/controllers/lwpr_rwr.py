@@ -70,6 +70,7 @@ from agents.learners.lwpr import LWPR
 from agents.controllers.saturation import SaturationWatch
 from agents.learners.rwr_inverse import RewardWeightedInverse
 from agents.policies.base import BaselinePolicy, PolicyRefusal, require_soft_arm_env
+from soft_gym.datasets.training import check_dataset_options
 from soft_gym._model_files import read_npz, write_npz
 from soft_gym._validation import (as_finite_array, require_in_range, require_integer,
                                   require_non_negative, require_positive, require_seed)
@@ -180,12 +181,7 @@ class LWPRRWRController(BaselinePolicy):
         if not isinstance(cache, (bool, np.bool_)):
             raise ValueError(f"cache must be True or False, got {cache!r}")
         self.cache = bool(cache)
-        if dataset is not None and not isinstance(dataset, str):
-            raise ValueError(f"dataset must be a dataset id (str) or None, got {dataset!r}")
-        if dataset_root is not None and not isinstance(dataset_root, (str, os.PathLike)):
-            raise ValueError(f"dataset_root must be a directory (str or path) or None, got "
-                             f"{dataset_root!r}")
-        self.dataset, self.dataset_root = dataset, dataset_root
+        self.dataset, self.dataset_root = check_dataset_options(dataset, dataset_root)
         self.env = unwrapped
         for part in ("pose", "target"):
             if part not in self.env.obs_parts:

@@ -33,6 +33,21 @@ from soft_gym.datasets.store import dataset_info, load_dataset
 DatasetRoot = str | os.PathLike | None
 
 
+def check_dataset_options(dataset: Any, dataset_root: Any) -> tuple[str | None, Any]:
+    """A method's ``dataset`` (an id, or ``None`` to collect) and ``dataset_root`` (a directory,
+    or ``None`` for Minari's root), checked; returns them.
+
+    Raises:
+        ValueError: a ``dataset`` that is no string, or a ``dataset_root`` that is no path.
+    """
+    if dataset is not None and not isinstance(dataset, str):
+        raise ValueError(f"dataset must be a dataset id (str) or None, got {dataset!r}")
+    if dataset_root is not None and not isinstance(dataset_root, (str, os.PathLike)):
+        raise ValueError(f"dataset_root must be a directory (str or path) or None, got "
+                         f"{dataset_root!r}")
+    return dataset, dataset_root
+
+
 def _plain(value: Any) -> Any:
     """``value`` as JSON data (tuples as lists, NumPy values as Python ones, others by repr)."""
     def default(item: Any) -> Any:
