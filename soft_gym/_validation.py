@@ -121,6 +121,15 @@ def as_finite_array(name: str, value: Any, shape: tuple[int, ...] | None = None)
     return array
 
 
+def as_points(name: str, value: Any, min_points: int = 1) -> np.ndarray:
+    """Convert to a float64 array of 3-D points (m), shape (n >= ``min_points``, 3), finite."""
+    points = as_finite_array(name, value)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) < min_points:
+        raise ValueError(f"{name} must be points (m), shape (n >= {min_points}, 3), got shape "
+                         f"{points.shape}")
+    return points
+
+
 def require_names(name: str, value: Any, allowed: Iterable[str]) -> tuple[str, ...]:
     """Return ``value`` (one name or a list/tuple of names) as a tuple of distinct names, each one
     of ``allowed``."""

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from soft_gym._validation import as_finite_array, require_integer, require_positive
+from soft_gym._validation import as_finite_array, as_points, require_integer, require_positive
 from soft_gym.simulator import Simulator
 
 
@@ -66,33 +66,12 @@ def drive_tip_to(sim: Simulator, start_m: np.ndarray, hold_s: float = 1.0, toler
     reached = [settle(candidate) for candidate in candidates]
     closest = int(np.argmin([np.linalg.norm(tip - start_m) for tip in reached]))
     fraction = candidates[closest].copy()
-    probe = 0.1 * np.where(fraction > 0.5, -1.0, 1.0)  # probe inwards, away from the limits
-    tip = settle(fraction)
-    jacobian = np.empty((3, spec.n_chambers))
-    for chamber in range(spec.n_chambers):
-        trial = fraction.copy()
-        trial[chamber] += probe[chamber]
-        jacobian[:, chamber] = (settle(trial) - tip) / probe[chamber]
-    tip = settle(fraction)
-    best = (np.linalg.norm(tip - start_m), fraction.copy())
-    for _ in range(max_trials):
-        error = start_m - tip
-        if np.linalg.norm(error) < tolerance_m:
-            break
-        scale = damping * max(np.linalg.norm(jacobian, 2) ** 2, 1e-12)
-        step = jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + scale * np.eye(3), error)
-        trial = np.clip(fraction + step, 0.0, 1.0)
-        new_tip = settle(trial)
-        moved, change = new_tip - tip, trial - fraction
-        if change @ change > 1e-12:  # Broyden's update of the Jacobian
-            jacobian += np.outer(moved - jacobian @ change, change) / (change @ change)
-        fraction, tip = trial, new_tip
-        distance = np.linalg.norm(tip - start_m)
-        if distance < best[0]:
-            best = (distance, fraction.copy())
-    if np.linalg.norm(tip - start_m) > best[0]:
-        tip = settle(best[1])
-        fraction = best[1]
+    jacobian, tip = _jacobian(settle, fraction, settle(fraction))
+    best_fraction, _, best_distance, tip = _damped_search(settle, start_m, fraction, tip, jacobian,
+                                                          tolerance_m, max_trials, damping)
+    fraction = best_fraction
+    if np.linalg.norm(tip - start_m) > best_distance:  # the arm ended past its best trial
+        tip = settle(best_fraction)
     return low + fraction * span, float(np.linalg.norm(tip - start_m))
 
 
@@ -130,10 +109,7 @@ def follow_path(sim: Simulator, points_m: np.ndarray, hold_s: float = 1.0,
     Raises:
         ValueError: ``points_m`` not finite points of shape (n >= 1, 3), or a bad setting.
     """
-    points = as_finite_array("points_m", points_m)
-    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 1:
-        raise ValueError(f"points_m must be tip positions (m), shape (n >= 1, 3), got shape "
-                         f"{points.shape}")
+    points = as_points("points_m", points_m)
     hold_s = require_positive("hold_s", hold_s)
     tolerance_m = require_positive("tolerance_m", tolerance_m)
     max_trials = require_integer("max_trials", max_trials, 1)
@@ -151,20 +127,21 @@ def follow_path(sim: Simulator, points_m: np.ndarray, hold_s: float = 1.0,
         found, distance = drive_tip_to(sim, point, hold_s=hold_s, tolerance_m=tolerance_m,
                                        damping=damping, n_candidates=n_candidates)
         fraction = (found - low) / span
-        return fraction, sim.tip_pose()[0], _jacobian(settle, fraction, sim.tip_pose()[0]), \
+        return fraction, sim.tip_pose()[0], _jacobian(settle, fraction, sim.tip_pose()[0])[0], \
             distance
 
     fraction, tip, jacobian, _ = restart(points[0])
     tip = settle(fraction)
     previous = 0.0
     for k, point in enumerate(points):
-        fraction, tip, distance = _damped_search(settle, point, fraction, tip, jacobian,
-                                                 tolerance_m, max_trials, damping)
+        fraction, tip, distance, _ = _damped_search(settle, point, fraction, tip, jacobian,
+                                                    tolerance_m, max_trials, damping)
         if distance >= tolerance_m:  # a stale Jacobian: estimate it afresh here and go on
             tip = settle(fraction)
-            jacobian = _jacobian(settle, fraction, tip)
-            fraction, tip, distance = _damped_search(settle, point, fraction, tip, jacobian,
-                                                     tolerance_m, max_trials, damping)
+            jacobian = _jacobian(settle, fraction, tip)[0]
+            fraction, tip, distance, _ = _damped_search(settle, point, fraction, tip,
+                                                        jacobian, tolerance_m, max_trials,
+                                                        damping)
         if distance >= tolerance_m and distance > previous:  # lost the path: search afresh
             again, again_tip, again_jacobian, again_distance = restart(point)
             if again_distance < distance:
@@ -177,25 +154,25 @@ def follow_path(sim: Simulator, points_m: np.ndarray, hold_s: float = 1.0,
     return pressures, distances
 
 
-def _jacobian(settle, fraction: np.ndarray, tip: np.ndarray) -> np.ndarray:
+def _jacobian(settle, fraction: np.ndarray, tip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``d tip / d fraction`` (m per unit of the chamber range) by one-sided differences of
-    0.1 of the range, probing inwards, away from the limits; the arm is left at ``fraction``."""
+    0.1 of the range, probing inwards, away from the limits; the arm is left at ``fraction``,
+    whose tip (read again there) is returned with it."""
     probe = 0.1 * np.where(fraction > 0.5, -1.0, 1.0)
     jacobian = np.empty((3, len(fraction)))
     for chamber in range(len(fraction)):
         trial = fraction.copy()
         trial[chamber] += probe[chamber]
         jacobian[:, chamber] = (settle(trial) - tip) / probe[chamber]
-    settle(fraction)
-    return jacobian
+    return jacobian, settle(fraction)
 
 
 def _damped_search(settle, point: np.ndarray, fraction: np.ndarray, tip: np.ndarray,
                    jacobian: np.ndarray, tolerance_m: float, max_trials: int,
-                   damping: float) -> tuple[np.ndarray, np.ndarray, float]:
+                   damping: float) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
     """Damped least-squares trials from ``fraction`` (tip at ``tip``) towards ``point``, the
     Jacobian updated in place by Broyden's rule; returns the best ``(fraction, tip, distance)``
-    seen (the arm is left at the last trial)."""
+    seen and the tip of the last trial, where the arm is left."""
     best = (float(np.linalg.norm(tip - point)), fraction.copy(), tip.copy())
     for _ in range(max_trials):
         error = point - tip
@@ -206,10 +183,10 @@ def _damped_search(settle, point: np.ndarray, fraction: np.ndarray, tip: np.ndar
         trial = np.clip(fraction + step, 0.0, 1.0)
         new_tip = settle(trial)
         moved, change = new_tip - tip, trial - fraction
-        if change @ change > 1e-12:
+        if change @ change > 1e-12:  # Broyden's update of the Jacobian
             jacobian += np.outer(moved - jacobian @ change, change) / (change @ change)
         fraction, tip = trial, new_tip
         distance = float(np.linalg.norm(tip - point))
         if distance < best[0]:
             best = (distance, fraction.copy(), tip.copy())
-    return best[1], best[2], best[0]
+    return best[1], best[2], best[0], tip

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from soft_gym._validation import as_finite_array, require_positive
+from soft_gym._validation import as_points, require_positive
 from soft_gym.engines import make_simulator
 from soft_gym.procedures.positioning import follow_path
 from soft_gym.robots.spec import ArmSpec
@@ -67,10 +67,7 @@ def reach_distances(spec: ArmSpec, points_m: np.ndarray, hold_s: float = 1.0,
     Raises:
         ValueError: ``points_m`` not of shape (n >= 1, 3) or not finite, or a bad setting.
     """
-    points = as_finite_array("points_m", points_m)
-    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 1:
-        raise ValueError(f"points_m must be points (m), shape (n >= 1, 3), got shape "
-                         f"{points.shape}")
+    points = as_points("points_m", points_m)
     hold_s = require_positive("hold_s", hold_s)
     tolerance_m = require_positive("tolerance_m", tolerance_m)
     sim = make_simulator(spec, "pybullet")

@@ -25,6 +25,16 @@ from soft_gym.robots.actuation import CHAMBER_ANGLES_RAD
 from soft_gym.robots.spec import ArmSpec
 
 
+def check_pressures(spec: ArmSpec, pressure_pa: np.ndarray) -> np.ndarray:
+    """Chamber pressures (Pa) checked: shape (n_chambers,), finite, within ``[0, p_max]``."""
+    command = as_finite_array("pressures_pa", pressure_pa, shape=(spec.n_chambers,))
+    if np.any(command < 0) or np.any(command > spec.p_max_pa * (1 + 1e-9)):
+        raise ValueError(
+            f"pressures_pa must lie within [0, p_max_pa={spec.p_max_pa.tolist()}], "
+            f"got {command.tolist()}")
+    return np.minimum(command, spec.p_max_pa)
+
+
 class PneumaticSupply:
     """Chamber pressures following their commands with a first-order lag, within [0, p_max].
 
@@ -47,13 +57,7 @@ class PneumaticSupply:
 
     def check_command(self, pressure_pa: np.ndarray) -> np.ndarray:
         """Validate a pressure command: shape (n_chambers,), finite, within [0, p_max]."""
-        n = self.spec.n_chambers
-        command = as_finite_array("pressures_pa", pressure_pa, shape=(n,))
-        if np.any(command < 0) or np.any(command > self.p_max_pa * (1 + 1e-9)):
-            raise ValueError(
-                f"pressures_pa must lie within [0, p_max_pa={self.p_max_pa.tolist()}], "
-                f"got {command.tolist()}")
-        return np.minimum(command, self.p_max_pa)
+        return check_pressures(self.spec, pressure_pa)
 
     def set_time_constant_scale(self, scale: float) -> None:
         """Make the lag ``scale`` times the arm's nominal time constant (domain randomisation)."""
@@ -237,11 +241,6 @@ class VolumeSupply:
             f"(ArmSpec.cylinders is set): command cylinder strokes with "
             f"set_cylinder_strokes(strokes_m), in [0, {self.max_stroke_m:.6g}] m")
 
-    @property
-    def command_pa(self) -> np.ndarray:
-        """The pressure (Pa) each commanded stroke gives at the chambers' rest lengths."""
-        return self.pressure_at(self.rest_lengths_m, self.command_stroke_m)
-
     def set_time_constant_scale(self, scale: float) -> None:
         """Make the stroke's lag ``scale`` times the arm's nominal time constant."""
         scale = require_positive("scale", scale)
@@ -250,7 +249,7 @@ class VolumeSupply:
     def check_pressures(self, pressure_pa: np.ndarray) -> np.ndarray:
         """Validate pressures (Pa) to start from: shape (n_chambers,), finite, within
         ``[0, p_max]``."""
-        return PneumaticSupply.check_command(self, pressure_pa)
+        return check_pressures(self.spec, pressure_pa)
 
     def reset(self, pressure_pa: np.ndarray | None = None,
               lengths_m: np.ndarray | None = None) -> None:

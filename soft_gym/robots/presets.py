@@ -241,8 +241,8 @@ PRESETS: dict[str, ArmSpec] = {spec.name: spec for spec in (WANG2023, ZHAO2021, 
 HO2018_CYLINDERS = CylinderSpec(bore_area_m2=math.pi * 0.010**2, max_stroke_m=0.0695,
                                 dead_volume_m3=2.0e-6)
 """ho2018's stepper-driven cylinders (Section 3.1), one per chamber: a 20 mm bore, 69.5 mm of
-stroke (21.8 mL), 2 mL of dead volume. The paper's dimensions are not in this repository; these
-are assumed (:data:`CYLINDER_NOTES`)."""
+stroke (21.8 mL), 2 mL of dead volume. The paper states no bore, stroke or tubing; these are
+assumed (:data:`CYLINDER_NOTES`)."""
 
 CYLINDERS: dict[str, CylinderSpec] = {"ho2018": HO2018_CYLINDERS}
 """The presets whose papers drive chamber volumes, and their cylinders

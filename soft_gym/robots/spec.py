@@ -253,11 +253,6 @@ class CylinderSpec:
             require_positive(name, getattr(self, name))
         require_non_negative("dead_volume_m3", self.dead_volume_m3)
 
-    @property
-    def displacement_m3(self) -> float:
-        """Gas volume a full stroke pushes out of the cylinder, ``A_b S`` (m^3)."""
-        return self.bore_area_m2 * self.max_stroke_m
-
 
 @dataclass(frozen=True)
 class ArmSpec:

@@ -16,7 +16,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from soft_gym._validation import as_finite_array, require_integer, require_positive
+from soft_gym._validation import as_finite_array, as_points, require_integer, require_positive
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.tasks.paths import (PATH_SHAPES, PathSpec, make_reference_trajectory, path_length,
                                   path_polyline, surface_height, workspace_surface)
@@ -76,11 +76,7 @@ class _TrackingReward:
 
 def _checked_tips(reachable_tips_m: Any) -> np.ndarray:
     """The arm's reachable tip positions (m, (n >= 1, 3)), checked."""
-    tips = as_finite_array("reachable_tips_m", reachable_tips_m)
-    if tips.ndim != 2 or tips.shape[1] != 3 or len(tips) < 1:
-        raise ValueError(f"reachable_tips_m must be tip positions (m), shape (n >= 1, 3), got "
-                         f"shape {tips.shape}")
-    return tips
+    return as_points("reachable_tips_m", reachable_tips_m)
 
 
 class ReachTask(_TrackingReward):
