@@ -56,3 +56,24 @@ def test_rotation_vectors_and_axis_rotations():
         vector[axis] = 0.7
         np.testing.assert_allclose(axis_rotation(axis, 0.7), rotation_vector_to_quaternion(vector),
                                    atol=1e-15)
+
+
+def test_one_quaternion_is_scipys_matrix_bit_for_bit():
+    """The single-quaternion path (plain floats) gives scipy's matrix exactly, for unit and
+    slightly off-unit quaternions as PyBullet returns them."""
+    rng = np.random.default_rng(1)
+    quaternions = rng.normal(size=(5000, 4))
+    quaternions /= np.linalg.norm(quaternions, axis=1)[:, None]
+    quaternions[::2] *= 1.0 + rng.normal(scale=1e-9, size=(2500, 1))
+    quaternions[-1] = [0.0, 0.0, 0.0, 3.0]
+    for quaternion in quaternions:
+        expected = Rotation.from_quat(quaternion).as_matrix()
+        assert np.array_equal(quaternion_to_matrix(quaternion), expected)
+        assert np.array_equal(quaternion_to_matrix(tuple(quaternion)), expected)
+
+
+@pytest.mark.parametrize("bad", [(0.0, 0.0, 0.0, 0.0), (np.nan, 0.0, 0.0, 1.0),
+                                 (np.inf, 0.0, 0.0, 1.0)])
+def test_one_degenerate_quaternion_is_refused(bad):
+    with pytest.raises(ValueError, match="quaternion"):
+        quaternion_to_matrix(bad)
