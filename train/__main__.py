@@ -35,7 +35,7 @@ from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_o
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
-from train.config import ALGORITHMS, VEC_KINDS
+from train.config import ALGORITHMS, VEC_KINDS, parse_key_values
 from train.sweep import main as sweep_main
 
 
@@ -79,7 +79,63 @@ def build_parser() -> argparse.ArgumentParser:
                              "for --timesteps more steps (model, replay buffer and "
                              "normalisation restored)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    demos = parser.add_argument_group(
+        "starting from demonstrations (off-policy algorithms; train/demonstrations.py)")
+    demos.add_argument("--demos", default=None, metavar="BASELINE",
+                       help="a baseline (e.g. hybrid_gpr, lwpr_rwr) whose episodes on the "
+                            "training env seed the agent: recorded as a Minari dataset in the "
+                            "run directory, cloned into the actor, put in the replay buffer")
+    demos.add_argument("--demo-dataset", default=None, metavar="ID",
+                       help="instead of --demos, a Minari dataset of demonstrations with the "
+                            "training env's spaces (e.g. a suite's --record minari output)")
+    demos.add_argument("--demo-root", default=None, metavar="DIR",
+                       help="the datasets root --demo-dataset lies under (default: the "
+                            "package's, python -m eval datasets --help)")
+    demos.add_argument("--demo-episodes", type=positive_int, default=4,
+                       help="episodes of --demos to record (>= 1)")
+    demos.add_argument("--demo-params", nargs="*", default=[], metavar="KEY=VALUE",
+                       help="the --demos baseline's parameters (e.g. kp=0.06)")
+    demos.add_argument("--bc-epochs", type=non_negative_int, default=100,
+                       help="behaviour-cloning epochs of the actor on the demonstrations")
+    demos.add_argument("--critic-warmup", type=non_negative_int, default=2000,
+                       help="critic gradient steps on the demonstrations, actor held")
     return parser
+
+
+def check_demonstrations(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict:
+    """``--demos`` / ``--demo-dataset`` and their options; returns the baseline's parameters."""
+    from agents.policies import BASELINES
+    from train.config import OFF_POLICY
+
+    given = [option for option, value in (("--demos", args.demos),
+                                          ("--demo-dataset", args.demo_dataset)) if value]
+    if not given:
+        extra = [option for option, value, default in (
+            ("--demo-root", args.demo_root, None), ("--demo-params", args.demo_params, []))
+            if value != default]
+        if extra:
+            parser.error(f"{extra[0]} applies with --demos or --demo-dataset, given neither")
+        return {}
+    if len(given) == 2:
+        parser.error("--demos and --demo-dataset: give one (record a baseline, or read a "
+                     "dataset)")
+    if args.algo not in OFF_POLICY:
+        parser.error(f"{given[0]} seeds an off-policy agent's actor and replay buffer: --algo "
+                     f"must be one of {list(OFF_POLICY)}, got {args.algo!r}")
+    if args.demos is not None and args.demos not in BASELINES:
+        parser.error(f"--demos must be a baseline ({', '.join(BASELINES)}), got "
+                     f"{args.demos!r}")
+    if args.demo_dataset is not None:
+        from soft_gym.datasets.store import load_dataset
+
+        try:
+            load_dataset(args.demo_dataset, args.demo_root)
+        except ValueError as error:
+            fail(parser, "--demo-dataset", error)
+    try:
+        return parse_key_values(args.demo_params, "--demo-params")
+    except ValueError as error:
+        parser.error(str(error))
 
 
 def check_resume(parser: argparse.ArgumentParser, run_dir: str) -> None:
@@ -125,7 +181,10 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         config_file=args.conf_file,
         out_dir=args.out, run_name=args.name, resume=None, eval_freq=args.eval_freq,
         eval_episodes=args.eval_episodes, checkpoint_freq=args.checkpoint_freq,
-        threads=args.threads, progress=not args.no_progress)
+        threads=args.threads, progress=not args.no_progress, demos=args.demos,
+        demo_dataset=args.demo_dataset, demo_root=args.demo_root,
+        demo_episodes=args.demo_episodes, demo_params=check_demonstrations(parser, args),
+        bc_epochs=args.bc_epochs, critic_warmup=args.critic_warmup)
     try:
         settings, _ = resolve(request)
     except ValueError as error:  # the config file's entry (the overrides passed above)
@@ -166,6 +225,9 @@ def main(argv: list[str] | None = None) -> None:
     if args.resume is not None:
         if args.timesteps is None:
             parser.error("--resume needs --timesteps (how many more steps to train)")
+        if args.demos is not None or args.demo_dataset is not None:
+            parser.error("--demos and --demo-dataset start a new run; --resume continues one "
+                         "(its replay buffer already holds the demonstrations)")
         check_resume(parser, args.resume)
         request = TrainRequest(resume=args.resume, timesteps=args.timesteps,
                                progress=not args.no_progress)

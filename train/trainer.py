@@ -40,12 +40,17 @@ from train.batched import Sb3VectorEnv
 from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class,
                           build_action_noise, read_hyperparameters, split_hyperparameters)
 from train.curves import plot_learning_curve
+from train.demonstrations import (load_demonstrations, record_demonstrations,
+                                  start_from_demonstrations)
 
 MODEL_FILE = "model.zip"
 BEST_MODEL_FILE = "best_model.zip"
 NORMALIZATION_FILE = "vecnormalize.pkl"
 BEST_NORMALIZATION_FILE = "best_vecnormalize.pkl"
 REPLAY_BUFFER_FILE = "replay_buffer.pkl"
+DEMO_SEED_OFFSET = 20_000
+"""Demonstrations are recorded on reset seeds ``seed + DEMO_SEED_OFFSET`` onward, apart from
+the training envs' (``seed``...) and the evaluation env's (``seed + 10_000``)."""
 
 
 @dataclass
@@ -72,6 +77,15 @@ class TrainRequest:
         checkpoint_freq: env steps between checkpoints (0: none).
         threads: torch threads.
         progress: show a progress bar.
+        demos: a baseline whose rollouts on the training env seed the agent (off-policy
+            algorithms; :mod:`train.demonstrations`), or ``None``.
+        demo_dataset: instead, a Minari dataset id of demonstrations with the training env's
+            spaces (under ``demo_root``, default the package's datasets root).
+        demo_root: where ``demo_dataset`` lies (recordings go to ``<run_dir>/demonstrations``).
+        demo_episodes: episodes of ``demos`` to record.
+        demo_params: the ``demos`` baseline's keyword arguments.
+        bc_epochs: behaviour-cloning epochs of the actor on the demonstrations.
+        critic_warmup: critic gradient steps on the demonstrations with the actor held.
     """
 
     algo: str = "sac"
@@ -91,6 +105,18 @@ class TrainRequest:
     checkpoint_freq: int = 50_000
     threads: int = 1
     progress: bool = True
+    demos: str | None = None
+    demo_dataset: str | None = None
+    demo_root: str | None = None
+    demo_episodes: int = 4
+    demo_params: dict = field(default_factory=dict)
+    bc_epochs: int = 100
+    critic_warmup: int = 2000
+
+    @property
+    def uses_demonstrations(self) -> bool:
+        """Whether the agent starts from demonstrations (``demos`` or ``demo_dataset``)."""
+        return self.demos is not None or self.demo_dataset is not None
 
 
 def resolve(request: TrainRequest) -> tuple[TrainSettings, dict]:
@@ -205,6 +231,9 @@ def train(request: TrainRequest) -> Path:
     # statistics is then refused by sb3:PATH rather than run on raw observations
     mark_normalization(model, settings.normalize is not None)
     model.set_logger(configure(str(run_dir / "logs"), ["csv", "tensorboard"]))
+    demo_report = None
+    if request.resume is None and request.uses_demonstrations:
+        demo_report = _start_from_demonstrations(request, settings, model, env, run_dir)
 
     (run_dir / "config.yaml").write_text(yaml.safe_dump({
         "request": {key: value for key, value in vars(request).items()
@@ -238,13 +267,37 @@ def train(request: TrainRequest) -> Path:
         model.save_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
     summary = {"timesteps": int(model.num_timesteps), "wall_s": round(elapsed, 1),
                "env_steps_per_s": round(callbacks[0].steps / max(elapsed, 1e-9), 1),
-               "n_envs": settings.n_envs}
+               "n_envs": settings.n_envs, **(demo_report or {})}
     with open(run_dir / "training.yaml", "a") as handle:
         yaml.safe_dump([summary], handle, sort_keys=False)
     env.close()
     eval_env.close()
     plot_learning_curve(run_dir, title=f"{request.algo.upper()} on {request.env_id}")
     return run_dir
+
+
+def _start_from_demonstrations(request: TrainRequest, settings: TrainSettings, model, env,
+                               run_dir: Path) -> dict:
+    """Record (or read) the demonstrations and start ``model`` from them
+    (:mod:`train.demonstrations`); returns the report for ``training.yaml``."""
+    if request.algo not in OFF_POLICY:
+        raise ValueError(f"demonstrations seed an off-policy agent's actor and replay buffer: "
+                         f"algo must be one of {list(OFF_POLICY)}, got {request.algo!r}")
+    started = time.perf_counter()
+    if request.demo_dataset is not None:
+        dataset_id, root = request.demo_dataset, request.demo_root
+    else:
+        root = str(run_dir / "demonstrations")
+        dataset_id = record_demonstrations(
+            request.env_id, settings.env_kwargs, request.demos, episodes=request.demo_episodes,
+            seed=request.seed + DEMO_SEED_OFFSET, root=root, policy_params=request.demo_params,
+            progress=request.progress)
+    demos = load_demonstrations(dataset_id, root, env)
+    report = start_from_demonstrations(model, demos, bc_epochs=request.bc_epochs,
+                                       critic_warmup=request.critic_warmup, seed=request.seed,
+                                       progress=request.progress)
+    report["demo_wall_s"] = round(time.perf_counter() - started, 1)
+    return report
 
 
 class SaveNormalization(BaseCallback):
