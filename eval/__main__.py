@@ -663,7 +663,8 @@ def _run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace) -> N
 SUITE_DESCRIPTION = (
     "Run the benchmark grid a YAML spec declares (presets x paths x conditions x policies x "
     "seeds): a bundled suite by name ('small' is the README's main job, 'default' every arm "
-    "with its paper's conditions) or a file of your own. The spec is checked before any run; "
+    "with its paper's conditions, 'demos' SAC started from demonstrations against SAC from "
+    "scratch) or a file of your own. The spec is checked before any run; "
     "each run's record is written as it finishes (--resume continues an interrupted grid); the "
     "report ranks the policies per arm and condition (leaderboard.md, runs.csv, suite.json, "
     "plots). The spec's schema is in docs/suite.md.")

@@ -39,7 +39,8 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from agents.policies import make_policy
+from agents.policies import BASELINES, make_policy
+from agents.policies.registry import constructor_parameters
 from eval.datasets.episodes import EpisodeRecorder
 from eval.runner import run_episode
 from soft_gym.datasets.store import load_dataset, write_dataset
@@ -101,7 +102,10 @@ def record_demonstrations(env_id: str, env_kwargs: dict[str, Any], policy: str, 
                          f"{policy!r}")
     env = EpisodeRecorder(gym.make(env_id, **env_kwargs))
     try:
-        baseline = make_policy(policy, env=env, **(policy_params or {}))
+        params = dict(policy_params or {})
+        if "progress" in constructor_parameters(BASELINES[policy]):  # its own build's bars
+            params.setdefault("progress", progress)
+        baseline = make_policy(policy, env=env, **params)
         if hasattr(baseline, "calibrate"):
             baseline.calibrate()
         errors = []

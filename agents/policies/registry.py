@@ -18,7 +18,7 @@ BASELINES: Registry[type[BaselinePolicy]] = Registry("policy")
 """Baseline names and the classes implementing them (registered in :mod:`agents.policies`)."""
 
 
-def _constructor_parameters(cls: type) -> list[str]:
+def constructor_parameters(cls: type) -> list[str]:
     """The keyword parameters a baseline class takes besides ``env``."""
     return [name for name, parameter in inspect.signature(cls.__init__).parameters.items()
             if name not in ("self", "env") and parameter.kind in (
@@ -44,7 +44,7 @@ def make_policy(name: str, env=None, **params: Any) -> BaselinePolicy:
     (spec,) = parse_spec(name, "policy", BASELINES, forms=("name",), also=("sb3:PATH",))
     cls = BASELINES[spec.name]
     require_soft_arm_env(env, f"policy {spec.name!r}")
-    known = _constructor_parameters(cls)
+    known = constructor_parameters(cls)
     unknown = sorted(key for key in params if key not in known)
     if unknown:
         raise ValueError(f"policy {spec.name!r} parameters must be among {known}, got unknown "

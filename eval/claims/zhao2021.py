@@ -65,12 +65,12 @@ EXPERIMENTS = (
     ClaimExperiment("zhao2021.shape", "zhao2021",
                     "the SR model from the paper's 6000-sample exploration: Table III's "
                     "pressures, 11 random poses, Table IV's loads 0-150 g on 4 of them",
-                    _QUICK, _run_shape, shares=_MODELS, cpu_minutes=(3.5, 20.0)),
+                    _QUICK, _run_shape, shares=_MODELS, cpu_minutes=(3.3, 20.0)),
     ClaimExperiment("zhao2021.p2p", "zhao2021",
                     "local_ik_asdm from the paper's start to the goal: d = 8, d = 2, ASDM, ASDM "
                     "with 50 / 75 / 100 g (at most 100 one-second steps)",
                     f"{_QUICK}, at most {QUICK_P2P_STEPS} steps", _run_p2p, shares=_MODELS,
-                    cpu_minutes=(2.8, 7.0)),
+                    cpu_minutes=(2.4, 7.0)),
     ClaimExperiment("zhao2021.sway", "zhao2021",
                     "ASDM to the goal with a swaying 119 g block, then a 1 N pull at the middle "
                     "from step 7 to 12", _QUICK, _run_sway, shares=_MODELS,
