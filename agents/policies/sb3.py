@@ -43,11 +43,21 @@ def shipped_agents(env_id: str | None = None) -> dict[str, Path]:
             if _read_run_config(path / "config.yaml").get("env_id") == env_id}
 
 
+REPOSITORY_DIR = SHIPPED_DIR.parents[1]
+"""The repository's root: a relative ``sb3:`` path not found from the working directory is looked
+up here (``sb3:agents/studies/demos/...``, the agents of a study kept beside the shipped ones)."""
+
+
 def resolve_sb3_path(path: str | Path) -> Path:
-    """A model path as given, or the shipped agent of that name."""
+    """A model path as given (from the working directory, else from the repository's root), or
+    the shipped agent of that name."""
     candidate = Path(path)
-    if not candidate.exists() and str(path) in shipped_agents():
+    if candidate.exists():
+        return candidate
+    if str(path) in shipped_agents():
         return shipped_agents()[str(path)]
+    if not candidate.is_absolute() and (REPOSITORY_DIR / candidate).exists():
+        return REPOSITORY_DIR / candidate
     return candidate
 
 

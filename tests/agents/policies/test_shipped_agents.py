@@ -6,6 +6,8 @@ below holding the arm at its pre-pressure."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -61,3 +63,22 @@ def test_a_shipped_agent_follows_its_recipe_and_tracks_its_path(name):
     settled = errors[len(errors) // 4:]  # after the start from rest
     assert settled.mean() < 0.25 * resting.mean(), (settled.mean(), resting.mean())
     assert settled.mean() < 10.0, settled.mean()
+
+
+def test_a_study_agent_loads_by_its_path_in_the_repository_from_any_directory(tmp_path,
+                                                                                monkeypatch):
+    """``sb3:agents/studies/...`` resolves from the repository's root when the working directory
+    holds no such path, and is not listed among the shipped agents."""
+    from agents.policies import shipped_agents
+    from agents.policies.sb3 import REPOSITORY_DIR, resolve_sb3_path
+
+    monkeypatch.chdir(tmp_path)
+    relative = "agents/studies/demos/sac_ho2018_track_demos_20k"
+    assert resolve_sb3_path(relative) == REPOSITORY_DIR / relative
+    assert "sac_ho2018_track_demos_20k" not in shipped_agents()
+    env = gym.make("SoftArmTrackHo2018-v0", feedback="em", path="circle")
+    agent = make_policy(f"sb3:{relative}", env=env)
+    observation, _ = env.reset(seed=0)
+    assert env.action_space.contains(agent.predict(observation, deterministic=True)[0])
+    env.close()
+    assert resolve_sb3_path("no/such/agent") == Path("no/such/agent")
