@@ -35,7 +35,7 @@ from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_o
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
-from train.config import ALGORITHMS, VEC_KINDS, parse_key_values
+from train.config import ALGORITHMS, OFF_POLICY, VEC_KINDS, parse_key_values
 from train.sweep import main as sweep_main
 
 
@@ -104,8 +104,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def check_demonstrations(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict:
     """``--demos`` / ``--demo-dataset`` and their options; returns the baseline's parameters."""
-    from agents.policies import BASELINES
-    from train.config import OFF_POLICY
+    from agents.policies import BASELINES  # lazy, as train.trainer: --help skips it
 
     given = [option for option, value in (("--demos", args.demos),
                                           ("--demo-dataset", args.demo_dataset)) if value]

@@ -88,9 +88,10 @@ def test_hyperparameters_are_checked_by_key_and_value():
                                   "train_freq": [1, "episode"], "gradient_steps": -1,
                                   "normalize": "dict(norm_obs=True)", "n_timesteps": 2e5})
     for algo in ALGORITHMS:
-        for entry in yaml.safe_load((ROOT / "train" / "configs" / f"{algo}.yml").read_text()
-                                    ).values():
-            split_hyperparameters(algo, entry)
+        for path in [ROOT / "train" / "configs" / f"{algo}.yml",
+                     *sorted((ROOT / "train" / "configs").glob(f"{algo}_*.yml"))]:
+            for entry in yaml.safe_load(path.read_text()).values():
+                split_hyperparameters(algo, entry)
 
 
 def test_numbers_in_e_notation_are_numbers():

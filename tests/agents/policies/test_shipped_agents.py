@@ -1,6 +1,5 @@
 """Every shipped SB3 agent (``agents/trained/<name>``): it loads on its arm's env, it was trained
-by a recipe kept in ``train/configs`` (the file its run named, else ``<algo>.yml`` or a study's
-``<algo>_*.yml``), and it tracks its path: over
+by the recipe its config file names (``train/configs/sac.yml``), and it tracks its path: over
 one clean cycle with EM feedback its mean tip error is well below the path's own size and far
 below holding the arm at its pre-pressure."""
 
@@ -36,24 +35,13 @@ def test_every_new_arm_has_a_shipped_agent():
             "SoftArmTrackZou2022-v0"} <= arms, arms
 
 
-def _recipes(config: dict) -> list[dict]:
-    """The recipes an agent may have been trained by: the config file its run named, else
-    ``train/configs/<algo>.yml`` and the study files beside it (``<algo>_*.yml``)."""
-    configs = SHIPPED_DIR.parents[1] / "train" / "configs"
-    named = config["request"].get("config_file")
-    files = ([SHIPPED_DIR.parents[1] / named] if named else
-             [configs / f"{config['algo']}.yml", *sorted(configs.glob(f"{config['algo']}_*.yml"))])
-    tables = [yaml.safe_load(path.read_text()) for path in files]
-    return [table[config["env_id"]] for table in tables if config["env_id"] in table]
-
-
 @pytest.mark.parametrize("name", AGENTS)
 def test_a_shipped_agent_follows_its_recipe_and_tracks_its_path(name):
     config = yaml.safe_load((SHIPPED_DIR / name / "config.yaml").read_text())
-    recipes = _recipes(config)
-    assert recipes, f"no recipe for {config['env_id']}"
-    assert any(config["env_kwargs"] == recipe["env_kwargs"] for recipe in recipes), \
-        f"no recipe in train/configs gives {name}'s env_kwargs"
+    recipes = yaml.safe_load((SHIPPED_DIR.parents[1] / "train" / "configs" /
+                              f"{config['algo']}.yml").read_text())
+    assert config["env_id"] in recipes, f"no recipe for {config['env_id']}"
+    assert config["env_kwargs"] == recipes[config["env_id"]]["env_kwargs"]
     env_kwargs = {k: v for k, v in config["env_kwargs"].items() if k != "randomization"}
     env = gym.make(config["env_id"], **env_kwargs)
     agent = make_policy(f"sb3:{name}", env=env)
