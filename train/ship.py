@@ -1,10 +1,13 @@
 """Copy a trained run into the repository as a shipped agent (``agents/trained/<name>/``).
 
     python -m train.ship results/train/sac_wang2023_track sac_wang2023_track --model best
+    python -m train.ship --evaluate sac_wang2023_track     (write its evaluation again)
 
 Only what loading and provenance need is kept: the model, its VecNormalize statistics, the
 resolved config, versions, the training summary and the learning curve (no replay buffer or
-checkpoints, so the repository stays small).
+checkpoints, so the repository stays small), and ``evaluation.yaml``: the agent's nominal
+tracking error by :func:`nominal_evaluation`, which ``tests/agents/policies/test_shipped_agents.py``
+checks the agent against (within 20 %).
 """
 
 from __future__ import annotations
@@ -13,15 +16,81 @@ import argparse
 import shutil
 from pathlib import Path
 
-from agents.policies import SHIPPED_DIR, mark_model_file, model_normalization_mark
+import gymnasium as gym
+import numpy as np
+import yaml
+
+import soft_gym  # noqa: F401  (registers the env ids)
+from agents.policies import SHIPPED_DIR, make_policy, mark_model_file, model_normalization_mark
 from soft_gym._cli import HelpFormatter
 from train.trainer import (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE, MODEL_FILE,
                            NORMALIZATION_FILE)
 
 
+EVALUATION_FILE = "evaluation.yaml"
+EVALUATION_SEED = 123
+
+
+def _episode_errors(env: gym.Env, act) -> np.ndarray:
+    """Tip errors (mm) of one episode reset with :data:`EVALUATION_SEED`, acting by ``act``."""
+    observation, _ = env.reset(seed=EVALUATION_SEED)
+    errors = []
+    while True:
+        observation, _, terminated, truncated, info = env.step(act(observation))
+        errors.append(info["error_mm"])
+        if terminated or truncated:
+            return np.array(errors)
+
+
+def nominal_evaluation(agent: str | Path) -> dict:
+    """A shipped agent's nominal tracking: one episode of the env it trained on, with its recipe's
+    keyword arguments less the randomisation (its feedback and path, no load), reset with seed
+    123, deterministic actions.
+
+    :param agent: the agent's directory, or a shipped agent's name.
+    :return: ``settled_error_mm``, the mean tip error (mm) after the first quarter of the steps
+        (the start from rest left out); ``resting_error_mm``, the mean error of holding every
+        chamber at its pre-pressure over the same episode; the env id and keyword arguments,
+        the reset seed and the steps.
+    """
+    directory = Path(agent)
+    if not (directory / "config.yaml").is_file():
+        directory = SHIPPED_DIR / str(agent)
+    if not (directory / "config.yaml").is_file():
+        raise ValueError(f"agent {str(agent)!r} is neither a directory holding config.yaml nor a "
+                         f"shipped agent in {SHIPPED_DIR}")
+    config = yaml.safe_load((directory / "config.yaml").read_text())
+    env_kwargs = {key: value for key, value in config["env_kwargs"].items()
+                  if key != "randomization"}
+    env = gym.make(config["env_id"], **env_kwargs)
+    try:
+        policy = make_policy(f"sb3:{directory}", env=env)
+        errors = _episode_errors(env, lambda obs: policy.predict(obs, deterministic=True)[0])
+        resting = _episode_errors(env,
+                                  lambda obs: -np.ones(env.action_space.shape, np.float32))
+    finally:
+        env.close()
+    return {"settled_error_mm": float(errors[len(errors) // 4:].mean()),
+            "resting_error_mm": float(resting.mean()), "env_id": config["env_id"],
+            "env_kwargs": env_kwargs, "reset_seed": EVALUATION_SEED, "steps": int(len(errors))}
+
+
+def write_evaluation(directory: str | Path) -> dict:
+    """Evaluate the agent in ``directory`` (:func:`nominal_evaluation`) and write the result to
+    its ``evaluation.yaml``; returns it."""
+    evaluation = nominal_evaluation(directory)
+    text = ("# Nominal tracking of this agent, written by python -m train.ship (train/ship.py,\n"
+            "# nominal_evaluation); tests/agents/policies/test_shipped_agents.py checks the agent\n"
+            "# against settled_error_mm (within 20 %).\n")
+    (Path(directory) / EVALUATION_FILE).write_text(text + yaml.safe_dump(evaluation,
+                                                                         sort_keys=False))
+    return evaluation
+
+
 def ship(run_dir: str | Path, name: str, model: str = "final",
-         destination: str | Path = SHIPPED_DIR) -> Path:
-    """Copy ``run_dir``'s final or best model with its provenance to ``destination/name``."""
+         destination: str | Path = SHIPPED_DIR, evaluate: bool = True) -> Path:
+    """Copy ``run_dir``'s final or best model with its provenance to ``destination/name``, and
+    (``evaluate``) write its nominal evaluation there (:func:`write_evaluation`)."""
     run_dir = Path(run_dir)
     if model not in ("final", "best"):
         raise ValueError(f"model must be 'final' or 'best', got {model!r}")
@@ -41,17 +110,38 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
         if (run_dir / extra).is_file():
             shutil.copy(run_dir / extra, target / extra)
     (target / "source.txt").write_text(f"{model} model of run {run_dir.name}\n")
+    if evaluate:
+        write_evaluation(target)
     return target
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m train.ship", description=__doc__,
                                      formatter_class=HelpFormatter)
-    parser.add_argument("run_dir", help="a run directory of python -m train")
-    parser.add_argument("name", help="the shipped agent's name (sb3:<name> loads it)")
+    parser.add_argument("run_dir", nargs="?", help="a run directory of python -m train")
+    parser.add_argument("name", nargs="?", help="the shipped agent's name (sb3:<name> loads it)")
     parser.add_argument("--model", choices=("final", "best"), default="final",
                         help="the final model or the best evaluated one")
+    parser.add_argument("--evaluate", nargs="+", default=None, metavar="AGENT",
+                        help="instead of shipping, write the evaluation.yaml of agents already "
+                             "shipped (names or directories)")
     args = parser.parse_args(argv)
+    if args.evaluate is not None:
+        if args.run_dir is not None:
+            parser.error("--evaluate takes agents already shipped: give no run_dir or name")
+        for agent in args.evaluate:
+            directory = Path(agent) if Path(agent).is_dir() else SHIPPED_DIR / agent
+            if not (directory / "model.zip").is_file():
+                parser.error(f"--evaluate: {agent!r} is not a shipped agent (no model.zip in "
+                             f"{directory})")
+        for agent in args.evaluate:
+            directory = Path(agent) if Path(agent).is_dir() else SHIPPED_DIR / agent
+            evaluation = write_evaluation(directory)
+            print(f"{directory}: settled error {evaluation['settled_error_mm']:.2f} mm "
+                  f"(resting {evaluation['resting_error_mm']:.2f} mm)")
+        return
+    if args.run_dir is None or args.name is None:
+        parser.error("give run_dir and name (or --evaluate AGENT)")
     try:
         print(ship(args.run_dir, args.name, args.model))
     except ValueError as error:

@@ -235,8 +235,11 @@ def test_shipping_keeps_what_loading_needs(tmp_path, small_ppo_run):
     run_dir = small_ppo_run
     shipped = ship(run_dir, "tiny", destination=tmp_path / "shipped")
     assert sorted(p.name for p in shipped.iterdir()) == [
-        "config.yaml", "learning_curve.png", "model.zip", "source.txt", "training.yaml",
-        "vecnormalize.pkl", "versions.yaml"]
+        "config.yaml", "evaluation.yaml", "learning_curve.png", "model.zip", "source.txt",
+        "training.yaml", "vecnormalize.pkl", "versions.yaml"]
+    evaluation = yaml.safe_load((shipped / "evaluation.yaml").read_text())
+    assert evaluation["reset_seed"] == 123 and evaluation["steps"] > 0
+    assert 0 < evaluation["settled_error_mm"] < float("inf")
     env = gym.make("SoftArmTrackWang2023-v0", **FAST_ENV)
     observation, _ = env.reset(seed=0)
     np.testing.assert_array_equal(make_policy(f"sb3:{run_dir}", env=env).predict(observation)[0],
