@@ -5,8 +5,12 @@ eye-in-hand camera frame at 160 x 120, the vision pose update on that frame, cam
 together, the OS-ELM update (N = 200) and prediction, and a whole env step with fused feedback
 next to one with ground-truth feedback (their ratio is the cost of the sensing), driven by a
 slow spiral (a turn every 8 s, 5-30 % of the pressure range) and, for fused feedback, by a random
-action per step, with the vision tracker on its own (the default) and with F-emp's pose as its
-prior (``sensing={"femp_prior": True}``). Last, the time to make a fused env in a new process
+action per step, with the vision tracker on its own (the default), with F-emp's pose as its
+prior (``sensing={"femp_prior": True}``) and with the tracker's matching as it was before the
+image-motion prediction and the wider window (``image_motion_prediction=False,
+wide_search_factor=None``: a frame the motion model mispredicts is matched against the whole
+local map); for each random-action run, the share of frames each matching stage decided
+(``VisionPoseEstimator.match_stages``). Last, the time to make a fused env in a new process
 with the calibration taken from the disk cache (:mod:`soft_gym.sensing.calibration_cache`),
 beside the calibration itself.
 
@@ -84,15 +88,23 @@ def main(argv: list[str] | None = None) -> None:
         model.predict(x)
         timings["elm_update"].append(middle - start)
         timings["elm_predict"].append(time.perf_counter() - middle)
-    # the env steps twice: with the slow spiral (smooth motion, the vision tracker's search by
-    # projection holds) and with a random pressure every step (the worst case: the image jumps
-    # and each frame is matched against the whole local map)
-    for feedback, actions, prior in (("ground_truth", "spiral", False), ("fused", "spiral", False),
-                                     ("fused", "random", False), ("fused", "random", True)):
-        options = {"sensing": {"femp_prior": True}} if prior else {}
-        env = gym.make("SoftArmReach-v0", feedback=feedback, episode_steps=10**6, **options)
+    # the env steps with the slow spiral (smooth motion, the vision tracker's search by
+    # projection from the motion model holds) and with a random pressure every step (the worst
+    # case: the image jumps and the motion model mispredicts nearly every frame)
+    old_matching = {"image_motion_prediction": False, "wide_search_factor": None}
+    stages = {}
+    for feedback, actions, variant in (("ground_truth", "spiral", ""), ("fused", "spiral", ""),
+                                       ("fused", "random", ""), ("fused", "random", "femp_prior"),
+                                       ("fused", "random", "old_matching")):
+        sensing = {"": {}, "femp_prior": {"femp_prior": True},
+                   "old_matching": {"vision": old_matching}}[variant]
+        env = gym.make("SoftArmReach-v0", feedback=feedback, episode_steps=10**6,
+                       **({"sensing": sensing} if sensing else {}))
         env.reset(seed=0)
         env.action_space.seed(0)
+        vision = (env.unwrapped.feedback_source.pipeline.vision if feedback == "fused"
+                  else None)
+        before = dict(vision.match_stages) if vision is not None else {}
         steps = []
         for k in range(args.steps):
             if actions == "random":
@@ -104,8 +116,12 @@ def main(argv: list[str] | None = None) -> None:
             env.step(action)
             steps.append(time.perf_counter() - start)
         name = (f"env_step_{feedback}" + ("_random_actions" if actions == "random" else "")
-                + ("_femp_prior" if prior else ""))
+                + (f"_{variant}" if variant else ""))
         timings[name] = steps
+        if vision is not None and actions == "random":
+            counts = {stage: vision.match_stages[stage] - before.get(stage, 0)
+                      for stage in vision.match_stages}
+            stages[name] = {stage: count / args.steps for stage, count in counts.items()}
         env.close()
     results = {name: stats(values) for name, values in timings.items()}
     calibrate_s = _make_in_new_process(cache="off")
@@ -114,15 +130,27 @@ def main(argv: list[str] | None = None) -> None:
     results["make_fused_env_from_disk_cache_s"] = _make_in_new_process(cache="on")
     results["fused_over_ground_truth"] = (results["env_step_fused"]["mean_us"]
                                           / results["env_step_ground_truth"]["mean_us"])
+    results["random_actions_speedup_over_old_matching"] = (
+        results["env_step_fused_random_actions_old_matching"]["mean_us"]
+        / results["env_step_fused_random_actions"]["mean_us"])
+    results["match_stage_shares"] = stages
     print(f"{'measurement':<26} {'mean us':>10} {'p95 us':>10}")
     for name, value in results.items():
-        if isinstance(value, dict):
+        if isinstance(value, dict) and "mean_us" in value:
             print(f"{name:<26} {value['mean_us']:10.1f} {value['p95_us']:10.1f}")
     print(f"fused env step / ground-truth env step: {results['fused_over_ground_truth']:.1f}x; "
           f"fused env steps/s: {1e6 / results['env_step_fused']['mean_us']:.0f} (spiral), "
           f"{1e6 / results['env_step_fused_random_actions']['mean_us']:.0f} (random actions), "
           f"{1e6 / results['env_step_fused_random_actions_femp_prior']['mean_us']:.0f} "
-          "(random actions, F-emp prior)")
+          "(random actions, F-emp prior), "
+          f"{1e6 / results['env_step_fused_random_actions_old_matching']['mean_us']:.0f} "
+          "(random actions, the matching without image motion or the wider window: "
+          f"{results['random_actions_speedup_over_old_matching']:.2f}x slower)")
+    print("share of random-action frames decided by each matching stage "
+          "(the rest lost before matching):")
+    for name, shares in stages.items():
+        print(f"  {name:<44} " + ", ".join(f"{stage} {share:.0%}"
+                                             for stage, share in shares.items()))
     print(f"make a fused env in a new process: {results['make_fused_env_calibrating_s']:.2f} s "
           f"calibrating, {results['make_fused_env_from_disk_cache_s']:.2f} s from the disk cache")
     if args.json:

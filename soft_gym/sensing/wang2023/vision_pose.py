@@ -12,8 +12,11 @@ docs/architecture.md, "Vision pose":
   bundle adjustment), which averages out the frame's own pose noise before the map inherits it;
 * every frame, ORB descriptors are matched to the local map: by projection from the predicted
   pose (constant velocity, or a prior from another sensor), comparing only map points projected
-  near each feature (ORB-SLAM2's search by projection), or against every map point after a loss
-  or when that finds too few (Hamming distance, Lowe ratio test);
+  near each feature (ORB-SLAM2's search by projection); where that finds too few (a jerky
+  motion), by projection from the last pose turned by the image's own shift since the last
+  frame (phase correlation, as PTAM's small-blurry-image rotation estimate), then in a window
+  twice as wide (ORB-SLAM2's second try); against every map point only after a loss or when all
+  of these fail (Hamming distance, Lowe ratio test);
   ``cv2.solvePnPRansac`` finds the inliers and a Gauss-Newton refinement weights each by its
   pyramid levels (ORB-SLAM2's pose optimisation);
 * the quality measure ``e_S`` is the RMS reprojection error of the inliers (px), as the paper's
@@ -37,6 +40,11 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from soft_gym._validation import as_finite_array, require_positive
+
+# frames over which the motion model's misses are counted (image_motion_min_misses)
+MISS_WINDOW = 10
+# the matching stages of VisionPoseEstimator.update, in order (VisionPoseEstimator.match_stages)
+MATCH_STAGES = ("prediction", "image_motion", "wide_window", "whole_map")
 
 # OpenCV's parallel loops may order ORB keypoints differently from run to run; one thread keeps
 # a seeded episode identical across processes (and the benchmarks measure one core anyway)
@@ -117,12 +125,48 @@ class VisionPoseEstimator:
             projected from the predicted camera pose (see :meth:`update`), and each feature is
             compared only with map points within this radius (px). The slow spiral moves the
             image ~0.4 px per frame, and the update takes ~10 instead of ~20 ms. If the
-            guided search finds fewer than ``2 min_inliers`` matches, or PnP fails on them, the
-            frame is matched against the whole local map (relocalisation). ``None`` always
+            guided search finds fewer than ``2 min_inliers`` matches, the next stage searches
+            (``image_motion_prediction``, ``wide_search_factor``), and the frame is matched
+            against the whole local map (relocalisation) when none finds enough; the first
+            search that finds enough decides the frame (PnP failing on its matches loses the
+            frame: a crowded or occluded view, not a wrong prediction). ``None`` always
             matches against the whole local map: 2x slower, and in the 100 s estimation spiral
             after calibration the camera's mean error was 0.87-0.90 mm against 1.0-1.3 mm with
             6 px (the window favours map points consistent with the current drift); on the
             slow spiral alone the two are equal (0.91 mm RMSE).
+        image_motion_prediction: where the search by projection from the predicted pose finds
+            too few matches while such misses are the rule (``image_motion_min_misses``), search
+            again from the last pose turned by the image's shift since the last tracked frame
+            (``cv2.phaseCorrelate`` of the two grey images; a shift of (dx, dy) px is a turn of
+            (atan(dy / f_y), -atan(dx / f_x)) about the camera's x and y axes), as PTAM (Klein
+            and Murray 2008) estimates the rotation of a fast camera from a small blurred image
+            before it tracks. Under a random pressure every control period (wang2023 preset)
+            the constant-velocity prediction missed the map points' pixels by 15 px (median)
+            and 81 % of the frames were matched against the whole local map; the turned pose
+            misses by 2.1 px and 98 % of those frames track from it. While the motion model
+            missed the last frame, the turned pose is searched first. ``False``: the matching
+            before this stage existed (motion model, then the whole local map).
+        image_motion_min_misses: the image-motion stage (with the wider window and the second
+            search) is used only while the motion model missed (its prediction further than
+            ``search_radius_px`` from the estimated pose, median over the inliers) at least
+            this many of the last ``MISS_WINDOW = 10`` tracked frames; below that a miss is
+            matched against the whole local map, whose ratio test against every map point is
+            the more discriminating. An isolated burst of misses (a flick: at most 4 in 10 over
+            the 200 s flick run) keeps the whole-map matching, which there tracked at 0.60 mm
+            against 0.74-0.81 mm with the image motion; random pressures every period miss 6 or
+            more of 10 on 92 % of frames. 0 uses the stage after any miss.
+        wide_search_factor: then search once more, from the image-motion prediction, in a window
+            this many times ``search_radius_px`` (ORB-SLAM2's TrackWithMotionModel retries with
+            twice its window) before matching the whole local map; ``None`` skips it.
+        refine_radius_factor: a pose found by the image-motion stage or the wider window is
+            searched again by projection from itself in a window this many times
+            ``search_radius_px`` and solved again (ORB-SLAM2 tracks the local map after its
+            motion model): the turned pose has no translation or roll, so its window admits
+            wrong matches. Under random pressures over the whole range (200 frames) the mean
+            tip error was 1.03 mm with 0.5, 0.87 mm with 1.0 and 1.57 mm without the second
+            search, against 1.48 mm matching the whole map (with 3, 3, 2 and 10 frames lost);
+            at 0.5 the random-action env ran 25-29 steps/s against 32 without the second search
+            and 20-21 matching the whole map (``bench/sensor_speed.py``). ``None`` skips it.
         max_descriptor_distance: a guided match must be within this Hamming distance (bits of
             256; ORB-SLAM2's TH_HIGH is 100).
         min_depth_m, max_depth_m: depth range of map points accepted from the depth buffer.
@@ -158,6 +202,10 @@ class VisionPoseEstimator:
     ransac_iterations: int = 200
     keyframe_spacing_m: float = 0.001
     search_radius_px: float | None = 6.0
+    image_motion_prediction: bool = True
+    image_motion_min_misses: int = 6
+    wide_search_factor: float | None = 2.0
+    refine_radius_factor: float | None = 0.5
     max_descriptor_distance: int = 80
     min_depth_m: float = 0.005
     max_depth_m: float = 1.0
@@ -191,6 +239,22 @@ class VisionPoseEstimator:
         require_positive("keyframe_position_std_m", self.keyframe_position_std_m)
         if self.search_radius_px is not None:
             require_positive("search_radius_px", self.search_radius_px)
+        if not isinstance(self.image_motion_prediction, (bool, np.bool_)):
+            raise ValueError("image_motion_prediction must be True or False, got "
+                             f"{self.image_motion_prediction!r}")
+        if (isinstance(self.image_motion_min_misses, bool)
+                or not isinstance(self.image_motion_min_misses, (int, np.integer))
+                or not 0 <= self.image_motion_min_misses <= MISS_WINDOW):
+            raise ValueError(f"image_motion_min_misses must be an integer in [0, {MISS_WINDOW}], "
+                             f"got {self.image_motion_min_misses!r}")
+        for name in ("wide_search_factor", "refine_radius_factor"):
+            value = getattr(self, name)
+            low, bound = (1, "> 1") if name == "wide_search_factor" else (0, "> 0")
+            if value is not None and (isinstance(value, bool) or not isinstance(
+                    value, (int, float, np.integer, np.floating)) or not np.isfinite(value)
+                    or value <= low):
+                raise ValueError(f"{name} must be a finite number {bound} or None, got "
+                                 f"{value!r}")
         if (not isinstance(self.max_descriptor_distance, (int, np.integer))
                 or not 0 < self.max_descriptor_distance <= 256):
             raise ValueError("max_descriptor_distance must be an integer in (0, 256], got "
@@ -204,6 +268,12 @@ class VisionPoseEstimator:
         # (frame, keyframe, its own estimated pose) of keyframes waiting for the frames after them
         self._pending: list = []
         self._frame = 0
+        # grey image (float32) of the last tracked frame, for the image-motion prediction
+        self._last_gray: np.ndarray | None = None
+        # whether the motion model missed each of the last tracked frames (see update)
+        self._misses: list[bool] = []
+        # frames each matching stage decided, tracked or lost (see update)
+        self.match_stages: dict[str, int] = dict.fromkeys(MATCH_STAGES, 0)
 
     def __deepcopy__(self, memo: dict) -> "VisionPoseEstimator":
         """A copy with its own map (OpenCV's ORB and matcher objects are rebuilt, not copied)."""
@@ -216,6 +286,9 @@ class VisionPoseEstimator:
         twin._history = copy.deepcopy(self._history, memo)
         twin._pending = copy.deepcopy(self._pending, memo)
         twin._frame = self._frame
+        twin._last_gray = copy.deepcopy(self._last_gray, memo)
+        twin._misses = list(self._misses)
+        twin.match_stages = dict(self.match_stages)
         return twin
 
     def __getstate__(self) -> dict:
@@ -235,6 +308,8 @@ class VisionPoseEstimator:
         self.keyframes = []
         self.last = self.previous = None
         self._history, self._pending, self._frame = [], [], 0
+        self._last_gray, self._misses = None, []
+        self.match_stages = dict.fromkeys(MATCH_STAGES, 0)
         count = self.add_keyframe(image, depth_m, world_from_camera)
         if count < self.min_inliers:
             raise ValueError(
@@ -311,10 +386,12 @@ class VisionPoseEstimator:
         if prior_world_from_tip is not None:
             prior_world_from_tip = as_finite_array("prior_world_from_tip", prior_world_from_tip,
                                                    shape=(4, 4))
-        keypoints, descriptors = self._detect(image)
+        gray = self._gray(image)
+        keypoints, descriptors = self._orb.detectAndCompute(gray, None)
         self._frame += 1
         if descriptors is None or len(keypoints) < self.min_inliers:
             self.previous = None
+            self._last_gray = None
             self._flush_pending()
             return self._lost(0)
         predicted = self._predicted_world_from_camera(prior_world_from_tip)
@@ -324,23 +401,74 @@ class VisionPoseEstimator:
         map_descriptors, map_points, nearest, map_octaves = self._local_map(guess)
         pixels = cv2.KeyPoint_convert(keypoints).astype(np.float64)
         octaves = np.array([k.octave for k in keypoints], dtype=np.int64)
-        estimate = None
-        # without a prediction (at the start, or after a loss without a prior): match all
+        frame = (pixels, descriptors, octaves, image.shape[1], image.shape[0])
+        local_map = (map_descriptors, map_points, map_octaves)
+        found = None
+        gray_float = gray.astype(np.float32) if self.image_motion_prediction else None
+        # without a prediction (at the start, or after a loss without a prior): match all.
+        # The first search that finds 2 min_inliers matches decides the frame, tracked or lost.
         if self.search_radius_px is not None and predicted is not None:
-            query, train = self._match_by_projection(pixels, descriptors, map_descriptors,
-                                                     map_points, np.linalg.inv(predicted),
-                                                     image.shape[1], image.shape[0])
-            if len(query) >= 2 * self.min_inliers:
-                estimate = self._solve(map_points[train], pixels[query], guess,
-                                       self._sigma2(octaves[query], map_octaves[train]))
-        if estimate is None:
+            radius = float(self.search_radius_px)
+            turned: list[np.ndarray] = []   # the image-motion prediction, made when needed
+
+            def poses(stage: str) -> tuple[np.ndarray, np.ndarray]:
+                """(pose the map is projected from, pose PnP starts from) of a stage."""
+                if stage == "prediction":
+                    return predicted, guess
+                if not turned:
+                    turned.append(self._turned_by_image_motion(gray_float))
+                return turned[0], turned[0]
+
+            stages = ["prediction"]
+            guided = (gray_float is not None and self._last_gray is not None
+                      and self._last_gray.shape == gray_float.shape
+                      and sum(self._misses) >= self.image_motion_min_misses)
+            if guided:
+                # while the motion is jerky (the motion model missed the last frame by more than
+                # the window), the image's prediction first: the motion model's would miss again
+                stages.insert(0 if self._misses[-1] else 1, "image_motion")
+            for stage in stages:
+                found = self._search_by_projection(frame, local_map, *poses(stage), radius)
+                if found is not None:
+                    break
+            if found is None and guided and self.wide_search_factor is not None:
+                centre, start = poses("image_motion")
+                stage = "wide_window"
+                found = self._search_by_projection(frame, local_map, centre, start,
+                                                   radius * float(self.wide_search_factor))
+        if (found is not None and stage != "prediction" and not found[0].lost
+                and self.refine_radius_factor is not None):
+            # the turned pose has no translation or roll, so its window admits wrong matches:
+            # search the local map again from the pose they gave (ORB-SLAM2's tracking of the
+            # local map after its motion model) and keep that pose if it tracks
+            solved = found[0].world_from_camera
+            again = self._search_by_projection(frame, local_map, solved, solved,
+                                               radius * float(self.refine_radius_factor))
+            if again is not None and not again[0].lost:
+                found = again
+        if found is None:
+            stage = "whole_map"
             query, train = self._match_all(descriptors, map_descriptors)
             estimate = self._solve(map_points[train], pixels[query], guess,
                                    self._sigma2(octaves[query], map_octaves[train]))
+        else:
+            estimate, query, train = found
+        self.match_stages[stage] += 1
         if estimate.lost:
             self.previous = None
+            self._last_gray = None
             self._flush_pending()
             return estimate
+        self._last_gray = gray_float
+        if predicted is not None and self.search_radius_px is not None:
+            # the motion model missed when the inliers' map points, projected from its
+            # prediction, lie further than the window from where this frame's pose puts them
+            inlier_points = map_points[train[self._inliers]]
+            miss_px = np.median(np.linalg.norm(
+                self._project(inlier_points, predicted)
+                - self._project(inlier_points, estimate.world_from_camera), axis=1))
+            self._misses.append(bool(miss_px > self.search_radius_px))
+            del self._misses[:-MISS_WINDOW]
         # after a loss, the held pose says nothing of the motion: predict none for the next frame
         self.previous = self.last if self.previous is not None else estimate
         self.last = estimate
@@ -406,6 +534,47 @@ class VisionPoseEstimator:
                 train.append(best.trainIdx)
         return np.asarray(query, dtype=np.int64), np.asarray(train, dtype=np.int64)
 
+    def _search_by_projection(self, frame: tuple, local_map: tuple,
+                              centre_world_from_camera: np.ndarray,
+                              start_world_from_camera: np.ndarray, radius_px: float
+                              ) -> tuple[VisionEstimate, np.ndarray, np.ndarray] | None:
+        """Search by projection from ``centre_world_from_camera`` within ``radius_px``, then PnP
+        started at ``start_world_from_camera``: (estimate, feature indices, map indices), or
+        ``None`` when fewer than ``2 min_inliers`` matches were found."""
+        pixels, descriptors, octaves, width, height = frame
+        map_descriptors, map_points, map_octaves = local_map
+        query, train = self._match_by_projection(pixels, descriptors, map_descriptors, map_points,
+                                                 np.linalg.inv(centre_world_from_camera),
+                                                 width, height, radius_px)
+        if len(query) < 2 * self.min_inliers:
+            return None
+        estimate = self._solve(map_points[train], pixels[query], start_world_from_camera,
+                               self._sigma2(octaves[query], map_octaves[train]))
+        return estimate, query, train
+
+    def _project(self, points_world: np.ndarray, world_from_camera: np.ndarray) -> np.ndarray:
+        """Pixels (n, 2) of world points (n, 3, m) seen from a camera pose (pinhole, no
+        distortion)."""
+        camera_from_world = np.linalg.inv(world_from_camera)
+        points = points_world @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
+        return (points[:, :2] / points[:, 2:3] * np.diag(self.camera_matrix)[:2]
+                + self.camera_matrix[:2, 2])
+
+    def _turned_by_image_motion(self, gray: np.ndarray) -> np.ndarray:
+        """The last tracked camera pose turned by the image's shift since that frame (the
+        ``image_motion_prediction`` stage): ``cv2.phaseCorrelate`` of the two grey images
+        (float32, under a Hann window) gives the shift (dx, dy) px of this frame against that
+        one, which a camera turn of atan(dy / f_y) about its x axis and -atan(dx / f_x) about
+        its y axis makes (the pinhole model at the optical axis; the translation, small against
+        the scene's depth, and the roll are left to the search's window)."""
+        window = cv2.createHanningWindow((gray.shape[1], gray.shape[0]), cv2.CV_32F)
+        (dx, dy), _ = cv2.phaseCorrelate(self._last_gray, gray, window)
+        turn = Rotation.from_rotvec([np.arctan(dy / self.camera_matrix[1, 1]),
+                                     -np.arctan(dx / self.camera_matrix[0, 0]), 0.0])
+        pose = self.last.world_from_camera.copy()
+        pose[:3, :3] = pose[:3, :3] @ turn.as_matrix()
+        return pose
+
     def _predicted_world_from_camera(self, prior_world_from_tip: np.ndarray | None
                                      ) -> np.ndarray | None:
         """The camera pose expected now: from the prior tip pose if given, else ORB-SLAM2's
@@ -420,11 +589,12 @@ class VisionPoseEstimator:
     def _match_by_projection(self, pixels: np.ndarray, descriptors: np.ndarray,
                              map_descriptors: np.ndarray, map_points: np.ndarray,
                              camera_from_world: np.ndarray, width: int,
-                             height: int) -> tuple[np.ndarray, np.ndarray]:
+                             height: int, radius_px: float | None = None
+                             ) -> tuple[np.ndarray, np.ndarray]:
         """Match features to map points projected near them (search by projection).
 
         Each feature takes its nearest descriptor among the map points projected within
-        ``search_radius_px``, if within ``max_descriptor_distance`` and below ``ratio`` times the
+        ``radius_px`` (default ``search_radius_px``), if within ``max_descriptor_distance`` and below ``ratio`` times the
         second nearest; each map point keeps its closest feature. Returns (feature, map) indices.
         """
         empty = np.empty(0, dtype=np.int64)
@@ -433,7 +603,7 @@ class VisionPoseEstimator:
         front = np.flatnonzero(depth > self.min_depth_m)
         projected = (points_camera[front, :2] / depth[front, None]
                      * np.diag(self.camera_matrix)[:2] + self.camera_matrix[:2, 2])
-        radius = float(self.search_radius_px)
+        radius = float(self.search_radius_px if radius_px is None else radius_px)
         inside = ((projected[:, 0] > -radius) & (projected[:, 0] < width + radius)
                   & (projected[:, 1] > -radius) & (projected[:, 1] < height + radius))
         candidates = front[inside]
@@ -591,9 +761,14 @@ class VisionPoseEstimator:
         return float(np.sqrt(max(np.trace(d_tip @ covariance @ d_tip.T), 0.0)))
 
     # ------------------------------------------------------------------ helpers
+    @staticmethod
+    def _gray(image: np.ndarray) -> np.ndarray:
+        if image.ndim == 3:
+            return cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2GRAY)
+        return image
+
     def _detect(self, image: np.ndarray):
-        gray = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
-        return self._orb.detectAndCompute(gray, None)
+        return self._orb.detectAndCompute(self._gray(image), None)
 
     def _estimate(self, world_from_camera: np.ndarray, error_px: float, inliers: int,
                   lost: bool) -> VisionEstimate:

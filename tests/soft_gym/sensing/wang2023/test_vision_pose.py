@@ -7,6 +7,7 @@ error) under partial occlusion, glare and blur (Figs. 6-7).
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
@@ -14,7 +15,8 @@ from scipy.spatial.transform import Rotation
 
 from soft_gym.robots import get_preset
 from soft_gym.sensing.wang2023.exploration import spiral_fractions
-from soft_gym.sensing.wang2023.vision_pose import VisionPoseEstimator, _cross
+from soft_gym.sensing.wang2023.vision_pose import (MATCH_STAGES, VisionPoseEstimator, _cross,
+                                                  _Keyframe)
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.engines.pybullet.simulator import ArmSimulator
 
@@ -175,43 +177,151 @@ def test_search_by_projection_matches_a_slow_reference():
     assert sorted(zip(query.tolist(), train.tolist())) == reference
 
 
-def test_a_pose_prior_replaces_the_motion_model_under_jerky_motion(monkeypatch):
-    """With a new random pressure every frame the constant-velocity prediction misses and each
-    frame is matched against the whole local map; a tip-pose prior from another sensor (here the
-    true pose, as F-emp approximates it) keeps the search by projection working."""
+def _track_random_pressures(options: dict, use_prior: bool = False, frames: int = 80,
+                            high: float = 0.5) -> tuple[dict[str, int], float, int]:
+    """A random pressure every control period, up to ``high`` of the range (the image jumps
+    between frames): the stages that decided the frames, the mean tip error (mm) and the frames
+    lost."""
     spec = get_preset("wang2023")
     rng = np.random.default_rng(4)
-    pressures = spec.p_pre_pa + rng.uniform(0.0, 0.5, (80, 3)) * (spec.p_max_pa - spec.p_pre_pa)
-    results = {}
-    for use_prior in (False, True):
-        sim = ArmSimulator(spec)
-        sim.reset(settle_s=0.5)
-        camera = EyeInHandCamera()
-        camera.reset(sim, np.random.default_rng(0))
-        tip_from_camera = np.eye(4)
-        tip_from_camera[:3, 3] = camera.offset_m
-        estimator = VisionPoseEstimator(camera.K(), tip_from_camera)
-        estimator.calibrate(*camera.render_clean(sim), camera.pose_matrix(sim))
-        full_matches = []
-        original = estimator._match_all
-        monkeypatch.setattr(estimator, "_match_all",
-                            lambda *args: full_matches.append(1) or original(*args))
-        errors = []
-        for target in pressures:
-            sim.set_pressures(target)
-            sim.step_physics(spec.control_period_s)
-            prior = None
-            if use_prior:
-                prior = camera.pose_matrix(sim) @ np.linalg.inv(tip_from_camera)
-            estimate = estimator.update(camera.read(sim, sim.time_s), camera.last_depth, prior)
-            errors.append(np.linalg.norm(estimate.position_m - sim.tip_pose()[0]) * 1000)
-        sim.close()
-        results[use_prior] = (len(full_matches), float(np.mean(errors)))
-    assert results[False][0] > 20, results
-    assert results[True][0] <= 3, results
-    assert results[True][1] < 2.0, results
+    pressures = spec.p_pre_pa + rng.uniform(0.0, high, (frames, 3)) * (spec.p_max_pa
+                                                                       - spec.p_pre_pa)
+    sim = ArmSimulator(spec)
+    sim.reset(settle_s=0.5)
+    camera = EyeInHandCamera()
+    camera.reset(sim, np.random.default_rng(0))
+    tip_from_camera = np.eye(4)
+    tip_from_camera[:3, 3] = camera.offset_m
+    estimator = VisionPoseEstimator(camera.K(), tip_from_camera, **options)
+    estimator.calibrate(*camera.render_clean(sim), camera.pose_matrix(sim))
+    errors, lost = [], 0
+    for target in pressures:
+        sim.set_pressures(target)
+        sim.step_physics(spec.control_period_s)
+        prior = None
+        if use_prior:
+            prior = camera.pose_matrix(sim) @ np.linalg.inv(tip_from_camera)
+        estimate = estimator.update(camera.read(sim, sim.time_s), camera.last_depth, prior)
+        errors.append(np.linalg.norm(estimate.position_m - sim.tip_pose()[0]) * 1000)
+        lost += estimate.lost
+    sim.close()
+    assert sum(estimator.match_stages.values()) == frames  # every frame had features
+    return estimator.match_stages, float(np.mean(errors)), lost
+
+
+OLD_MATCHING = {"image_motion_prediction": False, "wide_search_factor": None}
+
+
+def test_a_pose_prior_replaces_the_motion_model_under_jerky_motion():
+    """Under a random pressure every control period the motion model mispredicts and, with the
+    image-motion stage and the wider window off, most frames are matched against the whole
+    local map; a tip-pose prior from another sensor (here the true pose, as F-emp approximates
+    it) keeps the search by projection working."""
+    stages, _, _ = _track_random_pressures(OLD_MATCHING)
+    assert stages["whole_map"] > 20 and stages["image_motion"] == stages["wide_window"] == 0
+    stages, error_mm, _ = _track_random_pressures(OLD_MATCHING, use_prior=True)
+    assert stages["whole_map"] <= 3, stages
+    assert error_mm < 2.0
+    estimator = _estimator()
+    estimator.last = estimator._estimate(WORLD_FROM_CAMERA, 0.5, 100, False)
     with pytest.raises(ValueError, match="prior_world_from_tip"):
         estimator.update(np.zeros((120, 160, 3), np.uint8) + 100, None, np.eye(3))
+
+
+def test_the_image_motion_replaces_the_whole_map_under_jerky_motion():
+    """A random pressure over the whole range every control period (the motion model misses most
+    frames), without a prior: once the misses are the rule, the last pose turned by the image's
+    shift (and, if needed, the wider window) keeps the search by projection working, as a prior
+    from another sensor does, and tracking is as accurate as with the whole-map matching."""
+    stages, error_mm, lost = _track_random_pressures({}, high=1.0)
+    old_stages, old_error_mm, old_lost = _track_random_pressures(OLD_MATCHING, high=1.0)
+    # the whole map only until the motion model has missed 6 of 10 frames, and after losses
+    assert stages["whole_map"] <= 0.5 * old_stages["whole_map"], (stages, old_stages)
+    assert stages["image_motion"] > 20, stages
+    assert error_mm < 2.0 and error_mm <= 1.1 * old_error_mm, (error_mm, old_error_mm)
+    assert lost <= old_lost
+
+
+def _texture(seed: int = 0, shape: tuple[int, int] = (120, 160)) -> np.ndarray:
+    """A smooth random grey texture (uint8)."""
+    noise = np.random.default_rng(seed).random((shape[0] // 4, shape[1] // 4))
+    return (255 * cv2.resize(noise, shape[::-1], interpolation=cv2.INTER_CUBIC).clip(0, 1)
+            ).astype(np.uint8)
+
+
+@pytest.mark.parametrize("shift_px", [(5.0, -3.0), (-8.0, 0.0), (0.0, 6.0)])
+def test_image_motion_turns_the_camera_so_the_scene_moves_by_the_shift(shift_px) -> None:
+    """A frame whose content moved by (dx, dy) px: the turned pose projects the point that was at
+    the principal point of the last frame (at any depth) to the principal point + (dx, dy), to
+    the phase correlation's sub-pixel accuracy, and keeps the camera's position."""
+    dx, dy = shift_px
+    K_image = np.array([[150.0, 0.0, 80.0], [0.0, 150.0, 60.0], [0.0, 0.0, 1.0]])
+    estimator = VisionPoseEstimator(K_image, np.eye(4))
+    last = _pose([0.2, -0.1, 0.3], [0.01, -0.02, 0.15])
+    estimator.last = estimator._estimate(last, 0.5, 100, False)
+    image = _texture().astype(np.float32)
+    moved = cv2.warpAffine(image, np.array([[1.0, 0.0, dx], [0.0, 1.0, dy]]), (160, 120),
+                           borderMode=cv2.BORDER_REFLECT)
+    estimator._last_gray = image
+    turned = estimator._turned_by_image_motion(moved)
+    np.testing.assert_array_equal(turned[:3, 3], last[:3, 3])
+    for depth_m in (0.05, 0.5):
+        point = last[:3, :3] @ np.array([0.0, 0.0, depth_m]) + last[:3, 3]
+        camera = np.linalg.inv(turned)
+        p = camera[:3, :3] @ point + camera[:3, 3]
+        pixel = K_image[:2, :2] @ (p[:2] / p[2]) + K_image[:2, 2]
+        np.testing.assert_allclose(pixel, [80.0 + dx, 60.0 + dy], atol=0.3)
+
+
+def test_jerky_motion_tries_the_image_motion_first(monkeypatch) -> None:
+    """While the motion model missed at least 6 of the last 10 frames, including the last one,
+    a frame searches from the image's motion first; otherwise from the motion model first."""
+    estimator = _estimator()
+    points, pixels = _scene(200)
+    descriptors = np.random.default_rng(1).integers(0, 256, (200, 32), dtype=np.uint8)
+    estimator.keyframes = [_Keyframe(descriptors, points, WORLD_FROM_CAMERA.copy(), 200,
+                                     octaves=np.zeros(200, np.int64))]
+    estimator.last = estimator._estimate(WORLD_FROM_CAMERA, 0.5, 200, False)
+    estimator.previous = estimator.last
+    estimator._last_gray = np.zeros((240, 320), np.float32)
+    keypoints = [cv2.KeyPoint(float(u), float(v), 7.0) for u, v in pixels]
+
+    class Detector:  # the scene's own keypoints and descriptors, whatever the image
+        @staticmethod
+        def detectAndCompute(gray, mask):
+            return keypoints, descriptors
+
+    monkeypatch.setattr(estimator, "_orb", Detector())
+    turned = _pose([0.1, -0.2, 0.05], [0.01, 0.02, -0.03])
+    monkeypatch.setattr(estimator, "_turned_by_image_motion", lambda gray: turned)
+    centres = []
+    original = estimator._search_by_projection
+
+    def search(frame, local_map, centre, start, radius):
+        centres.append("image_motion" if centre is turned
+                       else "second search" if radius == 3.0 else "prediction")
+        return original(frame, local_map, centre, start, radius)
+
+    monkeypatch.setattr(estimator, "_search_by_projection", search)
+    image = np.zeros((240, 320), np.uint8)
+    # the image motion only once the motion model missed 6 of the last 10 frames; first
+    # when it missed the last one
+    for misses, searches in (([True] * 5 + [False] * 5, ["prediction"]),
+                             ([True] * 6 + [False] * 4, ["prediction"]),
+                             ([False] * 4 + [True] * 6, ["image_motion", "second search"])):
+        estimator._misses = list(misses)
+        estimator.previous = estimator.last
+        estimator._last_gray = np.zeros((240, 320), np.float32)
+        centres.clear()
+        estimator.update(image)
+        # the first search tracked the frame; the image motion's pose is searched again, from
+        # itself in half the window (refine_radius_factor)
+        assert centres == searches
+        # the motion model predicted this still camera exactly: no miss recorded
+        assert estimator._misses == (list(misses) + [False])[-10:]
+    assert estimator.match_stages == {"prediction": 2, "image_motion": 1, "wide_window": 0,
+                                      "whole_map": 0}
+    assert tuple(estimator.match_stages) == MATCH_STAGES
 
 
 # ==========================================================================================
@@ -987,6 +1097,10 @@ def test_defaults() -> None:
 @pytest.mark.parametrize("options", [
     {"min_inliers": 4}, {"n_features": 10}, {"ratio": 1.0}, {"keyframe_window": 0},
     {"search_radius_px": None}, {"max_descriptor_distance": 256}, {"max_descriptor_distance": 1},
+    {"image_motion_prediction": False}, {"wide_search_factor": None},
+    {"wide_search_factor": 1.5}, {"wide_search_factor": 3}, {"image_motion_min_misses": 0},
+    {"image_motion_min_misses": 10}, {"refine_radius_factor": None},
+    {"refine_radius_factor": 0.25},
 ])
 def test_boundary_settings_are_accepted(options: dict) -> None:
     estimator = _estimator(**options)
@@ -1014,6 +1128,21 @@ def test_boundary_settings_are_accepted(options: dict) -> None:
                                      r"\(0, 256\], got 0$"),
     ({"max_descriptor_distance": 257}, r"^max_descriptor_distance must be an integer"),
     ({"max_descriptor_distance": 80.0}, r"^max_descriptor_distance must be an integer"),
+    ({"image_motion_prediction": 1}, r"^image_motion_prediction must be True or False, got 1$"),
+    ({"image_motion_prediction": "yes"}, r"^image_motion_prediction must be True or False"),
+    ({"wide_search_factor": 1.0}, r"^wide_search_factor must be a finite number > 1 or None, "
+                                  r"got 1\.0$"),
+    ({"wide_search_factor": float("nan")}, r"^wide_search_factor must be a finite number > 1"),
+    ({"wide_search_factor": True}, r"^wide_search_factor must be a finite number > 1"),
+    ({"wide_search_factor": "2"}, r"^wide_search_factor must be a finite number > 1"),
+    ({"refine_radius_factor": 0.0}, r"^refine_radius_factor must be a finite number > 0 or "
+                                    r"None, got 0\.0$"),
+    ({"refine_radius_factor": float("inf")}, r"^refine_radius_factor must be a finite"),
+    ({"image_motion_min_misses": 11}, r"^image_motion_min_misses must be an integer in "
+                                      r"\[0, 10\], got 11$"),
+    ({"image_motion_min_misses": -1}, r"^image_motion_min_misses must be an integer"),
+    ({"image_motion_min_misses": 6.0}, r"^image_motion_min_misses must be an integer"),
+    ({"image_motion_min_misses": True}, r"^image_motion_min_misses must be an integer"),
 ])
 def test_bad_settings_are_named_first(options: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
