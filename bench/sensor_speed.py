@@ -7,12 +7,11 @@ next to one with ground-truth feedback (their ratio is the cost of the sensing),
 slow spiral (a turn every 8 s, 5-30 % of the pressure range) and, for fused feedback, by a random
 action per step, with the vision tracker on its own (the default), with F-emp's pose as its
 prior (``sensing={"femp_prior": True}``) and with the tracker's matching as it was before the
-image-motion prediction and the wider window (``image_motion_prediction=False,
-wide_search_factor=None``: a frame the motion model mispredicts is matched against the whole
-local map); for each random-action run, the share of frames each matching stage decided
-(``VisionPoseEstimator.match_stages``). Last, the time to make a fused env in a new process
-with the calibration taken from the disk cache (:mod:`soft_gym.sensing.calibration_cache`),
-beside the calibration itself.
+image-motion stage (``image_motion_prediction=False``: a frame the motion model mispredicts is
+matched against the whole local map); for each random-action run, the share of frames each
+matching stage decided (``VisionPoseEstimator.match_stages``). Last, the time to make a fused
+env in a new process with the calibration taken from the disk cache
+(:mod:`soft_gym.sensing.calibration_cache`), beside the calibration itself.
 
     python bench/sensor_speed.py [--steps 300] [--json out.json]
 """
@@ -91,13 +90,12 @@ def main(argv: list[str] | None = None) -> None:
     # the env steps with the slow spiral (smooth motion, the vision tracker's search by
     # projection from the motion model holds) and with a random pressure every step (the worst
     # case: the image jumps and the motion model mispredicts nearly every frame)
-    old_matching = {"image_motion_prediction": False, "wide_search_factor": None}
     stages = {}
     for feedback, actions, variant in (("ground_truth", "spiral", ""), ("fused", "spiral", ""),
                                        ("fused", "random", ""), ("fused", "random", "femp_prior"),
                                        ("fused", "random", "old_matching")):
         sensing = {"": {}, "femp_prior": {"femp_prior": True},
-                   "old_matching": {"vision": old_matching}}[variant]
+                   "old_matching": {"vision": {"image_motion_prediction": False}}}[variant]
         env = gym.make("SoftArmReach-v0", feedback=feedback, episode_steps=10**6,
                        **({"sensing": sensing} if sensing else {}))
         env.reset(seed=0)
@@ -144,7 +142,7 @@ def main(argv: list[str] | None = None) -> None:
           f"{1e6 / results['env_step_fused_random_actions_femp_prior']['mean_us']:.0f} "
           "(random actions, F-emp prior), "
           f"{1e6 / results['env_step_fused_random_actions_old_matching']['mean_us']:.0f} "
-          "(random actions, the matching without image motion or the wider window: "
+          "(random actions, the matching without the image-motion stage: "
           f"{results['random_actions_speedup_over_old_matching']:.2f}x slower)")
     print("share of random-action frames decided by each matching stage "
           "(the rest lost before matching):")

@@ -6,8 +6,8 @@
 Only what loading and provenance need is kept: the model, its VecNormalize statistics, the
 resolved config, versions, the training summary and the learning curve (no replay buffer or
 checkpoints, so the repository stays small), and ``evaluation.yaml``: the agent's nominal
-tracking error by :func:`nominal_evaluation`, which ``tests/agents/policies/test_shipped_agents.py``
-checks the agent against (within 20 %).
+tracking error by :func:`nominal_evaluation`, which
+``tests/agents/policies/test_shipped_agents.py`` checks the agent against (within 20 %).
 """
 
 from __future__ import annotations
@@ -21,7 +21,9 @@ import numpy as np
 import yaml
 
 import soft_gym  # noqa: F401  (registers the env ids)
-from agents.policies import SHIPPED_DIR, make_policy, mark_model_file, model_normalization_mark
+from agents.policies import (SHIPPED_DIR, BaselinePolicy, make_policy, mark_model_file,
+                             model_normalization_mark, resolve_sb3_path)
+from eval.runner import run_episode
 from soft_gym._cli import HelpFormatter
 from train.trainer import (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE, MODEL_FILE,
                            NORMALIZATION_FILE)
@@ -31,21 +33,34 @@ EVALUATION_FILE = "evaluation.yaml"
 EVALUATION_SEED = 123
 
 
-def _episode_errors(env: gym.Env, act) -> np.ndarray:
-    """Tip errors (mm) of one episode reset with :data:`EVALUATION_SEED`, acting by ``act``."""
-    observation, _ = env.reset(seed=EVALUATION_SEED)
-    errors = []
-    while True:
-        observation, _, terminated, truncated, info = env.step(act(observation))
-        errors.append(info["error_mm"])
-        if terminated or truncated:
-            return np.array(errors)
+class _PrePressure(BaselinePolicy):
+    """Every chamber held at its pre-pressure (action -1 in the absolute mode): the error an
+    agent that tracks must stay far below."""
+
+    name = "pre_pressure"
+
+    def __init__(self, env: gym.Env) -> None:
+        self.env = env.unwrapped
+        self._action = -np.ones(env.action_space.shape, np.float32)
+
+    def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        return self._action.copy(), None
+
+
+def _agent_directory(agent: str | Path) -> Path:
+    """The directory of an agent given as a path or a shipped agent's name
+    (:func:`~agents.policies.resolve_sb3_path`), refused unless it holds config.yaml."""
+    directory = resolve_sb3_path(agent)
+    if not (directory / "config.yaml").is_file():
+        raise ValueError(f"agent {str(agent)!r} is neither a directory holding config.yaml nor a "
+                         f"shipped agent in {SHIPPED_DIR}")
+    return directory
 
 
 def nominal_evaluation(agent: str | Path) -> dict:
-    """A shipped agent's nominal tracking: one episode of the env it trained on, with its recipe's
-    keyword arguments less the randomisation (its feedback and path, no load), reset with seed
-    123, deterministic actions.
+    """A shipped agent's nominal tracking: one episode (:func:`eval.runner.run_episode`) of the
+    env it trained on, with its recipe's keyword arguments less the randomisation (its feedback
+    and path, no load), reset with seed 123, deterministic actions.
 
     :param agent: the agent's directory, or a shipped agent's name.
     :return: ``settled_error_mm``, the mean tip error (mm) after the first quarter of the steps
@@ -53,21 +68,15 @@ def nominal_evaluation(agent: str | Path) -> dict:
         chamber at its pre-pressure over the same episode; the env id and keyword arguments,
         the reset seed and the steps.
     """
-    directory = Path(agent)
-    if not (directory / "config.yaml").is_file():
-        directory = SHIPPED_DIR / str(agent)
-    if not (directory / "config.yaml").is_file():
-        raise ValueError(f"agent {str(agent)!r} is neither a directory holding config.yaml nor a "
-                         f"shipped agent in {SHIPPED_DIR}")
+    directory = _agent_directory(agent)
     config = yaml.safe_load((directory / "config.yaml").read_text())
     env_kwargs = {key: value for key, value in config["env_kwargs"].items()
                   if key != "randomization"}
     env = gym.make(config["env_id"], **env_kwargs)
     try:
-        policy = make_policy(f"sb3:{directory}", env=env)
-        errors = _episode_errors(env, lambda obs: policy.predict(obs, deterministic=True)[0])
-        resting = _episode_errors(env,
-                                  lambda obs: -np.ones(env.action_space.shape, np.float32))
+        errors = run_episode(env, make_policy(f"sb3:{directory}", env=env),
+                             seed=EVALUATION_SEED)["error_mm"]
+        resting = run_episode(env, _PrePressure(env), seed=EVALUATION_SEED)["error_mm"]
     finally:
         env.close()
     return {"settled_error_mm": float(errors[len(errors) // 4:].mean()),
@@ -80,8 +89,8 @@ def write_evaluation(directory: str | Path) -> dict:
     its ``evaluation.yaml``; returns it."""
     evaluation = nominal_evaluation(directory)
     text = ("# Nominal tracking of this agent, written by python -m train.ship (train/ship.py,\n"
-            "# nominal_evaluation); tests/agents/policies/test_shipped_agents.py checks the agent\n"
-            "# against settled_error_mm (within 20 %).\n")
+            "# nominal_evaluation); tests/agents/policies/test_shipped_agents.py checks the\n"
+            "# agent against settled_error_mm (within 20 %).\n")
     (Path(directory) / EVALUATION_FILE).write_text(text + yaml.safe_dump(evaluation,
                                                                          sort_keys=False))
     return evaluation
@@ -129,13 +138,12 @@ def main(argv: list[str] | None = None) -> None:
     if args.evaluate is not None:
         if args.run_dir is not None:
             parser.error("--evaluate takes agents already shipped: give no run_dir or name")
-        for agent in args.evaluate:
-            directory = Path(agent) if Path(agent).is_dir() else SHIPPED_DIR / agent
-            if not (directory / "model.zip").is_file():
-                parser.error(f"--evaluate: {agent!r} is not a shipped agent (no model.zip in "
-                             f"{directory})")
-        for agent in args.evaluate:
-            directory = Path(agent) if Path(agent).is_dir() else SHIPPED_DIR / agent
+        directories = [resolve_sb3_path(agent) for agent in args.evaluate]
+        for agent, directory in zip(args.evaluate, directories):
+            if not all((directory / file).is_file() for file in ("model.zip", "config.yaml")):
+                parser.error(f"--evaluate: {agent!r} is not a shipped agent (no model.zip with a "
+                             f"config.yaml in {directory})")
+        for directory in directories:
             evaluation = write_evaluation(directory)
             print(f"{directory}: settled error {evaluation['settled_error_mm']:.2f} mm "
                   f"(resting {evaluation['resting_error_mm']:.2f} mm)")

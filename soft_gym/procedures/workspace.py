@@ -2,8 +2,8 @@
 
 Built once per arm on a private simulator and kept in the calibration cache (in the process and
 on disk, :mod:`soft_gym.sensing.calibration_cache`), so every environment reuses it: the reach
-task draws its targets from them and the track task places its paths. Built afresh it takes
-0.3-2.5 s (zou2022's long arm the slowest), which every new process paid when making an env.
+task draws its targets from them and the track task places its paths. Built afresh it took
+2.5 s on zou2022's arm, which every new process paid when making that arm's env.
 :func:`reach_distances` tells how far given points (a track path's targets) lie from what the
 arm reaches, by the pressure search of :mod:`soft_gym.procedures.positioning`.
 """

@@ -460,9 +460,10 @@ class VisionPoseEstimator:
             self._flush_pending()
             return estimate
         self._last_gray = gray_float
-        if predicted is not None and self.search_radius_px is not None:
-            # the motion model missed when the inliers' map points, projected from its
-            # prediction, lie further than the window from where this frame's pose puts them
+        if gray_float is not None and predicted is not None and self.search_radius_px is not None:
+            # the motion model missed (counted only where the image-motion stage may use it)
+            # when the inliers' map points, projected from its prediction, lie further than
+            # the window from where this frame's pose puts them
             inlier_points = map_points[train[self._inliers]]
             miss_px = np.median(np.linalg.norm(
                 self._project(inlier_points, predicted)
@@ -594,8 +595,9 @@ class VisionPoseEstimator:
         """Match features to map points projected near them (search by projection).
 
         Each feature takes its nearest descriptor among the map points projected within
-        ``radius_px`` (default ``search_radius_px``), if within ``max_descriptor_distance`` and below ``ratio`` times the
-        second nearest; each map point keeps its closest feature. Returns (feature, map) indices.
+        ``radius_px`` (default ``search_radius_px``), if within ``max_descriptor_distance`` and
+        below ``ratio`` times the second nearest; each map point keeps its closest feature.
+        Returns (feature, map) indices.
         """
         empty = np.empty(0, dtype=np.int64)
         points_camera = map_points @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]

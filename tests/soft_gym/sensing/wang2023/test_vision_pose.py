@@ -209,7 +209,7 @@ def _track_random_pressures(options: dict, use_prior: bool = False, frames: int 
     return estimator.match_stages, float(np.mean(errors)), lost
 
 
-OLD_MATCHING = {"image_motion_prediction": False, "wide_search_factor": None}
+OLD_MATCHING = {"image_motion_prediction": False}
 
 
 def test_a_pose_prior_replaces_the_motion_model_under_jerky_motion():
@@ -228,18 +228,36 @@ def test_a_pose_prior_replaces_the_motion_model_under_jerky_motion():
         estimator.update(np.zeros((120, 160, 3), np.uint8) + 100, None, np.eye(3))
 
 
-def test_the_image_motion_replaces_the_whole_map_under_jerky_motion():
+@pytest.fixture(scope="module")
+def jerky_tracking() -> tuple[tuple, tuple]:
+    """Random pressures over the whole range every control period, tracked with the image-motion
+    stage and without it: (stages, mean error mm, frames lost) of each."""
+    return (_track_random_pressures({}, high=1.0),
+            _track_random_pressures(OLD_MATCHING, high=1.0))
+
+
+def test_the_image_motion_replaces_the_whole_map_under_jerky_motion(jerky_tracking):
     """A random pressure over the whole range every control period (the motion model misses most
     frames), without a prior: once the misses are the rule, the last pose turned by the image's
     shift (and, if needed, the wider window) keeps the search by projection working, as a prior
     from another sensor does, and tracking is as accurate as with the whole-map matching."""
-    stages, error_mm, lost = _track_random_pressures({}, high=1.0)
-    old_stages, old_error_mm, old_lost = _track_random_pressures(OLD_MATCHING, high=1.0)
+    (stages, error_mm, lost), (old_stages, old_error_mm, old_lost) = jerky_tracking
     # the whole map only until the motion model has missed 6 of 10 frames, and after losses
     assert stages["whole_map"] <= 0.5 * old_stages["whole_map"], (stages, old_stages)
     assert stages["image_motion"] > 20, stages
     assert error_mm < 2.0 and error_mm <= 1.1 * old_error_mm, (error_mm, old_error_mm)
     assert lost <= old_lost
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "aimed at: at most a tenth of the jerky frames matched against the whole map; measured 11 "
+    "of 80 (63 without the image-motion stage): the first 6 misses go to the whole map before "
+    "the stage opens (image_motion_min_misses, which keeps the flick run's whole-map matching), "
+    "so does the frame after each of the 2 losses, and 3 more where the stage had closed or "
+    "found too few matches"))
+def test_at_most_a_tenth_of_jerky_frames_are_matched_against_the_whole_map(jerky_tracking):
+    (stages, _, _), _ = jerky_tracking
+    assert stages["whole_map"] <= 8, stages
 
 
 def _texture(seed: int = 0, shape: tuple[int, int] = (120, 160)) -> np.ndarray:
