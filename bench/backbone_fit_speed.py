@@ -14,7 +14,7 @@ for one core.
 Example::
 
     PYTHONPATH=. python bench/backbone_fit_speed.py
-    PYTHONPATH=. python bench/backbone_fit_speed.py --noise-mm 3 --paper-only --json fit.json
+    PYTHONPATH=. python bench/backbone_fit_speed.py --noise-mm 3 --curve cubic_fallback --json fit.json
 """
 
 from __future__ import annotations
@@ -33,7 +33,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from soft_gym._cli import HelpFormatter  # noqa: E402
 from soft_gym.kinematics import cc_backbone, lengths_from_curvature  # noqa: E402
-from soft_gym.sensing.zhao2021.backbone_fit import fit_backbone, mean_backbone_error_m  # noqa: E402
+from soft_gym.sensing.zhao2021.backbone_fit import (BACKBONE_CURVES, fit_backbone,  # noqa: E402
+                                                    mean_backbone_error_m)
 
 SEGMENT_M = 0.15
 CHAMBER_DISTANCE_M = 0.01
@@ -62,8 +63,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--noise-mm", type=float, default=0.0,
                         help="key-point noise xi: U(-xi, xi) mm per coordinate of P1..P6")
     parser.add_argument("--n-points", type=int, default=60, help="points of the fitted backbone")
-    parser.add_argument("--paper-only", action="store_true",
-                        help="keep the paper's least-squares fits (no residual fallback)")
+    parser.add_argument("--curve", choices=BACKBONE_CURVES, default="paper",
+                        help="the fitted curve (default: paper, eqs. 7-10 in each "
+                             "subsegment's frame)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the shapes and the noise")
     parser.add_argument("--json", type=Path, default=None, help="write the results here")
     args = parser.parse_args(argv)
@@ -79,12 +81,12 @@ def main(argv: list[str] | None = None) -> dict:
 
     times, errors, methods = [], [], []
     for points, backbone in zip(key_points, true):
-        fit = fit_backbone(points, args.n_points, paper_only=args.paper_only)  # warm-up
+        fit = fit_backbone(points, args.n_points, curve=args.curve)  # warm-up
         errors.append(mean_backbone_error_m(backbone, fit.points_m))
         methods.extend(fit.methods)
         for _ in range(args.repeats):
             start = time.perf_counter()
-            fit_backbone(points, args.n_points, paper_only=args.paper_only)
+            fit_backbone(points, args.n_points, curve=args.curve)
             times.append(time.perf_counter() - start)
     ms = 1e3 * np.array(times)
     errors_mm = 1e3 * np.array(errors)
@@ -101,8 +103,7 @@ def main(argv: list[str] | None = None) -> dict:
                      "scipy": scipy.__version__},
         "machine": platform.platform(),
     }
-    mode = "paper_only" if args.paper_only else "default cascade"
-    print(f"fit_backbone ({mode}): {args.shapes} random two-segment CC shapes up to "
+    print(f"fit_backbone (curve={args.curve}): {args.shapes} random two-segment CC shapes up to "
           f"{args.max_bend_deg:g} deg per segment, key-point noise xi = {args.noise_mm:g} mm, "
           f"{args.n_points} output points, {len(ms)} timed fits")
     print(f"{'':14s}{'mean':>9s}{'p95':>9s}{'max':>9s}")

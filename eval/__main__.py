@@ -82,6 +82,7 @@ from soft_gym._cli import (HelpFormatter, check_environment, check_output_dir, f
 from soft_gym._validation import SEED_MAX
 from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
+from soft_gym.sensing.zhao2021.backbone_fit import BACKBONE_CURVES
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 
 
@@ -448,6 +449,11 @@ def _zhao2021_parser(sub) -> argparse.ArgumentParser:
                                ">= 24 together (paper: 4000 2000)")
     zhao2021.add_argument("--iterations", type=positive_int, default=1000,
                           help="most training iterations of the networks, >= 1 (paper: 1000)")
+    zhao2021.add_argument("--backbone-curve", choices=BACKBONE_CURVES, default="paper",
+                          help="the curve fitted through the key points (shape and control): "
+                               "paper = eqs. 7-10 in each subsegment's frame (default), "
+                               "paper_base_frame = all in the base frame, cubic_fallback = a "
+                               "cubic where the paper's curve misses a key point by > 1 mm")
     zhao2021.add_argument("--baselines", nargs="*", default=[],
                           help="further policies on the free point-to-point run and circle, "
                                "e.g. lwpr_rwr cc_model sb3:PATH")
@@ -464,7 +470,8 @@ def _run_zhao2021(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
                      f"{args.samples}")
     _check_baselines(parser, args.baselines, zhao2021_module.check_baselines)
     config = ReconstructionConfig(n_free=free, n_loaded=loaded,
-                                  max_iterations=args.iterations)
+                                  max_iterations=args.iterations,
+                                  backbone_curve=args.backbone_curve)
     zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
                                    baselines=tuple(args.baselines))
     print(f"output directory: {args.out}")

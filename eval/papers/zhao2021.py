@@ -2,6 +2,10 @@
 fixed and adaptive step distance (Zhao et al. 2021, Sections VI-B to VI-D, Tables III-IV,
 Figs. 10-12).
 
+``table2`` (Section V-A, Table II): the backbone fit on FEM-like shapes with noisy key points,
+every curve of :data:`~soft_gym.sensing.zhao2021.backbone_fit.BACKBONE_CURVES`
+(:mod:`eval.papers.zhao2021_table2`).
+
 ``shape`` (Section VI-B): the SR model (:mod:`soft_gym.sensing.zhao2021.shape_reconstruction`: the paper's
 exploration, six SFE-PD networks, the backbone fit) is built once, then each test configuration
 is reached the way the exploration moves (two chambers by 0.05 bar per 1 s step, so the networks
@@ -54,6 +58,7 @@ from tqdm import tqdm
 import soft_gym  # noqa: F401
 from agents.policies import make_policy
 from eval.report import package_version, save_figure, write_json
+from eval.papers.zhao2021_table2 import plot_table2, report_table2, run_table2
 from eval.runner import agent_error
 from soft_gym.robots.presets import (base_point_from_paper, get_preset,
                                      paper_point_from_base, paper_pressures_to_chambers)
@@ -66,7 +71,7 @@ from soft_gym.sensors.strain_gauge import StrainGauges
 from soft_gym.engines import make_simulator
 from soft_gym.procedures.positioning import drive_tip_to
 
-EXPERIMENTS = ("shape", "p2p", "sway", "circle")
+EXPERIMENTS = ("table2", "shape", "p2p", "sway", "circle")
 PRESET = "zhao2021"
 OBS = ("pose", "target", "strain", "pressure")
 SETTLE_S = 1.0
@@ -149,7 +154,8 @@ def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True
                 "key_point_errors_mm": np.linalg.norm(estimate.key_points_m - true_points,
                                                       axis=1) * 1000.0,
                 "backbone_error_mm": mean_backbone_error_m(
-                    resample_by_arc_length(truth, 60), estimate.backbone_m) * 1000.0}
+                    resample_by_arc_length(truth, 60), estimate.backbone_m) * 1000.0,
+                "fit_methods": estimate.fit_methods}
 
     table3_pressures = paper_pressures_to_chambers(np.array(TABLE3_PRESSURES_BAR) * 1e5)
     configurations = [table3_pressures] + [rng.uniform(0.0, 1.0, n) * p_max for _ in range(11)]
@@ -161,14 +167,17 @@ def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True
         bar.update(1)
     table3 = results[0]
     table4 = {}
+    measured_loaded = []
     for load_g in TABLE4_LOADS_G:
         errors = []
         for pressures in configurations[1:5]:
             errors.append(measure(pressures, load_g / 1000.0))
             bar.update(1)
+        measured_loaded += errors
         table4[load_g] = {"max_mm": [float(e["key_point_errors_mm"].max()) for e in errors],
                           "mean_backbone_mm": [float(e["backbone_error_mm"]) for e in errors]}
     bar.close()
+    methods = [method for r in results + measured_loaded for method in r["fit_methods"]]
     true_paper_frame = paper_point_from_base(table3["true_mm"] / 1000.0) * 1000.0
     return {"config": asdict(config), "training": report,
             "table3": {"pressures_bar": list(TABLE3_PRESSURES_BAR),
@@ -180,7 +189,9 @@ def run_shape(config: ReconstructionConfig, seed: int = 0, progress: bool = True
             "mean_backbone_error_mm": float(np.mean([r["backbone_error_mm"] for r in results])),
             "key_point_errors_mm": np.array([r["key_point_errors_mm"] for r in results]
                                             ).mean(axis=0).tolist(),
-            "table4": table4}
+            "table4": table4,
+            "backbone_curve": config.backbone_curve,
+            "subsegments": {method: methods.count(method) for method in ("isf", "cubic")}}
 
 
 # ---------------------------------------------------------------------------- control (VI-C/D)
@@ -474,7 +485,7 @@ def _exploration(sensing: dict) -> dict:
 # ---------------------------------------------------------------------------- report
 def report_tables(results: dict) -> str:
     """Markdown tables of every experiment run."""
-    lines = []
+    lines = report_table2(results["table2"]) + [""] if "table2" in results else []
     shape = results.get("shape")
     if shape:
         t3 = shape["table3"]
@@ -486,9 +497,12 @@ def report_tables(results: dict) -> str:
                          f"{_xyz(t3['simulated_mm'][i])} | {t3['errors_mm'][i]:.2f} | "
                          f"{TABLE3_PAPER_ERRORS_MM[i]:.2f} | "
                          f"{t3['simulated_vs_paper_mm'][i]:.1f} |")
+        counts = shape["subsegments"]
         lines += ["", f"Mean backbone error, eq. (21), 12 configurations: "
                       f"{shape['mean_backbone_error_mm']:.2f} mm (paper "
-                      f"{PAPER_MEAN_BACKBONE_ERROR_MM} mm)", "",
+                      f"{PAPER_MEAN_BACKBONE_ERROR_MM} mm); curve {shape['backbone_curve']!r}, "
+                      f"subsegments fitted by the ISF {counts['isf']}, by the cubic "
+                      f"{counts['cubic']} (all runs)", "",
                   "Table IV: backbone error by tip load, max key-point error / mean backbone "
                   "error (mm)", "", "| load | 1 | 2 | 3 | 4 | paper means |",
                   "|---|---|---|---|---|---|"]
@@ -564,8 +578,8 @@ def plot_control(path: str | Path, results: dict) -> Path:
 def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
                    config: ReconstructionConfig | None = None,
                    baselines: tuple[str, ...] = (), progress: bool = True) -> dict:
-    """Run the experiments for every seed; write ``zhao2021_seed<N>.md/.png`` and
-    ``zhao2021.json`` under ``out`` and print the tables."""
+    """Run the experiments for every seed; write ``zhao2021_seed<N>.md/.png`` (and
+    ``zhao2021_table2_seed<N>.png``) and ``zhao2021.json`` under ``out`` and print the tables."""
     unknown = sorted(set(experiments) - set(EXPERIMENTS))
     if unknown:
         raise ValueError(f"experiments must be among {list(EXPERIMENTS)}, got {unknown}")
@@ -577,6 +591,9 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
         seeded = ReconstructionConfig(**{**asdict(base), "seed": seed})
         sensing = {k: v for k, v in asdict(seeded).items()}
         results: dict[str, Any] = {}
+        if "table2" in experiments:
+            results["table2"] = run_table2(seed, progress=progress)
+            plot_table2(out / f"zhao2021_table2_seed{seed}.png", results["table2"])
         if "shape" in experiments:
             results["shape"] = run_shape(seeded, seed, progress)
         if "p2p" in experiments:

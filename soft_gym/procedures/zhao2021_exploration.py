@@ -189,11 +189,17 @@ def cached_reconstruction(spec: ArmSpec, gauges, config: ReconstructionConfig,
                                                      data)
         return {"state": reconstructor.state(), "report": report}
 
+    settings = asdict(config)
+    del settings["backbone_curve"]  # fitted after the networks: the cache key as it was
     parts = {"what": "zhao2021 shape reconstruction", "arm": repr(spec),
-             "gauges": sensor_description(gauges, GAUGE_SETTINGS), "config": asdict(config),
+             "gauges": sensor_description(gauges, GAUGE_SETTINGS), "config": settings,
              **(key or {})}
     if data is not None:
         parts["exploration"] = exploration_digest(data)
-    return cached(parts, compute, use_cache=use_cache,
-                  use=lambda result: (ShapeReconstructor.from_state(result["state"]),
-                                      result["report"]))
+
+    def use(result: dict[str, Any]) -> tuple[ShapeReconstructor, dict[str, Any]]:
+        reconstructor = ShapeReconstructor.from_state(result["state"])
+        reconstructor.curve = config.backbone_curve
+        return reconstructor, result["report"]
+
+    return cached(parts, compute, use_cache=use_cache, use=use)

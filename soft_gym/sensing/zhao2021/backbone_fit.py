@@ -18,26 +18,48 @@ P_{2j}``, and each is written ``z = psi_j(x, y)`` and fitted in two stages (eq. 
   Levenberg-Marquardt refinement (``D`` and ``G`` follow in closed form), so every constraint
   holds by construction.
 
+**Which frame** (``curve``, :data:`BACKBONE_CURVES`). The paper shows the fit for the first
+subsegment (Fig. 6(a)) and states ``Z'_1 = tan(89 deg)`` there: the ISF's steep start (Fig. 6(b),
+"tangent with the Y axis") meets a backbone leaving the base along ``+z``. Read with every
+subsegment in the base frame (``"paper_base_frame"``), a later subsegment starts with the finite
+slope its predecessor ended on, and the convex branch that constraint 3 keeps can only flatten
+from there: a subsegment that turns back towards ``+z`` (the second segment of an S-bend, or of
+bends in planes 120 deg apart, which the paper's Table II shapes are) is missed by up to 60 mm.
+The default ``"paper"`` fits each subsegment as the paper fits the first, in a frame at its start
+whose ``z`` is the tangent there, so slope continuity (constraint 5) is the ISF's steep start in
+every subsegment. Measured on the paper's eight Table II configurations simulated on the zhao2021
+arm (:mod:`eval.papers.zhao2021_table2`): mean eq. (21) error 2.0 mm at ``xi = 0`` (paper
+2.4-3.2 mm) against 10.0 mm in the base frame (22-24 mm on two of the eight shapes). The
+inclination of 89 deg matters (85 deg gave 1.0 mm, 89.9 deg 10 mm); the printed 89 is kept.
+
+**Continuity.** Eqs. (8) and (10) put subsegment ``j + 1``'s start on the key point ``P_{2j}``
+with the slope subsegment ``j`` ended with; where the least-squares curve of subsegment ``j``
+misses ``P_{2j}`` the backbone is bridged by a straight piece (:attr:`BackboneFit.node_gaps_m`),
+as printed. Starting subsegment ``j + 1`` where ``j`` ended instead (a gapless curve) measured
+2.7 mm at ``xi = 0`` and 4.9-6.9 mm with noise against 2.2 and 4.0-5.9 mm: a missed key point
+then shifts the rest of the backbone. ``"cubic_fallback"`` chains its curves this way.
+
 Where the paper's parametrisation breaks down this module is explicit, and each subsegment records
 the method it used (:attr:`SubsegmentFit.method`) and why (:attr:`SubsegmentFit.reason`):
 
 (a) **Frame of the parabola.** ``y = Y(x)`` needs ``x`` monotonic along the subsegment, which
-    fails for a bend towards ``+-y``. Each subsegment is therefore fitted in a frame turned about
-    ``z`` so that the horizontal projection of its chord (start point to ``P_{2j}``) lies along
-    ``+x``. Rotation about ``z`` leaves ``t`` unchanged, and the slope constraint of eq. (8) is
-    carried over as the horizontal direction of the previous subsegment's end tangent. The
+    fails for a bend towards ``+-y``. Each subsegment is therefore fitted in its frame turned
+    about ``z`` so that the horizontal projection of its chord (start point to ``P_{2j}``) lies
+    along ``+x``. Rotation about ``z`` leaves ``t`` unchanged, and the slope constraint of eq. (8)
+    is carried over as the horizontal direction of the previous subsegment's end tangent. The
     reported ``A, B, C`` are in that turned frame (:attr:`SubsegmentFit.frame_angle_rad`). If the
     middle key point does not project strictly between the chord's ends, or the carried-over
     direction is more than 80 deg from the chord (the curve would turn back in ``x``), the
-    subsegment falls back to (c). When the previous end tangent is within 1 deg of vertical its
-    horizontal direction is undefined (it is noise); then, as the paper does at the base, no slope
-    constraint is imposed and the parabola interpolates the three points.
+    subsegment falls back to (c). When the previous end tangent is within 1 deg of vertical
+    (always, in a subsegment's own frame) its horizontal direction is undefined; then, as the
+    paper does at the base, no slope constraint is imposed and the parabola interpolates the
+    three points.
 (b) **Horizontal coordinate t.** ``t = sqrt(x^2 + y^2)`` is not monotonic along a backbone whose
     horizontal projection does not run straight away from the axis (an S-bend crossing back
     towards the axis, any bend out of a vertical plane through the axis), and then ``Z(t)`` is
     not a function. This module uses ``t`` = horizontal path length of the fitted XOY curves from
-    the base (closed form for a parabola), which equals ``sqrt(x^2 + y^2)`` for a backbone in a
-    vertical plane through the axis (every single-plane bend) and is always increasing. With this
+    the start of the frame (closed form for a parabola), which equals ``sqrt(x^2 + y^2)`` for a
+    curve in a vertical plane through the frame's axis and is always increasing. With this
     ``t``, ``dZ/dt`` is the cotangent of the tangent's inclination from vertical, so continuity of
     ``dZ/dt`` and of the horizontal direction is continuity of the 3-D tangent.
 (c) **Fallback.** A subsegment is fitted instead by the cubic ``r(tau) = P_start + c1 tau +
@@ -45,30 +67,18 @@ the method it used (:attr:`SubsegmentFit.method`) and why (:attr:`SubsegmentFit.
     the previous end tangent at its start (``+z`` at the base) and through its two other key
     points, when
 
-    * its horizontal chord is shorter than ``min_horizontal_extent_m`` (1 mm: nearly vertical,
-      no usable ``t``-range), or it fails a check of (a);
+    * its horizontal chord is shorter than ``min_horizontal_extent_m`` (1 mm: nearly straight
+      along the frame's ``z``, no usable ``t``-range), or it fails a check of (a);
     * its start tangent or key points do not rise (the ISF with ``D > 0`` only rises, so a
       backbone bent past horizontal cannot be represented);
-    * the paper's fit misses one of its two key points by more than ``tolerance_m`` (1 mm), i.e.
-      the constraints of eq. (10) bind. This is common: with the start slope ``tan(89 deg)`` the
-      convex ISF part (``2 max(t - E) < F``) cannot pass through the first three key points of a
-      constant-curvature bend (misses of 6-8 mm for 30-90 deg bends), nor through a subsegment
-      that bends back towards vertical (S-bends, misses up to ~20 mm). Dropping the constraint
-      ``2 max(t - E) < F`` makes those fits exact but puts the end of the subsegment on the
-      concave ISF branch, whose end tangent was measured 10-28 deg off, which then spoils the next
-      subsegment; so it is not used;
-    * the accepted ISF curve would be more than 1.1 times as long as the key-point polyline (a
-      detour between the key points, seen with noisy key points of a nearly straight arm).
+    * with ``curve="cubic_fallback"`` only: the paper's fit misses one of its two key points by
+      more than ``tolerance_m`` (1 mm), i.e. the constraints of eq. (10) bind (with the start
+      slope ``tan(89 deg)`` the convex ISF part cannot pass through the first three key points
+      of a constant-curvature bend: misses of 6-8 mm for 30-90 deg bends), or the ISF curve
+      would be more than 1.1 times as long as the key-point polyline (a detour).
 
-    ``paper_only=True`` keeps the paper's least-squares fits whatever their residuals (only the
-    structural fallbacks apply), for comparison.
-
-Continuity: the least-squares parabola of eq. (8) need not pass through ``P_{2j}``, so subsegment
-``j + 1`` starts at the *fitted* end of subsegment ``j`` (its "node", within the reported
-residual of ``P_{2j}``) with its end tangent: the backbone is continuous with a continuous tangent
-(the paper states the start constraints on the key point itself, which would leave a gap of that
-residual). For a backbone in one vertical plane the XOY residuals vanish and every key point is
-interpolated.
+    The cubic fallback is exact through the key points (0.04-0.6 mm on constant-curvature
+    shapes, 0.2 mm on the Table II shapes) but it is not the paper's method.
 
 Eqs. (8) and (10) print the objective as a sum of residual norms; here it is the sum of squares
 (closed form for eq. (8); for eq. (10) the two free parameters meet the two points exactly
@@ -78,25 +88,34 @@ The fitted curve is sampled densely and resampled to ``n_points`` points evenly 
 length from ``P0`` to its end; :func:`mean_backbone_error_m` is the shape error of eq. (21).
 Lengths are in metres; quaternions are scalar-last ``(x, y, z, w)``.
 
-Measured (tests/soft_gym/sensing/zhao2021/test_backbone_fit.py, bench/backbone_fit_speed.py; two 150 mm constant-curvature
-segments, key points every 50 mm): eq. (21) error 0.04 / 0.09 / 0.24 mm for single-plane bends of
-30 / 60 / 90 deg per segment, <= 0.6 mm for S-bends and bends of up to 120 deg per segment in any
-planes (``paper_only=True``: 1.0 / 2.9 / 4.5 mm, near the paper's 2.4-3.2 mm of Table II, and
-21-28 mm on S-bends); with key-point noise ``U(-xi, xi)`` the error grows to about the mean
-key-point displacement (3.7 mm at ``xi = 4 mm``). About 0.6 ms per fit on one core.
+Measured (tests/soft_gym/sensing/zhao2021/test_backbone_fit.py, bench/backbone_fit_speed.py,
+``python -m eval zhao2021 --experiments table2``): see docs/architecture.md ("zhao2021 backbone
+fit") for the error of each curve on constant-curvature shapes and on Table II's shapes with
+key-point noise ``xi``.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from soft_gym._validation import as_finite_array, require_integer, require_positive
+from soft_gym._validation import as_finite_array, require_choice, require_integer, require_positive
 
 __all__ = ["BackboneFit", "SubsegmentFit", "fit_backbone", "mean_backbone_error_m",
-           "resample_by_arc_length", "BASE_SLOPE_DEG"]
+           "resample_by_arc_length", "BASE_SLOPE_DEG", "BACKBONE_CURVES"]
+
+BACKBONE_CURVES = ("paper", "paper_base_frame", "cubic_fallback")
+"""The curves :func:`fit_backbone` can fit (its ``curve``):
+
+* ``"paper"`` (default): eqs. (7)-(10), each subsegment in its own frame, ``z`` along the tangent
+  at its start, so every subsegment starts as the paper's first does (``Z' = tan(89 deg)``);
+* ``"paper_base_frame"``: eqs. (7)-(10) with every subsegment in the base frame, the start slopes
+  carried over from the previous subsegment there;
+* ``"cubic_fallback"``: ``"paper_base_frame"``, with the cubic of choice (c) wherever the paper's
+  curve misses a key point by more than ``tolerance_m`` (exact through the key points, not the
+  paper's method)."""
 
 #: Inclination of ``Z_1`` at the base: ``Z'_1(x_0, y_0) = tan(89 deg)`` (zhao2021, after eq. (10)).
 BASE_SLOPE_DEG = 89.0
@@ -140,6 +159,11 @@ class SubsegmentFit:
         t_end_m: The same at the end.
         key_point_residuals_m: Distances (2,) of ``P_{2j-1}, P_{2j}`` from the fitted curve at
             their parameter values.
+        frame: Rotation (3, 3) whose columns are the fitting frame's axes in the base frame
+            (before the turn about its ``z`` by ``frame_angle_rad``): the identity in the base
+            frame, ``z`` along the start tangent for ``curve="paper"``. ``parabola_abc``,
+            ``isf_defg``, ``t_start_m`` and ``t_end_m`` are in this frame (``t`` from the
+            subsegment's start for ``curve="paper"``); points and tangents are in the base frame.
     """
 
     method: str
@@ -154,6 +178,7 @@ class SubsegmentFit:
     key_point_residuals_m: np.ndarray
     t_start_m: float
     t_end_m: float
+    frame: np.ndarray = field(default_factory=lambda: np.eye(3))
 
 
 @dataclass(frozen=True)
@@ -162,7 +187,7 @@ class BackboneFit:
 
     Attributes:
         points_m: Backbone (n_points, 3), evenly spaced by arc length from ``P0`` to the tip.
-        tip_position_m: End of the fitted curve (3,) (``P6`` up to the XOY least-squares residual).
+        tip_position_m: End of the fitted curve (3,) (``P6`` up to the last subsegment's residual).
         tip_tangent: Unit tangent (3,) at the tip.
         tip_quaternion: ``(x, y, z, w)``, the smallest rotation taking ``+z`` to ``tip_tangent``.
         length_m: Arc length of the fitted curve.
@@ -187,6 +212,13 @@ class BackboneFit:
     def fallback_subsegments(self) -> tuple[int, ...]:
         """1-based indices ``j`` of the subsegments not fitted by the paper's ISF."""
         return tuple(j + 1 for j, sub in enumerate(self.subsegments) if sub.method != "isf")
+
+    @property
+    def node_gaps_m(self) -> np.ndarray:
+        """Distance (2,) from where subsegments 1 and 2 end to where 2 and 3 start (m): the
+        straight bridges of eqs. (8) and (10), zero for ``curve="cubic_fallback"``."""
+        return np.array([np.linalg.norm(after.start_m - before.end_m)
+                         for before, after in zip(self.subsegments[:-1], self.subsegments[1:])])
 
     @property
     def key_point_residuals_m(self) -> np.ndarray:
@@ -225,8 +257,8 @@ def mean_backbone_error_m(true_points_m: np.ndarray, fitted_points_m: np.ndarray
     return float(np.mean(np.linalg.norm(true - fitted, axis=1)))
 
 
-def fit_backbone(key_points_m: np.ndarray, n_points: int = 60, *, tolerance_m: float = 1e-3,
-                 min_horizontal_extent_m: float = 1e-3, paper_only: bool = False) -> BackboneFit:
+def fit_backbone(key_points_m: np.ndarray, n_points: int = 60, *, curve: str = "paper",
+                 tolerance_m: float = 1e-3, min_horizontal_extent_m: float = 1e-3) -> BackboneFit:
     """Fit the backbone through the key points with zhao2021 eqs. (7)-(10).
 
     Args:
@@ -234,13 +266,14 @@ def fit_backbone(key_points_m: np.ndarray, n_points: int = 60, *, tolerance_m: f
             ``P1..P6`` (6, 3) with ``P0`` at the origin. ``P0`` is the base: the backbone leaves it
             along ``+z``.
         n_points: Points of the returned backbone, evenly spaced by arc length (>= 2).
-        tolerance_m: Largest distance of a subsegment's two fitted key points from the fitted
-            curve before the fallbacks (c) are tried.
+        curve: One of :data:`BACKBONE_CURVES`: ``"paper"`` (default; each subsegment in its own
+            frame), ``"paper_base_frame"`` or ``"cubic_fallback"``. Only the structural
+            fallbacks of (c) (no usable ``t``-range, ``x`` not monotonic, not rising) replace
+            the paper's curve in the first two; :attr:`BackboneFit.methods` names the curve of
+            every subsegment.
+        tolerance_m: ``"cubic_fallback"`` only: the largest distance of a subsegment's two
+            fitted key points from the paper's curve before the cubic replaces it.
         min_horizontal_extent_m: Horizontal chord below which a subsegment is fitted by the cubic.
-        paper_only: Keep the paper's least-squares fit (eq. (8), and eq. (10) with its
-            constraints as printed) whatever it misses the key points by; only the structural
-            fallbacks of (c) (no usable ``t``-range, ``x`` not monotonic, not rising) apply. For
-            comparison with the paper; the default cascade is more accurate.
 
     Returns:
         A :class:`BackboneFit`.
@@ -252,10 +285,9 @@ def fit_backbone(key_points_m: np.ndarray, n_points: int = 60, *, tolerance_m: f
         raise ValueError(f"key_points_m must have shape (7, 3) (P0..P6) or (6, 3) (P1..P6, P0 at "
                          f"the origin), got shape {points.shape}")
     n_points = require_integer("n_points", n_points, 2)
+    curve = require_choice("curve", curve, BACKBONE_CURVES)
     tolerance_m = require_positive("tolerance_m", tolerance_m)
     min_horizontal_extent_m = require_positive("min_horizontal_extent_m", min_horizontal_extent_m)
-    if not isinstance(paper_only, (bool, np.bool_)):
-        raise ValueError(f"paper_only must be a bool, got {paper_only!r}")
     scale = float(np.max(np.linalg.norm(points - points[0], axis=1)))
     if scale <= 0.0:
         raise ValueError(f"key_points_m must not all coincide with P0, got {points.tolist()}")
@@ -266,15 +298,22 @@ def fit_backbone(key_points_m: np.ndarray, n_points: int = 60, *, tolerance_m: f
     subsegments, dense = [], [start[None]]
     for j in range(3):
         q1, q2 = points[2 * j + 1], points[2 * j + 2]
-        sub, samples, t_start = _fit_subsegment(start, tangent, t_start, q1, q2, tolerance_m,
-                                                min_horizontal_extent_m, paper_only)
+        if curve == "paper":
+            sub, samples = _fit_in_own_frame(start, tangent, q1, q2, min_horizontal_extent_m)
+        else:
+            sub, samples, t_start = _fit_subsegment(start, tangent, t_start, q1, q2, tolerance_m,
+                                                    min_horizontal_extent_m,
+                                                    curve == "paper_base_frame")
         subsegments.append(sub)
-        dense.append(samples[1:])
-        start, tangent = sub.end_m, sub.end_tangent
-    curve = np.vstack(dense)
-    length = float(np.sum(np.linalg.norm(np.diff(curve, axis=0), axis=1)))
-    return BackboneFit(points_m=resample_by_arc_length(curve, n_points),
-                       tip_position_m=start.copy(), tip_tangent=tangent.copy(),
+        dense.append(samples[1:] if j == 0 or curve == "cubic_fallback" else samples)
+        tangent = sub.end_tangent
+        # eqs. (8) and (10) start subsegment j + 1 on the key point P_2j (a straight bridge
+        # from where subsegment j ended, if it missed it); the cubic fallback chains its curves
+        start = sub.end_m if curve == "cubic_fallback" else q2.copy()
+    polyline = np.vstack(dense)
+    length = float(np.sum(np.linalg.norm(np.diff(polyline, axis=0), axis=1)))
+    return BackboneFit(points_m=resample_by_arc_length(polyline, n_points),
+                       tip_position_m=subsegments[-1].end_m.copy(), tip_tangent=tangent.copy(),
                        tip_quaternion=_quaternion_from_z(tangent), length_m=length,
                        key_points_m=points, subsegments=tuple(subsegments))
 
@@ -337,6 +376,21 @@ def _fit_subsegment(start: np.ndarray, tangent: np.ndarray, t_start: float, q1: 
                           f"polyline (> {_MAX_LENGTH_RATIO}): it detours between the key points")
     sub, samples = _cubic(start, tangent, q1, q2, reason, t_start)
     return sub, samples, sub.t_end_m
+
+
+def _fit_in_own_frame(start: np.ndarray, tangent: np.ndarray, q1: np.ndarray, q2: np.ndarray,
+                      min_extent_m: float) -> tuple[SubsegmentFit, np.ndarray]:
+    """``curve="paper"``: the subsegment fitted as the paper fits the first, in a frame at its
+    start whose ``z`` is the tangent there (the smallest rotation from the base frame's ``+z``;
+    the turn about ``z`` does not matter, choice (a) turns the frame to the chord)."""
+    frame = _rotation_from_z(tangent)
+    local_q1, local_q2 = (q1 - start) @ frame, (q2 - start) @ frame
+    sub, samples, _ = _fit_subsegment(np.zeros(3), np.array([0.0, 0.0, 1.0]), 0.0, local_q1,
+                                      local_q2, 1.0, min_extent_m, True)
+    samples = start + samples @ frame.T
+    end_tangent = frame @ sub.end_tangent
+    return replace(sub, start_m=start.copy(), end_m=samples[-1].copy(),
+                   end_tangent=end_tangent / np.linalg.norm(end_tangent), frame=frame), samples
 
 
 def _isf_applicable(start: np.ndarray, tangent: np.ndarray, q1: np.ndarray, q2: np.ndarray,
@@ -535,6 +589,18 @@ def _solve_isf(slope: float, sigma1: float, eta1: float, eta2: float,
         if not improved or gain < 1e-12 * best:
             break
     return p[0], p[1]
+
+
+def _rotation_from_z(direction: np.ndarray) -> np.ndarray:
+    """The smallest rotation (3, 3) taking ``+z`` to the unit vector ``direction`` (Rodrigues;
+    the identity for ``+z`` itself, a half turn about ``x`` for ``-z``)."""
+    x, y, z = direction
+    if z < -1.0 + 1e-12:
+        return np.diag([1.0, -1.0, -1.0])
+    k = 1.0 / (1.0 + z)
+    return np.array([[1.0 - k * x * x, -k * x * y, x],
+                     [-k * x * y, 1.0 - k * y * y, y],
+                     [-x, -y, z]])
 
 
 def _quaternion_from_z(direction: np.ndarray) -> np.ndarray:

@@ -20,10 +20,11 @@ from typing import Any
 
 import numpy as np
 
-from soft_gym._validation import (fields_from_options, require_integer, require_learning_rate,
-                                  require_non_negative, require_positive, require_seed)
+from soft_gym._validation import (fields_from_options, require_choice, require_integer,
+                                  require_learning_rate, require_non_negative, require_positive,
+                                  require_seed)
 from soft_gym.robots.spec import ArmSpec
-from soft_gym.sensing.zhao2021.backbone_fit import fit_backbone
+from soft_gym.sensing.zhao2021.backbone_fit import BACKBONE_CURVES, fit_backbone
 from soft_gym.sensing.zhao2021.shape_exploration import N_KEY_POINTS
 
 
@@ -43,6 +44,9 @@ class ReconstructionConfig:
             0.001 left the tip's validation error at 2.2 mm against 1.4 mm).
         dropout: between SFE and PD (0; the paper's 0.3, see :mod:`soft_gym.sensing.zhao2021.sfe_pd`).
         n_points: backbone points returned by the fit (60, eq. 21's count).
+        backbone_curve: the curve fitted through the key points, one of
+            :data:`~soft_gym.sensing.zhao2021.backbone_fit.BACKBONE_CURVES` (``"paper"``, eqs.
+            7-10; it changes no training, so models are shared between curves).
         seed: seeds the exploration, the readings' noise and the training.
     """
 
@@ -55,6 +59,7 @@ class ReconstructionConfig:
     learning_rate: float = 1e-2
     dropout: float = 0.0
     n_points: int = 60
+    backbone_curve: str = "paper"
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -71,6 +76,7 @@ class ReconstructionConfig:
         if not isinstance(self.dropout, (int, float)) or not 0.0 <= self.dropout < 1.0:
             raise ValueError(f"dropout must be a number in [0, 1), got {self.dropout!r}")
         require_integer("n_points", self.n_points, 2)
+        require_choice("backbone_curve", self.backbone_curve, BACKBONE_CURVES)
         require_seed("seed", self.seed)
 
     @classmethod
@@ -87,6 +93,7 @@ class ShapeEstimate:
     backbone_m: np.ndarray        # (n_points, 3), m, from the base to the tip
     tip_position_m: np.ndarray    # (3,), m
     tip_quaternion: np.ndarray    # (x, y, z, w)
+    fit_methods: tuple[str, ...] = ()  # the curve of each subsegment ("isf" or "cubic")
 
 
 class ShapeReconstructor:
@@ -95,11 +102,14 @@ class ShapeReconstructor:
     Args:
         predictor: a trained :class:`~soft_gym.sensing.zhao2021.sfe_pd.SFEPDPredictor`.
         n_points: points of the returned backbone, evenly spaced by arc length.
+        curve: the backbone fit's curve (:data:`~soft_gym.sensing.zhao2021.backbone_fit.
+            BACKBONE_CURVES`; ``"paper"``, eqs. 7-10).
     """
 
-    def __init__(self, predictor, n_points: int = 60) -> None:
+    def __init__(self, predictor, n_points: int = 60, curve: str = "paper") -> None:
         self.predictor = predictor
         self.n_points = require_integer("n_points", n_points, 2)
+        self.curve = require_choice("curve", curve, BACKBONE_CURVES)
 
     @property
     def window(self) -> int:
@@ -115,9 +125,10 @@ class ShapeReconstructor:
         """Key points and backbone from the last ``w + 1`` steps' pressures (Pa, ``(w + 1,
         n_chambers)``) and gauge readings (``(w + 1, n_gauges)``), oldest first."""
         points = self.key_points(pressures_pa, readings)
-        fit = fit_backbone(np.vstack([np.zeros(3), points]), n_points=self.n_points)
+        fit = fit_backbone(np.vstack([np.zeros(3), points]), n_points=self.n_points,
+                           curve=self.curve)
         return ShapeEstimate(points, fit.points_m, points[-1].copy(),
-                             np.asarray(fit.tip_quaternion, dtype=float))
+                             np.asarray(fit.tip_quaternion, dtype=float), fit.methods)
 
     def state(self) -> dict[str, Any]:
         return {"predictor": self.predictor.state(), "n_points": self.n_points}
@@ -168,7 +179,7 @@ def fit_reconstruction(spec: ArmSpec, data, config: ReconstructionConfig = Recon
                                learning_rate=config.learning_rate, progress=progress)
     finally:
         torch.set_num_threads(threads)
-    return ShapeReconstructor(predictor, config.n_points), {
+    return ShapeReconstructor(predictor, config.n_points, config.backbone_curve), {
         "iterations": report.iterations,
         "validation_rmse": report.validation_rmse.tolist(),
         "training_rmse": report.training_rmse.tolist()}
