@@ -454,6 +454,11 @@ def _zhao2021_parser(sub) -> argparse.ArgumentParser:
                                "paper = eqs. 7-10 in each subsegment's frame (default), "
                                "paper_base_frame = all in the base frame, cubic_fallback = a "
                                "cubic where the paper's curve misses a key point by > 1 mm")
+    zhao2021.add_argument("--paper-training", action="store_true",
+                          help="train the networks with the paper's settings where the defaults "
+                               "differ: SFE-PD dropout 0.3 and Adam at 0.001, the local IK "
+                               "network at 0.001 without its skip connection (separate cache "
+                               "entries; about as long to build as the defaults)")
     zhao2021.add_argument("--baselines", nargs="*", default=[],
                           help="further policies on the free point-to-point run and circle, "
                                "e.g. lwpr_rwr cc_model sb3:PATH")
@@ -469,11 +474,14 @@ def _run_zhao2021(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         parser.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
                      f"{args.samples}")
     _check_baselines(parser, args.baselines, zhao2021_module.check_baselines)
+    paper = zhao2021_module.PAPER_TRAINING if args.paper_training else {}
     config = ReconstructionConfig(n_free=free, n_loaded=loaded,
                                   max_iterations=args.iterations,
-                                  backbone_curve=args.backbone_curve)
+                                  backbone_curve=args.backbone_curve,
+                                  **paper.get("sensing", {}))
     zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
-                                   baselines=tuple(args.baselines))
+                                   baselines=tuple(args.baselines),
+                                   controller=paper.get("controller"))
     print(f"output directory: {args.out}")
 
 

@@ -7,6 +7,8 @@ import io
 import re
 from pathlib import Path
 
+import pytest
+
 import soft_gym
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -32,10 +34,12 @@ def test_the_readme_baseline_loop_runs_and_tracks():
     env.close()
 
 
+@pytest.mark.slow
 def test_the_readme_quick_builds_run_with_progress_bars(monkeypatch, capsys):
     """The README's quick builds of ``local_ik_asdm`` and ``lwpr_rwr``, built afresh (no
     cache): both finish with a trained model of the size asked for, and both show their
-    progress bars on stderr."""
+    progress bars on stderr. Slow (about 70 s on one core): both builds are also tested in
+    their own modules (``tests/agents/controllers``)."""
     (block,) = [block for block in _python_blocks(ROOT / "README.md") if ".pretrain()" in block]
     from soft_gym.sensing import calibration_cache
 

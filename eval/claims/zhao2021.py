@@ -231,7 +231,7 @@ CLAIMS = (
           "errors of P1-P6: 1.31, 1.30, 2.14, 1.70, 1.45, 1.51 mm (all under 3 mm)",
           "reproduced: every key point under 3 mm; partly: their mean under 3 mm",
           "zhao2021.shape", _key_points,
-          cause="seed 2's far tip P6 at 6.14 mm (P1-P5 under 1.7 mm on every seed; max 1.49 "
+          cause="seed 2's far tip P6 at 6.14 mm (P1-P5 under 1.7 mm on every seed; max 1.46 "
                 "and 1.15 mm on seeds 0-1): unknown"),
     Claim("zhao2021.table4_loads", "zhao2021", "Table IV, Section VI-B",
           "Tip loads up to 150 g change the reconstructed backbone's error only slightly.",
@@ -239,11 +239,11 @@ CLAIMS = (
           "reproduced: 150 g's mean backbone error at most 1.3 x the free one's; partly: at "
           "most 2 x",
           "zhao2021.shape", _loads_barely_matter,
-          cause="1.63 x on seed 0, 1.12 x on seed 1: the reconstruction from noise-free key "
-                "points is far better than the paper's (0.49-0.63 mm mean backbone error free "
-                "with the cubic_fallback curve, the default when these records were made; "
-                "the paper 5.75 mm), so the 0.07-0.31 mm that 150 g adds can be a large share "
-                "of it (the paper's load added 0.86 mm)"),
+          cause="1.87 x on seed 0, 2.79 x on seed 2 (1.14 x on seed 1): free, the "
+                "reconstruction is 3-7 x better than the paper's (mean backbone error 0.81-1.88 "
+                "mm with the paper's curve; the paper 5.75 mm), so the 0.3-1.5 mm that 150 g "
+                "adds (the paper's load: 0.86 mm) is a larger share of it; 150 g is twice the "
+                "75 g the networks learnt from"),
     Claim("zhao2021.p2p_asdm_fewest_steps", "zhao2021", "Fig. 11, Section VI-C1",
           "ASDM reaches the goal in fewer steps than a fixed 8 mm or 2 mm step.",
           "steps: ASDM 14, d = 8 24, d = 2 75",

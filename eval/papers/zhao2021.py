@@ -77,6 +77,12 @@ OBS = ("pose", "target", "strain", "pressure")
 SETTLE_S = 1.0
 """A controller step: one command held this long (the paper measures 1 s after each change)."""
 
+PAPER_TRAINING = {"sensing": {"dropout": 0.3, "learning_rate": 1e-3},
+                  "controller": {"learning_rate": 1e-3, "skip": False}}
+"""The paper's training settings where the defaults differ (``--paper-training``): the SFE-PD
+networks with its dropout of 0.3 and Adam at 0.001 (Section III-A), the local IK network at 0.001
+without the skip connection that adds ``A_n`` to its output (Section IV)."""
+
 TABLE3_PRESSURES_BAR = (0.0, 0.5, 0.6, 0.8, 0.7, 0.0)
 TABLE3_TRUE_MM = np.array([[-0.1, 0.5, 49.6], [4.2, 4.9, 90.1], [3.8, 9.6, 133.2],
                            [-22.6, 19.9, 172.9], [-35.9, 35.2, 210.8], [-58.7, 64.7, 248.5]])
@@ -324,9 +330,10 @@ def _summary_p2p(run: dict, tolerance_mm: float) -> dict:
 
 def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
             runs=P2P_RUNS, baselines: tuple[str, ...] = (),
-            max_steps: int = MAX_P2P_STEPS) -> dict:
+            max_steps: int = MAX_P2P_STEPS, controller: dict | None = None) -> dict:
     """Section VI-C-1's runs (and ``baselines`` on the free run), each at most ``max_steps``
-    controller steps."""
+    controller steps; ``controller``: further ``local_ik_asdm`` settings (its network's
+    training, e.g. :data:`PAPER_TRAINING`'s)."""
     goal = p2p_goal_m()
     free_start = p2p_start_m()
     results = {}
@@ -336,7 +343,8 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
         env = _make_env(sensing, scenario, start, goal, (max_steps + 2) * 20)
         try:
             policy = make_policy("local_ik_asdm", env, step_mm=step_mm, adaptive=adaptive,
-                                 exploration=_exploration(sensing), seed=seed)
+                                 exploration=_exploration(sensing), seed=seed,
+                                 **(controller or {}))
             run = _drive(env, policy, goal, max_steps, seed, f"p2p {label}", progress,
                          advance_within_mm=policy.tolerance_mm)
         finally:
@@ -354,8 +362,10 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
                               ).tolist(), "runs": results}
 
 
-def run_sway(sensing: dict, seed: int = 0, progress: bool = True) -> dict:
-    """Section VI-C-2: a swaying 119 g block, then a pull at the middle from step 7 to 12."""
+def run_sway(sensing: dict, seed: int = 0, progress: bool = True,
+             controller: dict | None = None) -> dict:
+    """Section VI-C-2: a swaying 119 g block, then a pull at the middle from step 7 to 12
+    (``controller`` as :func:`run_p2p`'s)."""
     goal = p2p_goal_m()
     paper_start = base_point_from_paper(np.array(P2P_START_MM) / 1000.0)
     toward_axis = -np.r_[paper_start[:2], 0.0] / np.linalg.norm(paper_start[:2])
@@ -369,7 +379,7 @@ def run_sway(sensing: dict, seed: int = 0, progress: bool = True) -> dict:
     env = _make_env(sensing, scenario, start, goal, (MAX_P2P_STEPS + 2) * 20)
     try:
         policy = make_policy("local_ik_asdm", env, step_mm=8.0, adaptive=True,
-                             exploration=_exploration(sensing), seed=seed)
+                             exploration=_exploration(sensing), seed=seed, **(controller or {}))
         run = _drive(env, policy, goal, MAX_P2P_STEPS, seed, "sway and pull", progress,
                      advance_within_mm=policy.tolerance_mm)
     finally:
@@ -408,10 +418,12 @@ def _summary_circle(run: dict, load_steps) -> dict:
 
 def run_circle(sensing: dict, seed: int = 0, progress: bool = True,
                baselines: tuple[str, ...] = (),
-               masses_kg: tuple[float, ...] = (0.0,) + CIRCLE_LOADS_KG) -> dict:
+               masses_kg: tuple[float, ...] = (0.0,) + CIRCLE_LOADS_KG,
+               controller: dict | None = None) -> dict:
     """Section VI-D: the circle free and with the 263 g block from step 29 to 60.
 
-    ``masses_kg``: the runs, by the block's mass (kg; 0: the free run)."""
+    ``masses_kg``: the runs, by the block's mass (kg; 0: the free run); ``controller`` as
+    :func:`run_p2p`'s."""
     points = circle_points_m()
     results = {}
     runs = [("free", 0.0) if mass == 0 else
@@ -424,7 +436,8 @@ def run_circle(sensing: dict, seed: int = 0, progress: bool = True,
         env = _make_env(sensing, scenario, points[0], points[0], (MAX_CIRCLE_STEPS + 2) * 20)
         try:
             policy = make_policy("local_ik_asdm", env, step_mm=8.0, adaptive=True,
-                                 exploration=_exploration(sensing), seed=seed)
+                                 exploration=_exploration(sensing), seed=seed,
+                                 **(controller or {}))
             run = _drive(env, policy, points[1:], MAX_CIRCLE_STEPS, seed, f"circle {label}",
                          progress, advance_within_mm=policy.tolerance_mm)
         finally:
@@ -577,9 +590,11 @@ def plot_control(path: str | Path, results: dict) -> Path:
 
 def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
                    config: ReconstructionConfig | None = None,
-                   baselines: tuple[str, ...] = (), progress: bool = True) -> dict:
+                   baselines: tuple[str, ...] = (), progress: bool = True,
+                   controller: dict | None = None) -> dict:
     """Run the experiments for every seed; write ``zhao2021_seed<N>.md/.png`` (and
-    ``zhao2021_table2_seed<N>.png``) and ``zhao2021.json`` under ``out`` and print the tables."""
+    ``zhao2021_table2_seed<N>.png``) and ``zhao2021.json`` under ``out`` and print the tables;
+    ``controller``: further ``local_ik_asdm`` settings for every control run."""
     unknown = sorted(set(experiments) - set(EXPERIMENTS))
     if unknown:
         raise ValueError(f"experiments must be among {list(EXPERIMENTS)}, got {unknown}")
@@ -597,11 +612,13 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
         if "shape" in experiments:
             results["shape"] = run_shape(seeded, seed, progress)
         if "p2p" in experiments:
-            results["p2p"] = run_p2p(sensing, seed, progress, baselines=baselines)
+            results["p2p"] = run_p2p(sensing, seed, progress, baselines=baselines,
+                                     controller=controller)
         if "sway" in experiments:
-            results["sway"] = run_sway(sensing, seed, progress)
+            results["sway"] = run_sway(sensing, seed, progress, controller=controller)
         if "circle" in experiments:
-            results["circle"] = run_circle(sensing, seed, progress, baselines=baselines)
+            results["circle"] = run_circle(sensing, seed, progress, baselines=baselines,
+                                           controller=controller)
         table = report_tables(results)
         print(f"\nzhao2021, seed {seed}\n{table}")
         (out / f"zhao2021_seed{seed}.md").write_text(table + "\n")

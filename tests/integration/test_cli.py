@@ -188,6 +188,7 @@ EVAL_BAD = [
     (["ho2018", "--seeds", "-1"], "--seeds", ">= 0"),
     (["zhao2021", "--samples", "-1", "5"], "--samples", ">= 0"),
     (["zhao2021", "--iterations", "0"], "--iterations", ">= 1"),
+    (["zhao2021", "--backbone-curve", "bezier"], "--backbone-curve", "paper_base_frame"),
     (["zhao2021", "--baselines", "sb3:/nonexistent/model"], "--baselines", "/nonexistent"),
     (["zou2022", "--samples", "5"], "--samples", ">= 20"),
     (["zou2022", "--epochs", "0"], "--epochs", ">= 1"),

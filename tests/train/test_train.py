@@ -105,7 +105,13 @@ def test_resume_without_a_model_is_refused(tmp_path):
         train(TrainRequest(resume=str(tmp_path), timesteps=10, progress=False))
 
 
-@pytest.mark.parametrize("algo", ALGORITHMS)
+SLOW_SMOKE = ("td3", "ddpg")
+"""Smoke trainings run only with ``-m slow`` (13-16 s each on one core): SAC's takes the same
+off-policy path in the default suite."""
+
+
+@pytest.mark.parametrize("algo", [pytest.param(algo, marks=pytest.mark.slow)
+                                  if algo in SLOW_SMOKE else algo for algo in ALGORITHMS])
 def test_smoke_training_saves_a_model_that_loads_back_identically(tmp_path, algo):
     hyperparameters = {"learning_starts": 200} if algo in ("sac", "td3", "ddpg") else {}
     if algo == "ppo":
