@@ -201,8 +201,10 @@ NO_OSCILLATION = (
     "the fixed 8 mm step does not oscillate here (its distance to the goal never rises; steps "
     "ASDM / d = 8 / d = 2: 7 / 7 / 28 on seed 0, 9 / 10 / 37 on seed 1): the local IK network's "
     "steps land about where they are "
-    "planned, so ASDM's growing step saves nothing over d = 8 (the paper's network, trained "
-    "with other settings, erred at 8 mm steps); the goal is also 72 mm from the paper's, the "
+    "planned, so ASDM's growing step saves nothing over d = 8; trained with the paper's "
+    "settings (--paper-training: SFE-PD dropout 0.3 and Adam at 0.001, the IK network at 0.001 "
+    "without its skip connection) d = 8 still never rises (7 / 9 / 40 steps, seed 0), so the "
+    "networks' accuracy does not explain it; the goal is also 72 mm from the paper's, the "
     "nearest point the preset reaches with 100 g")
 """The measured cause shared by the point-to-point claims that do not reproduce."""
 
