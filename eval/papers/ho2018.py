@@ -147,13 +147,16 @@ def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
                    lead_in_s: float = 15.0,
                    preset: str = "ho2018", pretrain_waypoints: int | None = None,
                    baselines: tuple[str, ...] = (), progress: bool = True,
+                   env_options: dict[str, Any] | None = None,
                    **controller_params: Any) -> dict[str, dict]:
     """Run every setting of experiment ``name`` once; returns per-run records (targets, tips,
     errors, per-cycle statistics).
 
     ``baselines``: further policies (``cc_model``, ``hybrid_gpr``, ``sb3:PATH``) run on the same
     rectangle under the load of the experiment's online run, for comparison (their own
-    calibration; ``controller_params`` go to ``lwpr_rwr`` only).
+    calibration; ``controller_params`` go to ``lwpr_rwr`` only, ``window`` among them replacing
+    the experiment's). ``env_options``: further ``gym.make`` keywords of every run's env (e.g.
+    ``sensor_config``).
     """
     if name not in EXPERIMENT_SPECS:
         raise ValueError(f"experiment must be one of {list(EXPERIMENT_SPECS)}, got {name!r}")
@@ -175,12 +178,13 @@ def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
             interface = {"obs": ("pose", "target", "pressure"), **agent.env_interface}
         env = gym.make("SoftArmReach-v0", preset=preset, feedback="em",
                        scenario=_scenario(run.load, lead_in_s, cycle_s),
-                       episode_steps=int(round(total_s / 0.05)) + 10, **interface)
+                       episode_steps=int(round(total_s / 0.05)) + 10, **interface,
+                       **(env_options or {}))
         try:
             if run.policy == "lwpr_rwr":
                 policy = make_policy("lwpr_rwr", env, online=run.online,
-                                     window=experiment.window, pretrain_waypoints=waypoints,
-                                     seed=seed, **controller_params)
+                                     **{"window": experiment.window, **controller_params},
+                                     pretrain_waypoints=waypoints, seed=seed)
                 report = policy.pretrain()
                 if path_m is None:
                     path_m = workspace_rectangle(workspace_surface(policy.pretraining_tips_mm()),
