@@ -43,11 +43,12 @@ BUDGET_MS = 1000.0 / 23.0
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--window", type=int, default=550,
-                        help="online window (samples; the filling experiment's 550)")
+                        help="online window (samples; the filling experiment's)")
     parser.add_argument("--decisions", type=int, default=600,
-                        help="decisions to run after the window has filled (>= 10)")
+                        help="decisions timed after the window has filled (>= 10)")
     parser.add_argument("--seed", type=int, default=0, help="seed (>= 0)")
     args = parser.parse_args(argv)
     if args.window < 1:

@@ -94,13 +94,14 @@ def report(results: dict[str, dict[str, Any]]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m eval.papers.ho2018_factors",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
         description="ho2018's static experiment (Table 1) with one factor changed at a time: "
                     "what sets the online learner's 2-3 mm floor. About 40 s per factor and "
                     "seed on one core once the pre-training is cached.")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2],
-                        help="seeds (>= 0; default 0 1 2)")
+                        help="seeds (>= 0)")
     parser.add_argument("--factors", nargs="+", default=list(FACTORS), metavar="FACTOR",
-                        help=f"which factors (default all: {', '.join(FACTORS)})")
+                        help=f"which factors, among: {', '.join(FACTORS)}")
     parser.add_argument("--out", type=Path, default=Path("results/ho2018_factors"),
                         help="output directory (made)")
     args = parser.parse_args(argv)
