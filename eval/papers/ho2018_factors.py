@@ -35,6 +35,7 @@ import numpy as np
 from tqdm import tqdm
 
 from eval.papers.ho2018 import run_experiment
+from soft_gym._cli import HelpFormatter, check_output_dir, seed_int
 
 NO_EM_NOISE = {"sensor_config": {"em": {"position_noise_m": 0.0, "orientation_noise_deg": 0.0}}}
 
@@ -93,23 +94,17 @@ def report(results: dict[str, dict[str, Any]]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m eval.papers.ho2018_factors",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        prog="python -m eval.papers.ho2018_factors", formatter_class=HelpFormatter,
         description="ho2018's static experiment (Table 1) with one factor changed at a time: "
                     "what sets the online learner's 2-3 mm floor. About 40 s per factor and "
                     "seed on one core once the pre-training is cached.")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2],
-                        help="seeds (>= 0)")
-    parser.add_argument("--factors", nargs="+", default=list(FACTORS), metavar="FACTOR",
-                        help=f"which factors, among: {', '.join(FACTORS)}")
+    parser.add_argument("--seeds", type=seed_int, nargs="+", default=[0, 1, 2], help="seeds")
+    parser.add_argument("--factors", nargs="+", default=list(FACTORS), choices=list(FACTORS),
+                        metavar="FACTOR", help=f"which factors, among: {', '.join(FACTORS)}")
     parser.add_argument("--out", type=Path, default=Path("results/ho2018_factors"),
                         help="output directory (made)")
     args = parser.parse_args(argv)
-    if any(seed < 0 for seed in args.seeds):
-        parser.error(f"--seeds must be >= 0, got {args.seeds}")
-    unknown = [name for name in args.factors if name not in FACTORS]
-    if unknown:
-        parser.error(f"--factors must be among {list(FACTORS)}, got {unknown}")
+    check_output_dir(parser, "--out", args.out)
     results = run_factors(args.seeds, args.factors)
     table = report(results)
     print(table)

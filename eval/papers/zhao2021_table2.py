@@ -103,9 +103,7 @@ def simulate_shapes(links_per_segment: int = LINKS_PER_SEGMENT, engine: str = "p
             sim.step_physics(HOLD_S)
             backbone = sim.backbone()
             shapes[name] = (np.vstack([np.zeros(3), key_points_from_backbone(spec, backbone)]),
-                            backbone)
-            for k, link in enumerate(links):
-                sim.set_external_force(f"table2_{k}", int(link), np.zeros(3))
+                            backbone)  # the next configuration replaces the four forces
     finally:
         sim.close()
     return shapes

@@ -301,9 +301,9 @@ def fit_backbone(key_points_m: np.ndarray, n_points: int = 60, *, curve: str = "
         if curve == "paper":
             sub, samples = _fit_in_own_frame(start, tangent, q1, q2, min_horizontal_extent_m)
         else:
-            sub, samples, t_start = _fit_subsegment(start, tangent, t_start, q1, q2, tolerance_m,
-                                                    min_horizontal_extent_m,
-                                                    curve == "paper_base_frame")
+            fallback_m = tolerance_m if curve == "cubic_fallback" else None
+            sub, samples, t_start = _fit_subsegment(start, tangent, t_start, q1, q2,
+                                                    min_horizontal_extent_m, fallback_m)
         subsegments.append(sub)
         dense.append(samples[1:] if j == 0 or curve == "cubic_fallback" else samples)
         tangent = sub.end_tangent
@@ -323,10 +323,14 @@ def fit_backbone(key_points_m: np.ndarray, n_points: int = 60, *, curve: str = "
 # --------------------------------------------------------------------------------------------
 
 def _fit_subsegment(start: np.ndarray, tangent: np.ndarray, t_start: float, q1: np.ndarray,
-                    q2: np.ndarray, tolerance_m: float, min_extent_m: float, paper_only: bool
+                    q2: np.ndarray, min_extent_m: float, fallback_tolerance_m: float | None
                     ) -> tuple[SubsegmentFit, np.ndarray, float]:
     """Fit one subsegment; returns the fit, dense samples (k, 3) from its start, and the
-    horizontal path length ``t`` at its end."""
+    horizontal path length ``t`` at its end. With ``fallback_tolerance_m`` the cubic replaces a
+    paper's curve that misses a key point by more than it (or detours); with ``None`` only the
+    structural fallbacks apply."""
+    keep_paper_curve = fallback_tolerance_m is None
+    tolerance_m = math.inf if keep_paper_curve else fallback_tolerance_m
     reason = _isf_applicable(start, tangent, q1, q2, min_extent_m)
     if not reason:
         chord = q2[:2] - start[:2]
@@ -348,7 +352,7 @@ def _fit_subsegment(start: np.ndarray, tangent: np.ndarray, t_start: float, q1: 
             a = (u1 * u1 * (v1 - b * u1) + u2 * u2 * (v2 - b * u2)) / (u1 ** 4 + u2 ** 4)
             slope = tangent[2] / horizontal
         xy_residual = max(abs(a * u1 * u1 + b * u1 - v1), abs(a * u2 * u2 + b * u2 - v2))
-        if xy_residual > tolerance_m and not paper_only:
+        if xy_residual > tolerance_m:
             reason = (f"XOY parabola misses a key point by {1e3 * xy_residual:.2f} mm "
                       f"> tolerance {1e3 * tolerance_m:.2f} mm")
         else:
@@ -362,7 +366,7 @@ def _fit_subsegment(start: np.ndarray, tangent: np.ndarray, t_start: float, q1: 
                                [u2, a * u2 * u2 + b * u2, z_at[1]]])
             residuals = np.linalg.norm(fitted - np.array([[u1, v1, d1[2]], [u2, v2, d2[2]]]),
                                        axis=1)
-            if residuals.max() > tolerance_m and not paper_only:
+            if residuals.max() > tolerance_m:
                 reason = (f"ISF misses a key point by {1e3 * residuals.max():.2f} mm > tolerance "
                           f"{1e3 * tolerance_m:.2f} mm (the constraints of eq. (10) bind)")
             else:
@@ -370,7 +374,7 @@ def _fit_subsegment(start: np.ndarray, tangent: np.ndarray, t_start: float, q1: 
                                                   log_alpha, r, residuals)
                 polyline = float(np.linalg.norm(q1 - start) + np.linalg.norm(q2 - q1))
                 length = float(np.sum(np.linalg.norm(np.diff(samples, axis=0), axis=1)))
-                if length <= _MAX_LENGTH_RATIO * polyline or paper_only:
+                if length <= _MAX_LENGTH_RATIO * polyline or keep_paper_curve:
                     return sub, samples, t_end
                 reason = (f"ISF curve is {length / polyline:.2f} times as long as the key-point "
                           f"polyline (> {_MAX_LENGTH_RATIO}): it detours between the key points")
@@ -386,7 +390,7 @@ def _fit_in_own_frame(start: np.ndarray, tangent: np.ndarray, q1: np.ndarray, q2
     frame = _rotation_from_z(tangent)
     local_q1, local_q2 = (q1 - start) @ frame, (q2 - start) @ frame
     sub, samples, _ = _fit_subsegment(np.zeros(3), np.array([0.0, 0.0, 1.0]), 0.0, local_q1,
-                                      local_q2, 1.0, min_extent_m, True)
+                                      local_q2, min_extent_m, None)
     samples = start + samples @ frame.T
     end_tangent = frame @ sub.end_tangent
     return replace(sub, start_m=start.copy(), end_m=samples[-1].copy(),
