@@ -162,6 +162,10 @@ class Simulator(Protocol):
     def chamber_lengths(self) -> np.ndarray:
         """Chamber lengths (m, (n_chambers,))."""
 
+    def segment_bend_angles_rad(self) -> np.ndarray:
+        """Each segment's bending angle (rad, (n_segments,)): the backbone tangent's turn from
+        the segment's base to its end."""
+
     def joint_positions(self) -> np.ndarray:
         """The engine's generalised coordinates (rad or m)."""
 

@@ -284,8 +284,9 @@ class CCModelController(BaselinePolicy):
 
         # keeps every trial length at least half the rest length
         shortest = start[chambers] - 0.5 * self.rest_lengths[chambers]
+        # gtol too: at scipy's default 1e-8 the fit could stop 0.2 um off the displacement
         fit = least_squares(residual, np.zeros(3), jac=jacobian, bounds=(-shortest, np.inf),
-                            xtol=1e-12, ftol=1e-12)
+                            xtol=1e-12, ftol=1e-12, gtol=1e-12)
         return fit.x
 
     def calibrate_on_copy(self, seed: int = 0) -> np.ndarray:

@@ -197,6 +197,8 @@ class LWPRRWRController(BaselinePolicy):
         self.forward: LWPR | None = None
         self.inverse: RewardWeightedInverse | None = None
         self.pretraining: dict[str, Any] = {}
+        self.learnt_transitions = 0
+        """Transitions online learning has taken so far (those past the minimum step)."""
         # one second of decisions with every chamber beyond its range: the target is out of reach
         self.saturation = SaturationWatch(self.name, self.p_low, self.p_high, steps=max(
             1, round(1.0 / (self.hold_steps * spec.control_period_s))))
@@ -264,6 +266,7 @@ class LWPRRWRController(BaselinePolicy):
         if np.linalg.norm(dp) < self.min_step_mm:
             return  # mostly the tracker's noise (0.8 mm per axis for the EM coil)
         self.forward.update(np.concatenate([p, u, du]), dp)
+        self.learnt_transitions += 1
         if self.forward.fields_per_output != self._fields_seen:
             self.inverse.set_fields(*self._inverse_fields())
         self.inverse.add(p, u, du, dp)

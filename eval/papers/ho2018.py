@@ -2,17 +2,33 @@
 tip loads (Ho et al. 2018, Sections 3.4-3.5, Tables 1-2, Figs. 7, 8 and 10).
 
 The ``lwpr_rwr`` baseline (:mod:`agents.controllers.lwpr_rwr`) tracks a rectangle projected onto
-the upright ho2018 arm's workspace with EM feedback:
+the upright ho2018 arm's workspace with EM feedback, driving the chambers' volumes through their
+cylinders as the paper did (Section 3.1; ``actuation="volume"``, docs/architecture.md "Volume
+actuation"; its ``u`` is then each cylinder's stroke, the paper's stepper position):
 
-| experiment | rectangle | cycles | cycle | pre-training | window | runs (setting: load)       |
-|------------|-----------|--------|-------|--------------|--------|----------------------------|
-| `static`   | 25 x 100 mm | 3    | 40 s  | 80 waypoints | 425    | offline: none; online: 14.2 g tip |
-| `varying`  | 40 x 60 mm  | 4    | 30 s  | 320 waypoints| 550    | offline: empty 14 g fluid tip; offline: filling; online: filling |
+| experiment | rectangle | cycles | pre-training | window | runs (setting: load)       |
+|------------|-----------|--------|--------------|--------|----------------------------|
+| `static`   | 25 x 100 mm | 3    | 80 waypoints | 425    | offline: none; online: 14.2 g tip |
+| `varying`  | 40 x 60 mm  | 4    | 320 waypoints| 550    | offline: empty 14 g fluid tip; offline: filling; online: filling |
 
-Cycle lengths: the paper accumulated "approximately 400" and "approximately 300" new training
-points per cycle against windows of 425 and 550, so its window held about the last cycle and
-what was learnt on one pass was still there on the next. At ``lwpr_rwr``'s 10 Hz decisions, 40 s
-and 30 s cycles give 400 and 300 decisions per cycle.
+How long and how fast (:data:`PROTOCOLS`):
+
+| protocol | `static` cycle | `static` decisions | `varying` cycle | `varying` decisions | lead-in |
+|----------|----------------|--------------------|-----------------|---------------------|---------|
+| `paper` (default) | 133.3 s | 20 Hz | 45 s | offline 20 Hz, online 6.7 Hz | 30 s |
+| `quick`  | 40 s | 10 Hz | 30 s | 10 Hz | 15 s |
+
+The paper's: three static cycles "had a total runtime of 400 s" with online updates at 23 Hz on
+average (Section 3.4.2). In the varying experiment's online run "the update rate was limited to
+approximately 7 Hz, i.e. each online update took ~0.143 s" (Section 3.5.3), with "approximately
+300 new training points" per cycle; its offline runs, without the updates, are read as running
+at the loop's own rate, as the static ones. The varying cycle time is not stated, so 45 s gives
+the online run 300 decisions at 6.7 Hz. One decision spans ``hold_steps`` of the env's 20 Hz
+control steps, so 20 Hz (1 step) and 6.7 Hz (3 steps) are the rates nearest 23 and 7 Hz; each
+run's ``lwpr_rwr`` is pre-trained on the same waypoints at its own decision period (the paper
+pre-trained one model for the three runs). Each record counts the transitions online learning
+took in each cycle (``learnt_per_cycle``; the paper had about 400 and 300 against windows of 425
+and 550). ``quick`` is the shorter protocol: 400 and 300 decisions per cycle at 10 Hz.
 
 Filling (ho2018 Section 3.5.2): +10 g from the start of cycle 3 and +6 g from the start of cycle 4,
 at 0.6 g/s (0.6 mL/s of water), onto the 14 g container.
@@ -21,11 +37,16 @@ Projection onto the workspace (ho2018 Section 3.4: "projected to the 3D workspac
 which was approximated from the pre-training data"): a quadratic surface
 ``z = a + b x + c y + d x^2 + e x y + f y^2`` is fitted by least squares to the pre-training tip
 positions, and the rectangle, centred on the arm's axis with its long side along x, is lifted
-onto it. Before each run the tip tracks the rectangle's first corner for ``lead_in_s`` until the
+onto it. Before each run the tip tracks the rectangle's first corner for ``lead_in_s`` so that the
 error settles ("the robot was allowed to track to the first point of the desired trajectory
 until the error converged, at which point data acquisition was initiated": online learners learn
-from then on); the error is then recorded over the cycles: the Euclidean distance
-between the target and the true tip (mm), per cycle mean, standard deviation and maximum.
+from then on; each record gives the lead-in's mean error over its last 5 s and the change from
+the 5 s before, ``lead_in_settled_mm`` and ``lead_in_drift_mm``); the error is then recorded over
+the cycles: the Euclidean distance between the target and the true tip (mm), per cycle mean,
+standard deviation and maximum.
+
+Further baselines (``cc_model``, ``hybrid_gpr``, ``sb3:PATH``) model or were trained on chamber
+pressures, so they drive pressures on the same rectangle and load.
 """
 
 from __future__ import annotations
@@ -70,18 +91,17 @@ class Experiment:
     cycles: int
     pretrain_waypoints: int
     window: int
-    cycle_s: float
     runs: tuple[Run, ...]
     paper: dict[str, tuple[float, ...]] = field(default_factory=dict, compare=False)
 
 
 EXPERIMENT_SPECS = {
     "static": Experiment(
-        "static", 100.0, 25.0, 3, 80, 425, 40.0,
+        "static", 100.0, 25.0, 3, 80, 425,
         (Run("offline, no load", False, "none"), Run("online, 14.2 g tip", True, "tip")),
         paper={"offline, no load": (4.56, 5.72, 5.53), "online, 14.2 g tip": (4.42, 3.33, 1.63)}),
     "varying": Experiment(
-        "varying", 60.0, 40.0, 4, 320, 550, 30.0,
+        "varying", 60.0, 40.0, 4, 320, 550,
         (Run("offline, empty 14 g tip", False, "empty"),
          Run("offline, filling", False, "filling"), Run("online, filling", True, "filling")),
         paper={"offline, empty 14 g tip": (6.01, 7.19, 7.08, 6.94),
@@ -89,6 +109,38 @@ EXPERIMENT_SPECS = {
                "online, filling": (4.16, 3.10, 1.07, 0.98)}),
 }
 """The experiments, with the paper's per-cycle mean errors (mm, Tables 1 and 2)."""
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """How long and how fast the experiments run (see the module docstring).
+
+    Attributes:
+        name: ``"paper"`` or ``"quick"``.
+        cycle_s: seconds per rectangle cycle, per experiment.
+        hold_steps: the env's 20 Hz control steps per ``lwpr_rwr`` decision (1: 20 Hz, 2: 10
+            Hz, 3: 6.7 Hz), per experiment, for its ``"offline"`` and its ``"online"`` runs.
+        lead_in_s: seconds tracking the first corner before recording.
+    """
+
+    name: str
+    cycle_s: dict[str, float]
+    hold_steps: dict[str, dict[str, int]]
+    lead_in_s: float
+
+
+PROTOCOLS = {
+    "paper": Protocol("paper", cycle_s={"static": 400.0 / 3.0, "varying": 45.0},
+                      hold_steps={"static": {"offline": 1, "online": 1},
+                                  "varying": {"offline": 1, "online": 3}}, lead_in_s=30.0),
+    "quick": Protocol("quick", cycle_s={"static": 40.0, "varying": 30.0},
+                      hold_steps={"static": {"offline": 2, "online": 2},
+                                  "varying": {"offline": 2, "online": 2}}, lead_in_s=15.0),
+}
+"""The paper's protocol (the default) and the shorter one (``--quick``)."""
+
+ACTUATION = "volume"
+"""How ``lwpr_rwr`` drives the chambers in these experiments: the paper's cylinder volumes."""
 
 
 def workspace_rectangle(surface: np.ndarray, width_mm: float, height_mm: float,
@@ -143,26 +195,34 @@ def check_baselines(baselines: tuple[str, ...], preset: str = "ho2018") -> None:
                 probe.close()
 
 
-def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
-                   lead_in_s: float = 15.0,
+def run_experiment(name: str, seed: int = 0, protocol: str = "paper",
+                   cycle_s: float | None = None, lead_in_s: float | None = None,
                    preset: str = "ho2018", pretrain_waypoints: int | None = None,
                    baselines: tuple[str, ...] = (), progress: bool = True,
                    env_options: dict[str, Any] | None = None,
                    **controller_params: Any) -> dict[str, dict]:
     """Run every setting of experiment ``name`` once; returns per-run records (targets, tips,
-    errors, per-cycle statistics).
+    errors, per-cycle statistics, transitions learnt per cycle, the lead-in's settling).
 
-    ``baselines``: further policies (``cc_model``, ``hybrid_gpr``, ``sb3:PATH``) run on the same
-    rectangle under the load of the experiment's online run, for comparison (their own
-    calibration; ``controller_params`` go to ``lwpr_rwr`` only, ``window`` among them replacing
-    the experiment's). ``env_options``: further ``gym.make`` keywords of every run's env (e.g.
-    ``sensor_config``).
+    ``protocol``: ``"paper"`` or ``"quick"`` (:data:`PROTOCOLS`); ``cycle_s`` and ``lead_in_s``
+    (s) replace its cycle time and lead-in, ``hold_steps`` among ``controller_params`` its
+    decision rate. ``baselines``: further policies (``cc_model``, ``hybrid_gpr``, ``sb3:PATH``)
+    run on the same rectangle under the load of the experiment's online run, for comparison
+    (their own calibration, driving pressures; ``controller_params`` go to ``lwpr_rwr`` only,
+    ``window`` among them replacing the experiment's). ``env_options``: further ``gym.make``
+    keywords of every run's env (e.g. ``sensor_config``, or ``actuation="pressure"`` for the
+    ``lwpr_rwr`` runs).
     """
     if name not in EXPERIMENT_SPECS:
         raise ValueError(f"experiment must be one of {list(EXPERIMENT_SPECS)}, got {name!r}")
+    if protocol not in PROTOCOLS:
+        raise ValueError(f"protocol must be one of {list(PROTOCOLS)}, got {protocol!r}")
     experiment = EXPERIMENT_SPECS[name]
+    timing = PROTOCOLS[protocol]
     waypoints = experiment.pretrain_waypoints if pretrain_waypoints is None else pretrain_waypoints
-    cycle_s = experiment.cycle_s if cycle_s is None else cycle_s
+    cycle_s = timing.cycle_s[name] if cycle_s is None else cycle_s
+    lead_in_s = timing.lead_in_s if lead_in_s is None else lead_in_s
+    controller_params = {"window": experiment.window, **controller_params}
     load = experiment.runs[-1].load
     runs = list(experiment.runs) + [Run(f"{policy}, {_LOAD_NAMES[load]}", False, load, policy)
                                     for policy in baselines]
@@ -171,19 +231,23 @@ def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
     path_m = None
     for run in runs:
         total_s = lead_in_s + experiment.cycles * cycle_s
-        interface = {"obs": ("pose", "target")}
+        interface: dict[str, Any] = {"obs": ("pose", "target"), "actuation": ACTUATION}
         agent = None
         if run.policy.startswith("sb3:"):  # the env as the agent was trained (its obs, actions)
             agent = make_policy(run.policy)
             interface = {"obs": ("pose", "target", "pressure"), **agent.env_interface}
+        elif run.policy != "lwpr_rwr":
+            interface["actuation"] = "pressure"  # their models are in chamber pressures
         env = gym.make("SoftArmReach-v0", preset=preset, feedback="em",
                        scenario=_scenario(run.load, lead_in_s, cycle_s),
-                       episode_steps=int(round(total_s / 0.05)) + 10, **interface,
-                       **(env_options or {}))
+                       episode_steps=int(round(total_s / 0.05)) + 10,
+                       **{**interface, **(env_options or {})})
         try:
             if run.policy == "lwpr_rwr":
+                rate = {"hold_steps": timing.hold_steps[name]["online" if run.online
+                                                             else "offline"]}
                 policy = make_policy("lwpr_rwr", env, online=run.online,
-                                     **{"window": experiment.window, **controller_params},
+                                     **{**rate, **controller_params},
                                      pretrain_waypoints=waypoints, seed=seed)
                 report = policy.pretrain()
                 if path_m is None:
@@ -206,6 +270,9 @@ def run_experiment(name: str, seed: int = 0, cycle_s: float | None = None,
             env.close()
     return results
 
+
+LEAD_IN_WINDOW_S = 5.0
+"""The lead-in's settling is read over its last ``LEAD_IN_WINDOW_S`` (s) against the one before."""
 
 _LOAD_NAMES = {"none": "no load", "tip": "14.2 g tip", "empty": "empty 14 g tip",
                "filling": "filling"}
@@ -233,6 +300,7 @@ def _track(env, policy, path_m: np.ndarray, cycles: int, cycle_s: float, lead_in
             [targets[k], targets[min(k + 1, len(targets) - 1)]])
         return observation
 
+    learnt = np.zeros(len(targets), dtype=int)  # transitions learnt so far, after each step
     bar = tqdm(total=len(targets), desc=label, disable=not progress, leave=False)
     for k in range(len(targets)):
         seen = with_targets(observation, k)
@@ -242,17 +310,31 @@ def _track(env, policy, path_m: np.ndarray, cycles: int, cycle_s: float, lead_in
             policy.update(seen, action, reward,
                           with_targets(observation, min(k + 1, len(targets) - 1)), info)
         tips[k] = info["tip_position_m"]
+        learnt[k] = getattr(policy, "learnt_transitions", 0)
         bar.update(1)
     bar.close()
     # after step k the tip should be at the target the policy was sent to, targets[k + 1]
     aimed = np.vstack([targets[1:], targets[-1:]])
-    errors_mm = np.linalg.norm(tips - aimed, axis=1)[lead_in:] * 1000.0
+    all_errors_mm = np.linalg.norm(tips - aimed, axis=1) * 1000.0
+    errors_mm = all_errors_mm[lead_in:]
     per_cycle = np.array_split(errors_mm, cycles)
+    ends = np.cumsum([len(c) for c in per_cycle]) + lead_in - 1
+    learnt_per_cycle = np.diff(np.concatenate([[learnt[lead_in - 1] if lead_in else 0],
+                                               learnt[ends]]))
+    window = int(round(LEAD_IN_WINDOW_S / period))
+    settled = all_errors_mm[max(0, lead_in - window):lead_in]
+    before = all_errors_mm[max(0, lead_in - 2 * window):max(0, lead_in - window)]
     return {"targets_m": aimed[lead_in:], "tips_m": tips[lead_in:], "errors_mm": errors_mm,
             "time_s": np.arange(len(errors_mm)) * period,
             "cycle_mean_mm": [float(c.mean()) for c in per_cycle],
             "cycle_std_mm": [float(c.std()) for c in per_cycle],
-            "cycle_max_mm": [float(c.max()) for c in per_cycle]}
+            "cycle_max_mm": [float(c.max()) for c in per_cycle],
+            "learnt_per_cycle": [int(n) for n in learnt_per_cycle],
+            "actuation": "volume" if unwrapped.arm.cylinders is not None else "pressure",
+            "decision_hz": 1.0 / (period * getattr(policy, "hold_steps", 1)),
+            "lead_in_settled_mm": float(settled.mean()) if settled.size else float("nan"),
+            "lead_in_drift_mm": (float(settled.mean() - before.mean())
+                                 if settled.size and before.size else float("nan"))}
 
 
 def report_table(name: str, results: dict[str, dict]) -> str:
@@ -260,12 +342,14 @@ def report_table(name: str, results: dict[str, dict]) -> str:
     paper's means."""
     experiment = EXPERIMENT_SPECS[name]
     header = ["setting"] + [f"cycle {i + 1} mean (std)" for i in range(experiment.cycles)] + \
-        [f"cycle {i + 1} max" for i in range(experiment.cycles)] + ["paper means"]
+        [f"cycle {i + 1} max" for i in range(experiment.cycles)] + ["learnt per cycle",
+                                                                   "paper means"]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for label, record in results.items():
         cells = [label] + [f"{m:.2f} ({s:.2f})" for m, s in zip(record["cycle_mean_mm"],
                                                                   record["cycle_std_mm"])]
         cells += [f"{m:.2f}" for m in record["cycle_max_mm"]]
+        cells.append(", ".join(str(n) for n in record.get("learnt_per_cycle", ())) or "-")
         cells.append(", ".join(f"{v:.2f}" for v in experiment.paper.get(label, ())))
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -299,25 +383,27 @@ def plot_experiment(path: str | Path, name: str, results: dict[str, dict]) -> Pa
 
 
 def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
-                   cycle_s: float | None = None, lead_in_s: float = 15.0,
-                   baselines: tuple[str, ...] = ()) -> dict:
-    """Run the experiments for every seed; write ``ho2018_<experiment>_seed<N>.md/.png`` and
-    ``ho2018.json`` under ``out`` and print the tables."""
+                   protocol: str = "paper", cycle_s: float | None = None,
+                   lead_in_s: float | None = None, baselines: tuple[str, ...] = ()) -> dict:
+    """Run the experiments for every seed under ``protocol`` (:data:`PROTOCOLS`); write
+    ``ho2018_<experiment>_seed<N>.md/.png`` and ``ho2018.json`` under ``out`` and print the
+    tables."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     summary: dict[str, Any] = {}
     for name in experiments:
         for seed in seeds:
-            results = run_experiment(name, seed=seed, cycle_s=cycle_s, lead_in_s=lead_in_s,
-                                     baselines=baselines)
+            results = run_experiment(name, seed=seed, protocol=protocol, cycle_s=cycle_s,
+                                     lead_in_s=lead_in_s, baselines=baselines)
             table = report_table(name, results)
             print(f"\n{name} load experiment, seed {seed} (tracking error, mm)\n{table}")
             (out / f"ho2018_{name}_seed{seed}.md").write_text(table + "\n")
             plot_experiment(out / f"ho2018_{name}_seed{seed}.png", name, results)
             summary[f"{name}_seed{seed}"] = {
-                label: {key: record[key] for key in ("cycle_mean_mm", "cycle_std_mm",
-                                                     "cycle_max_mm", "pretraining")}
+                label: {key: record[key] for key in (
+                    "cycle_mean_mm", "cycle_std_mm", "cycle_max_mm", "learnt_per_cycle",
+                    "lead_in_settled_mm", "lead_in_drift_mm", "pretraining")}
                 for label, record in results.items()}
     write_json(out / "ho2018.json", {"soft_arm_gym_version": package_version(),
-                                     "experiments": summary})
+                                     "protocol": protocol, "experiments": summary})
     return summary

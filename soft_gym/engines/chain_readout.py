@@ -80,6 +80,18 @@ class ChainReadout:
         lengths = arc[:, None] + d * (theta_x[:, None] * np.sin(sigma) - theta_y[:, None] * np.cos(sigma))
         return lengths.reshape(-1)
 
+    def segment_bend_angles_rad(self, q: np.ndarray) -> np.ndarray:
+        """Each segment's bending angle (rad, shape (n_segments,)): how far the backbone's
+        tangent turns from the segment's base to its end, ``|(theta_x, theta_y)|`` of its bend
+        joints (a joint at a segment boundary shared in proportion to the compliance each side
+        owes it, the last segment with the half tip joint, as :meth:`chamber_lengths` reads
+        them). For a constant-curvature segment this is the CC angle ``theta = kappa L``; it is
+        how a paper's "bending angle per segment" is read here. Where neighbouring segments bend
+        in different planes, the joint they share holds both bends and its split mixes them, so
+        each angle is then approximate (9 % low for two 0.19 rad bends 120 deg apart)."""
+        _, theta_x, theta_y = self._segment_arc_and_bend(q)
+        return np.hypot(theta_x, theta_y)
+
     def curvature_profile(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Backbone curvature at every vertex, for sensors that integrate strain along the arm.
 

@@ -194,9 +194,10 @@ ZOU2022 = ArmSpec(
                             "it turns the bending plane along the arm"})
 
 _HO_SEGMENT = SegmentSpec(
-    length_m=0.0775, outer_radius_m=0.0135, chamber_offset_m=7.0e-3, chamber_area_m2=1.07e-4,
+    length_m=0.0775, outer_radius_m=0.0135, chamber_offset_m=8.0e-3,
+    chamber_area_m2=math.pi * 4.5e-3**2, central_cavity_radius_m=2.5e-3,
     youngs_modulus_pa=450e3, axial_modulus_pa=1.2e6, density_kg_m3=1070.0, n_links=4,
-    p_max_pa=330e3, p_pre_pa=40e3,
+    p_max_pa=430e3, p_pre_pa=40e3,
     bending_stiffening=0.5, axial_stiffening=2.0, damping_ratio=0.3, extra_tip_mass_kg=0.0)
 
 HO2018 = ArmSpec(
@@ -204,29 +205,43 @@ HO2018 = ArmSpec(
     pneumatic_time_constant_s=0.1, control_period_s=0.05, physics_dt_s=2.5e-3,
     actuation_update_s=0.01, mujoco_physics_dt_s=2.5e-3 / 3,
     description=("Ho et al. 2018: two segments standing upright (base below, EM coil on the tip), "
-                 "155 mm total, OD 27 mm, Dragon Skin 10, body mass 41.7 g, ~100 deg bending per "
-                 "segment in any direction, 0.04 MPa pre-pressure, EM tracker."),
+                 "155 mm total, OD 27 mm, Dragon Skin 10 (body 60.0 g from the material; the "
+                 "paper weighs 41.7 g), ~100 deg bending per segment in any direction, 0.04 MPa "
+                 "pre-pressure, EM tracker."),
     notes={"mujoco_physics_dt_s": "0.83 ms: the upright arm swings the most; at 2.5 ms the MuJoCo "
                                   "engine's tip strays 1.1-1.8 mm from a 4x finer step, at 0.83 "
                                   "ms 0.38-0.60 mm (PyBullet at 2.5 ms: 1.4-2.3 mm)",
            "mount": "upright as in the paper's Figs. 1(d) and 3: gravity compresses the arm and "
                     "tips it further as it bends",
-           "chamber_area_m2": "107 mm^2 per chamber, so that with 1070 kg/m^3 the body weighs "
-                              "41.7 g as the paper states",
+           "chamber_area_m2": "a cross-section a moulded 27 mm arm can have: three round, "
+                              "fibre-wound bores of 4.5 mm radius (63.6 mm^2) at 8.0 mm from the "
+                              "axis around a 2.5 mm central cavity (Section 2.1: the proximal "
+                              "segment's centre cavity carries the distal segment's three tubes, "
+                              "1.6 mm OD), leaving 1.0 mm outer and inner walls and 4.9 mm between "
+                              "bores (SegmentSpec.wall_thickness_m)",
+           "density_kg_m3": "Dragon Skin 10's 1.07 g/cm^3: the body's mass follows from the "
+                            "material, 30.0 g per segment, 60.0 g in all. The paper states "
+                            "41.71 g (Section 3.5.2), which 155 mm of 27 mm silicone reaches only "
+                            "with 56 % of the section hollow: 107 mm^2 bores with 0.45 mm walls "
+                            "between them and no central cavity. No layout with walls of 1 mm "
+                            "and the tube cavity comes near it (the thinnest, above, weighs "
+                            "60.0 g); the paper's figure may leave out parts of the arm or weigh "
+                            "a shorter body, and the arm here keeps the material's mass",
            "youngs_modulus_pa": "450 kPa effective bending modulus (Dragon Skin 10 ~150-180 kPa "
                                 "solid, stiffened by the fibre-wound, pre-pressurised chambers): "
-                                "upright, the arm's own weight is 0.18 of its self-weight "
-                                "buckling load, the 14.2 g tip 0.19 and the full 30 g fluid tip "
-                                "0.41 of the tip buckling load, so the loads deform a bent arm "
-                                "markedly (up to ~2x its compliance) without collapsing a "
-                                "straight one. At 80 kPa the straight arm fell over under the "
-                                "14.2 g tip; at 300 kPa the 30 g tip (0.86 of buckling) made it "
-                                "seven times softer, which no controller in the paper faced",
-           "axial_modulus_pa": "1.2 MPa effective (the helical fibres carry the axial load): the "
-                               "0.04 MPa pre-pressure lengthens the 155 mm arm to ~161 mm",
-           "p_max_pa": "chosen so one chamber at p_max bends its segment 97-104 deg upright (the "
-                       "paper: 'up to 100 deg' per segment); the paper drives volumes and states "
-                       "no pressure",
+                                "upright, the arm's own weight is 0.21 of its self-weight "
+                                "buckling load (7.84 EI / L^3), the 14.2 g tip 0.16 and the full "
+                                "30 g fluid tip 0.34 of the tip buckling load (pi^2 EI / (4 "
+                                "L^2)), so the loads deform a bent arm markedly without "
+                                "collapsing a straight one",
+           "axial_modulus_pa": "1.2 MPa effective (the helical fibres carry the axial load)",
+           "p_max_pa": "chosen so one chamber at p_max bends its segment about 100 deg as the "
+                       "paper's ('up to 100 deg' per segment), upright under its own weight: "
+                       "104.5 deg for the proximal segment and 94.3 deg for the distal one "
+                       "(93 deg each weightless), the angle being how far the backbone's tangent "
+                       "turns from the segment's base to its end (Simulator."
+                       "segment_bend_angles_rad, the CC angle kappa L). The paper drives "
+                       "volumes and states no pressure",
            "pneumatic_time_constant_s": "0.1 s: stepper-driven cylinders displace the chamber "
                                         "volume directly, so the chamber follows the command "
                                         "within a few control steps",
@@ -238,10 +253,10 @@ HO2018 = ArmSpec(
 
 PRESETS: dict[str, ArmSpec] = {spec.name: spec for spec in (WANG2023, ZHAO2021, ZOU2022, HO2018)}
 
-HO2018_CYLINDERS = CylinderSpec(bore_area_m2=math.pi * 0.010**2, max_stroke_m=0.0695,
+HO2018_CYLINDERS = CylinderSpec(bore_area_m2=math.pi * 0.010**2, max_stroke_m=0.0616,
                                 dead_volume_m3=2.0e-6)
-"""ho2018's stepper-driven cylinders (Section 3.1), one per chamber: a 20 mm bore, 69.5 mm of
-stroke (21.8 mL), 2 mL of dead volume. The paper states no bore, stroke or tubing; these are
+"""ho2018's stepper-driven cylinders (Section 3.1), one per chamber: a 20 mm bore, 61.6 mm of
+stroke (19.4 mL), 2 mL of dead volume. The paper states no bore, stroke or tubing; these are
 assumed (:data:`CYLINDER_NOTES`)."""
 
 CYLINDERS: dict[str, CylinderSpec] = {"ho2018": HO2018_CYLINDERS}
@@ -252,12 +267,12 @@ CYLINDER_NOTES: dict[str, dict[str, str]] = {"ho2018": {
     "cylinders": "ho2018 Section 3.1 drives each chamber's volume with a stepper-driven cylinder "
                  "(a closed volume: a load that shortens a chamber raises its pressure). Assumed, "
                  "the paper stating no bore, stroke or tubing: a 20 mm bore (a 30 mL syringe's) and "
-                 "2 mL of dead volume (about 1 m of 1.6 mm tubing); the stroke, 69.5 mm, is the "
-                 "longest that keeps a chamber of the straight arm at rest (80.8 mm, 8.6 mL) "
-                 "within p_max = 330 kPa from the 0.04 MPa pre-pressure, so the preset's pressure "
+                 "2 mL of dead volume (about 1 m of 1.6 mm tubing); the stroke, 61.6 mm, is the "
+                 "longest that keeps a chamber of the straight arm at rest (78.9 mm, 5.0 mL) "
+                 "within p_max = 430 kPa from the 0.04 MPa pre-pressure, so the preset's pressure "
                  "range is the cylinders' range at rest. A bent chamber is longer, so one "
                  "cylinder at full stroke bends its segment less than p_max does",
-    "action": "the paper's: each action drives a cylinder's stroke, [-1, 1] to [0, 69.5 mm]; "
+    "action": "the paper's: each action drives a cylinder's stroke, [-1, 1] to [0, 61.6 mm]; "
               "the chamber pressure follows from the gas law with the chamber's present length"}}
 """Where :data:`CYLINDERS`' numbers come from, merged into the volume-actuated arm's notes."""
 

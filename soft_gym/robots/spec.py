@@ -2,12 +2,16 @@
 
 All quantities are SI (m, kg, s, Pa, rad). The derived section properties follow from a solid
 silicone cylinder with three chamber bores at distance ``chamber_offset_m`` from the axis at angles
-``sigma_i = 2 pi i / 3`` (docs/architecture.md, "Chambers"):
+``sigma_i = 2 pi i / 3``, and an optional central cavity of radius ``r_c`` on the axis (ho2018's
+carries the distal segment's tubes; docs/architecture.md, "Chambers"):
 
-* cross-section area ``A = pi R^2 - 3 A_c``
-* second moment of area about any diameter ``I = pi R^4 / 4 - 3 A_c^2 / (4 pi) - 1.5 A_c d^2``
+* cross-section area ``A = pi R^2 - 3 A_c - pi r_c^2``
+* second moment of area about any diameter
+  ``I = pi R^4 / 4 - 3 A_c^2 / (4 pi) - 1.5 A_c d^2 - pi r_c^4 / 4``
   (each bore treated as a circle of area ``A_c``; the parallel-axis terms sum to ``1.5 A_c d^2``
   whatever the bending direction, since ``sum_i sin^2(sigma_i - phi) = 3/2``)
+* the thinnest wall: the least of the outer wall ``R - d - r``, the wall to the cavity
+  ``d - r - r_c`` and the wall between two bores ``sqrt(3) d - 2 r``, with ``r = sqrt(A_c / pi)``
 * polar moment ``J = 2 I``; shear modulus ``G = E / (2 (1 + nu))``.
 """
 
@@ -31,11 +35,11 @@ MAX_LOAD_TO_WEIGHT = {"hanging": 4.0, "horizontal": 4.0, "upright": 2.0}
 Tip masses, a filling container, a swaying mass and held pushes together may weigh or push at
 most this much. Up to it the simulated arm stays on its joints' end stops under any actuation
 and from any direction (``tests/soft_gym/engines/test_runaway.py``); at eight times its weight a hanging ho2018
-arm under random pressures no longer does. An upright arm folds over under a load on top: the
-upright ho2018 arm stays on its stops under random pressures with 120 g (2.9 times its weight)
-and not with 150 g, so upright arms bear twice their weight. The papers' loads are well inside
-it (zhao2021's 263 g is 1.4 times its hanging arm's own weight, ho2018's 32 g fluid tip 0.77 of
-its upright arm's)."""
+arm under random pressures no longer does. An upright arm folds over under a load on top: an
+upright ho2018 arm of 41.7 g stayed on its stops under random pressures with 120 g (2.9 times
+its weight) and not with 150 g, so upright arms bear twice their weight (the present 60.0 g arm
+is checked at its 120 g). The papers' loads are well inside it (zhao2021's 263 g is 1.4 times
+its hanging arm's own weight, ho2018's 32 g fluid tip 0.53 of its upright arm's)."""
 """How the arm base is mounted: hanging (tip down, the papers' setups), upright, horizontal."""
 
 MAX_CHAMBER_AREA_GROWTH = 4.0
@@ -87,6 +91,9 @@ class SegmentSpec:
             silicone.
         torsion: whether links get a torsion joint (stiffness ``G J / ds``).
         extra_tip_mass_kg: mass fixed at this segment's distal end (connector, tip cap, camera).
+        central_cavity_radius_m: radius ``r_c`` of a hollow core along the axis (m; 0: solid).
+            ho2018 Section 2.1: the proximal segment's centre cavity carries the distal segment's
+            air tubes.
         braid_twist_m: torsion lever ``r_t`` (m) of an unbalanced braid: a braided (McKibben)
             muscle whose braid is not balanced rotates as it extends, so each pressurised chamber
             twists the segment about its axis with the moment ``r_t p A_c(p)`` (the same effective
@@ -116,13 +123,15 @@ class SegmentSpec:
     torsion: bool = False
     extra_tip_mass_kg: float = 0.0
     braid_twist_m: float = 0.0
+    central_cavity_radius_m: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("length_m", "outer_radius_m", "chamber_offset_m", "chamber_area_m2",
                      "youngs_modulus_pa", "density_kg_m3", "p_max_pa", "max_bend_per_m_rad",
                      "damping_ratio"):
             require_positive(name, getattr(self, name))
-        for name in ("p_pre_pa", "bending_stiffening", "axial_stiffening", "extra_tip_mass_kg"):
+        for name in ("p_pre_pa", "bending_stiffening", "axial_stiffening", "extra_tip_mass_kg",
+                     "central_cavity_radius_m"):
             require_non_negative(name, getattr(self, name))
         if not np.isfinite(self.braid_twist_m) or (self.braid_twist_m != 0.0 and not self.torsion):
             raise ValueError(f"braid_twist_m must be finite, and 0 without torsion joints "
@@ -155,25 +164,38 @@ class SegmentSpec:
             raise ValueError(
                 f"chamber_offset_m must be smaller than outer_radius_m={self.outer_radius_m}, "
                 f"got {self.chamber_offset_m!r}")
-        if self.area_m2 <= 0 or self.second_moment_m4 <= 0:
+        if self.area_m2 <= 0 or self.second_moment_m4 <= 0 or self.wall_thickness_m <= 0:
             raise ValueError(
-                f"chamber_area_m2={self.chamber_area_m2!r} leaves no solid cross-section for "
-                f"outer_radius_m={self.outer_radius_m} and chamber_offset_m={self.chamber_offset_m}")
+                f"chamber_area_m2={self.chamber_area_m2!r} leaves no wall between the bores, the "
+                f"outer surface and the central cavity for outer_radius_m={self.outer_radius_m}, "
+                f"chamber_offset_m={self.chamber_offset_m} and central_cavity_radius_m="
+                f"{self.central_cavity_radius_m} (thinnest wall {self.wall_thickness_m:.6g} m)")
         if self.p_pre_pa > self.p_max_pa:
             raise ValueError(f"p_pre_pa must be <= p_max_pa={self.p_max_pa}, got {self.p_pre_pa!r}")
 
     # --- derived section properties -------------------------------------------------------------
     @property
     def area_m2(self) -> float:
-        """Solid cross-section area ``pi R^2 - 3 A_c`` (m^2)."""
-        return math.pi * self.outer_radius_m**2 - 3.0 * self.chamber_area_m2
+        """Solid cross-section area ``pi R^2 - 3 A_c - pi r_c^2`` (m^2)."""
+        return (math.pi * self.outer_radius_m**2 - 3.0 * self.chamber_area_m2
+                - math.pi * self.central_cavity_radius_m**2)
 
     @property
     def second_moment_m4(self) -> float:
         """Second moment of area ``I`` about any diameter (m^4), see the module docstring."""
         a_c, d = self.chamber_area_m2, self.chamber_offset_m
         return (math.pi * self.outer_radius_m**4 / 4.0 - 3.0 * a_c**2 / (4.0 * math.pi)
-                - 1.5 * a_c * d**2)
+                - 1.5 * a_c * d**2 - math.pi * self.central_cavity_radius_m**4 / 4.0)
+
+    @property
+    def wall_thickness_m(self) -> float:
+        """The thinnest silicone wall of the cross-section (m): outer wall ``R - d - r``, wall
+        to the central cavity ``d - r - r_c`` or wall between two bores ``sqrt(3) d - 2 r``,
+        with ``r = sqrt(A_c / pi)`` the bore's radius."""
+        r = math.sqrt(self.chamber_area_m2 / math.pi)
+        d = self.chamber_offset_m
+        return min(self.outer_radius_m - d - r, d - r - self.central_cavity_radius_m,
+                   math.sqrt(3.0) * d - 2.0 * r)
 
     @property
     def bending_rigidity_nm2(self) -> float:

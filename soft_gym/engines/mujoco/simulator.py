@@ -180,6 +180,11 @@ class MujocoArmSimulator(CommonArm):
         """Chamber lengths (m), shape (n_chambers,)."""
         return self._readout.chamber_lengths(self.data.qpos)
 
+    def segment_bend_angles_rad(self) -> np.ndarray:
+        """Each segment's bending angle (rad, (n_segments,)), the tangent's turn from its base
+        to its end."""
+        return self._readout.segment_bend_angles_rad(self.data.qpos)
+
     def curvature_profile(self) -> tuple[np.ndarray, np.ndarray]:
         """Arc position (m) and curvature vector (1/m) at every backbone vertex."""
         return self._readout.curvature_profile(self.data.qpos)

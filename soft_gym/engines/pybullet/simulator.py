@@ -229,6 +229,12 @@ class ArmSimulator(CommonArm):
         (:meth:`ChainReadout.chamber_lengths <soft_gym.engines.chain_readout.ChainReadout.chamber_lengths>`)."""
         return self._readout.chamber_lengths(self.joint_positions())
 
+    def segment_bend_angles_rad(self) -> np.ndarray:
+        """Each segment's bending angle (rad, (n_segments,)), the tangent's turn from its base
+        to its end (:meth:`ChainReadout.segment_bend_angles_rad
+        <soft_gym.engines.chain_readout.ChainReadout.segment_bend_angles_rad>`)."""
+        return self._readout.segment_bend_angles_rad(self.joint_positions())
+
     def curvature_profile(self) -> tuple[np.ndarray, np.ndarray]:
         """Arc position (m) and curvature vector (1/m) at every backbone vertex
         (:meth:`ChainReadout.curvature_profile <soft_gym.engines.chain_readout.ChainReadout.curvature_profile>`)."""

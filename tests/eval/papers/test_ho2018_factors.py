@@ -5,13 +5,19 @@ from __future__ import annotations
 import pytest
 
 from eval.papers import ho2018_factors
-from eval.papers.ho2018_factors import FACTORS, RUNS, main, report, run_factors
+from eval.papers.ho2018_factors import FACTORS, MEASURED_ON, RUNS, main, report, run_factors
 
 
 def test_every_factor_changes_one_thing_the_experiment_takes():
+    """Each factor changes one keyword of the measured experiment (the EM noise keeps its
+    pressure actuation), which stays the shorter protocol with pressure-driven chambers."""
+    assert MEASURED_ON == {"protocol": "quick", "env_options": {"actuation": "pressure"}}
     assert FACTORS["default"] == {}
     for name, change in FACTORS.items():
         assert len(change) <= 1, name
+        for key, value in change.items():
+            if key == "env_options":
+                assert value["actuation"] == "pressure" and len(value) == 2, name
     assert set().union(*FACTORS.values()) <= {"env_options", "ridge", "min_step_mm", "window",
                                              "hold_steps", "kp", "cycle_s"}
 
@@ -32,8 +38,10 @@ def test_the_runs_forward_each_factor_to_the_experiment(monkeypatch):
 
     monkeypatch.setattr(ho2018_factors, "run_experiment", fake)
     results = run_factors([0, 2], ["ridge 2", "path 3x slower"], progress=False)
-    assert calls == [("static", 0, {"ridge": 2.0}), ("static", 2, {"ridge": 2.0}),
-                     ("static", 0, {"cycle_s": 120.0}), ("static", 2, {"cycle_s": 120.0})]
+    assert calls == [("static", 0, {**MEASURED_ON, "ridge": 2.0}),
+                     ("static", 2, {**MEASURED_ON, "ridge": 2.0}),
+                     ("static", 0, {**MEASURED_ON, "cycle_s": 120.0}),
+                     ("static", 2, {**MEASURED_ON, "cycle_s": 120.0})]
     assert results["ridge 2"][RUNS[1]]["seeds"] == [0, 2]
 
 

@@ -153,6 +153,7 @@ def single_chamber_pressures(spec, fractions: dict[int, float]) -> np.ndarray:
         # per stretched length where the beam bends per rest length (a difference of the axial
         # strain), so the load stays where that fits the 2 % tolerance
         ("zhao2021", {0: 0.3, 4: 0.3}),
+        ("zhao2021", {0: 0.3, 3: 0.3}),
     ],
 )
 def test_pure_moment_gives_constant_curvature_arc(make_sim, preset, fractions):
@@ -173,6 +174,7 @@ def test_pure_moment_gives_constant_curvature_arc(make_sim, preset, fractions):
     axial, moment = pneumatic_loads_reference(spec, pressure)
     origin, frame = np.zeros(3), np.eye(3)
     expected = [origin]
+    angles = []
     for k, segment in enumerate(spec.segments):
         chambers = [c - 3 * k for c in fractions if 3 * k <= c < 3 * k + 3]
         force = sum(pressure[3 * k + c] * segment.chamber_area_m2 for c in chambers)
@@ -182,6 +184,7 @@ def test_pure_moment_gives_constant_curvature_arc(make_sim, preset, fractions):
         kappa = force * segment.chamber_offset_m / segment.bending_rigidity_nm2
         phi = SIGMA[chambers[0]] + math.pi if chambers else 0.0
         s = segment.length_m * (1.0 + force / segment.axial_rigidity_n)
+        angles.append(kappa * segment.length_m)  # the beam's end rotation M L / (E I)
         local = arc_points(s, kappa, phi, segment.n_links)
         expected.extend(origin + local[1:] @ frame.T)
         origin = origin + frame @ local[-1]
@@ -193,6 +196,12 @@ def test_pure_moment_gives_constant_curvature_arc(make_sim, preset, fractions):
     assert error.max() < tolerance, (
         f"backbone off the analytic arc by {error.max() * 1e3:.2f} mm "
         f"(limit {tolerance * 1e3:.2f} mm); per point (mm): {np.round(error * 1e3, 2)}")
+    # each segment's bending angle is the beam's end rotation under its pure moment, M L / (E I)
+    # (per rest length, as the chain bends), where the segments bend in one plane (the joint
+    # they share is split between them by compliance, which mixes two planes' bends)
+    if len({chamber % 3 for chamber in fractions}) == 1:
+        np.testing.assert_allclose(time_average(sim, 1.0, lambda s: s.segment_bend_angles_rad()),
+                                   angles, rtol=0.02)
 
 
 # ------------------------------------------------------------------------------------------
@@ -423,6 +432,22 @@ def test_upright_arm_stands_straight_and_gravity_compresses_it(make_sim):
     reference = float(weight_above @ np.array(link_compliance))
     assert 0.0 < shortening
     assert shortening == pytest.approx(reference, rel=0.3)
+
+
+def test_one_chamber_at_p_max_bends_an_upright_ho2018_segment_about_100_degrees(make_sim):
+    """ho2018 Section 3.1: "an omnidirectional bending angle of up to 100 deg was attainable by
+    each segment". Upright under its own weight, one chamber of a segment at ``p_max`` (the
+    others at the pre-pressure) turns that segment's backbone tangent by 90-110 deg, for both
+    segments; the other segment stays within a few degrees of straight."""
+    spec = get_preset("ho2018")
+    for segment in range(spec.n_segments):
+        sim = make_sim(spec, gravity=True)
+        sim.reset(spec.p_pre_pa, settle_s=0.0)
+        ramp_pressures(sim, single_chamber_pressures(spec, {3 * segment: 1.0}), ramp_s=3.0)
+        advance(sim, 4.0)
+        bends = np.degrees(sim.segment_bend_angles_rad())
+        assert 90.0 <= bends[segment] <= 110.0, f"segment bends (deg): {np.round(bends, 1)}"
+        assert bends[1 - segment] < 15.0, f"segment bends (deg): {np.round(bends, 1)}"
 
 
 def test_tip_mass_equals_its_weight_at_the_tip(make_sim):

@@ -54,7 +54,7 @@ def test_a_load_compressing_a_closed_chamber_raises_its_pressure_by_the_gas_law(
     held.step_physics(3.0)
     yield_volume = sim.tip_pose()[0][0] - tip_before[0]
     yield_pressure = held.tip_pose()[0][0] - held_before[0]
-    assert 0.0 < yield_volume < 0.97 * yield_pressure  # 6 % stiffer here
+    assert 0.0 < yield_volume < 0.97 * yield_pressure  # 3.4 % stiffer here
 
 
 @pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
@@ -119,7 +119,7 @@ def test_the_env_drives_strokes_and_reports_pressures():
 
 def test_bad_input_is_refused_naming_the_parameter():
     sim = make_simulator(VOLUME_HO2018, "mujoco")
-    with pytest.raises(ValueError, match=r"strokes_m must lie within .*\[0, max_stroke_m=0.0695\]"):
+    with pytest.raises(ValueError, match=r"strokes_m must lie within .*\[0, max_stroke_m=0.0616\]"):
         sim.set_cylinder_strokes(np.full(6, 0.08))
     with pytest.raises(ValueError, match="strokes_m"):
         sim.set_cylinder_strokes(np.full(6, -1e-3))
@@ -128,7 +128,7 @@ def test_bad_input_is_refused_naming_the_parameter():
     with pytest.raises(ValueError, match="pressures_pa cannot be commanded"):
         sim.set_pressures(HO2018.p_pre_pa)
     with pytest.raises(ValueError, match="pressure_pa=.* outside the cylinders' range"):
-        sim.reset(pressure_pa=np.full(6, 330e3))  # all at p_max: a chamber stretched past it
+        sim.reset(pressure_pa=np.full(6, 430e3))  # all at p_max: a chamber stretched past it
     with pytest.raises(ValueError, match="strokes_m cannot be commanded"):
         make_simulator(HO2018, "mujoco").set_cylinder_strokes(np.zeros(6))
     with pytest.raises(ValueError, match="max_stroke_m=0.08 would put"):
