@@ -134,9 +134,9 @@ CLAIMS = (
           cause="online filling 2.44 -> 2.55, 2.23 -> 2.02 and 2.36 -> 2.25 mm (cycle 4 / 1 = "
                 "1.05, 0.91, 0.96) on seeds 0-2: stable through the filling, where the offline "
                 "model reaches 14.3-17.1 mm in cycle 4, but not down to 1 mm. At the paper's 6.7 "
-                "Hz its first cycles are already at the offline model's 2.5 mm (the empty "
-                "container costs the pre-trained model little), so there is no load error to "
-                "learn away before the filling, and with 251-272 transitions learnt a cycle (the "
+                "Hz its first cycle is already 2.2-2.4 mm, below the offline model's 2.6 mm under "
+                "the empty container, so there is no load error to learn away before the "
+                "filling, and with 251-272 transitions learnt a cycle (the "
                 "paper about 300) it holds 2.0-2.6 mm while the container fills; the same runs at "
                 "20 Hz end at 2.0 mm (seed 0)"),
 )
