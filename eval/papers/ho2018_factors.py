@@ -3,8 +3,8 @@
 ho2018 Table 1: online local learning under an unknown 14.2 g tip load takes the tracking error
 from 4.42 to 1.63 mm over three cycles. On the shorter protocol with pressure-driven chambers
 (:data:`MEASURED_ON`: 40 s cycles, 10 Hz decisions; :mod:`eval.papers.ho2018`'s ``static``
-experiment), ``lwpr_rwr`` levelled off at 2.4-2.6 mm on the earlier ho2018 arm, about where the
-unloaded offline model tracked. Each factor below is one change to that experiment (both of its
+experiment), ``lwpr_rwr`` levels off about where the unloaded offline model tracks (2.0-2.1 mm
+against 1.9 on the present arm; 2.4-2.6 mm on an earlier, lighter one). Each factor below is one change to that experiment (both of its
 runs, offline unloaded and online with the tip load), on the same seeds, so its effect on the
 floor is measured, not guessed:
 
@@ -103,9 +103,10 @@ def report(results: dict[str, dict[str, Any]]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m eval.papers.ho2018_factors", formatter_class=HelpFormatter,
-        description="ho2018's static experiment (Table 1) with one factor changed at a time: "
-                    "what sets the online learner's 2-3 mm floor. About 40 s per factor and "
-                    "seed on one core once the pre-training is cached.")
+        description="ho2018's static experiment (Table 1) on the shorter protocol with "
+                    "pressure-driven chambers, one factor changed at a time: what sets the "
+                    "online learner's floor. About 50-110 s per factor and seed on one core "
+                    "once the pre-training is cached.")
     parser.add_argument("--seeds", type=seed_int, nargs="+", default=[0, 1, 2], help="seeds")
     parser.add_argument("--factors", nargs="+", default=list(FACTORS), choices=list(FACTORS),
                         metavar="FACTOR", help=f"which factors, among: {', '.join(FACTORS)}")
