@@ -62,7 +62,6 @@ def main(argv: list[str] | None = None) -> int:
     unwrapped = env.unwrapped
     observation, _ = env.reset(seed=args.seed)
     policy.reset()
-    pretrained = policy.forward.samples_seen  # an update that learns adds one sample
     learning: list[float] = []
     max_steps = 100 * (args.window + args.updates)
     for step in range(max_steps):
@@ -74,11 +73,11 @@ def main(argv: list[str] | None = None) -> int:
         unwrapped.observation_part(observation, "target")[:] = np.concatenate([target, target])
         action, _ = policy.predict(observation, deterministic=True)
         next_observation, reward, _, _, info = env.step(action)
-        learnt = policy.forward.samples_seen
+        learnt = policy.learnt_transitions
         start = time.perf_counter()
         policy.update(observation, action, reward, next_observation, info)
         elapsed = time.perf_counter() - start
-        if policy.forward.samples_seen > learnt and learnt - pretrained >= args.window:
+        if policy.learnt_transitions > learnt >= args.window:
             learning.append(elapsed)
         observation = next_observation
     else:

@@ -116,24 +116,22 @@ class Protocol:
     """How long and how fast the experiments run (see the module docstring).
 
     Attributes:
-        name: ``"paper"`` or ``"quick"``.
         cycle_s: seconds per rectangle cycle, per experiment.
         hold_steps: the env's 20 Hz control steps per ``lwpr_rwr`` decision (1: 20 Hz, 2: 10
             Hz, 3: 6.7 Hz), per experiment, for its ``"offline"`` and its ``"online"`` runs.
         lead_in_s: seconds tracking the first corner before recording.
     """
 
-    name: str
     cycle_s: dict[str, float]
     hold_steps: dict[str, dict[str, int]]
     lead_in_s: float
 
 
 PROTOCOLS = {
-    "paper": Protocol("paper", cycle_s={"static": 400.0 / 3.0, "varying": 45.0},
+    "paper": Protocol(cycle_s={"static": 400.0 / 3.0, "varying": 45.0},
                       hold_steps={"static": {"offline": 1, "online": 1},
                                   "varying": {"offline": 1, "online": 3}}, lead_in_s=30.0),
-    "quick": Protocol("quick", cycle_s={"static": 40.0, "varying": 30.0},
+    "quick": Protocol(cycle_s={"static": 40.0, "varying": 30.0},
                       hold_steps={"static": {"offline": 2, "online": 2},
                                   "varying": {"offline": 2, "online": 2}}, lead_in_s=15.0),
 }
@@ -274,6 +272,21 @@ def run_experiment(name: str, seed: int = 0, protocol: str = "paper",
 LEAD_IN_WINDOW_S = 5.0
 """The lead-in's settling is read over its last ``LEAD_IN_WINDOW_S`` (s) against the one before."""
 
+
+def lead_in_settling(errors_mm: np.ndarray, window: int) -> tuple[float, float]:
+    """How far the lead-in's error had settled: its mean over the last ``window`` steps (mm), and
+    that mean less the mean of the ``window`` steps before (mm; negative while still falling).
+    A lead-in shorter than a window is read over what it has; NaN where there is nothing."""
+    errors_mm = np.asarray(errors_mm, dtype=float)
+    end = len(errors_mm)
+    settled = errors_mm[max(0, end - window):]
+    before = errors_mm[max(0, end - 2 * window):max(0, end - window)]
+    if not settled.size:
+        return float("nan"), float("nan")
+    mean = float(settled.mean())
+    return mean, (mean - float(before.mean())) if before.size else float("nan")
+
+
 _LOAD_NAMES = {"none": "no load", "tip": "14.2 g tip", "empty": "empty 14 g tip",
                "filling": "filling"}
 
@@ -321,9 +334,8 @@ def _track(env, policy, path_m: np.ndarray, cycles: int, cycle_s: float, lead_in
     ends = np.cumsum([len(c) for c in per_cycle]) + lead_in - 1
     learnt_per_cycle = np.diff(np.concatenate([[learnt[lead_in - 1] if lead_in else 0],
                                                learnt[ends]]))
-    window = int(round(LEAD_IN_WINDOW_S / period))
-    settled = all_errors_mm[max(0, lead_in - window):lead_in]
-    before = all_errors_mm[max(0, lead_in - 2 * window):max(0, lead_in - window)]
+    settled_mm, drift_mm = lead_in_settling(all_errors_mm[:lead_in],
+                                            int(round(LEAD_IN_WINDOW_S / period)))
     return {"targets_m": aimed[lead_in:], "tips_m": tips[lead_in:], "errors_mm": errors_mm,
             "time_s": np.arange(len(errors_mm)) * period,
             "cycle_mean_mm": [float(c.mean()) for c in per_cycle],
@@ -332,9 +344,7 @@ def _track(env, policy, path_m: np.ndarray, cycles: int, cycle_s: float, lead_in
             "learnt_per_cycle": [int(n) for n in learnt_per_cycle],
             "actuation": "volume" if unwrapped.arm.cylinders is not None else "pressure",
             "decision_hz": 1.0 / (period * getattr(policy, "hold_steps", 1)),
-            "lead_in_settled_mm": float(settled.mean()) if settled.size else float("nan"),
-            "lead_in_drift_mm": (float(settled.mean() - before.mean())
-                                 if settled.size and before.size else float("nan"))}
+            "lead_in_settled_mm": settled_mm, "lead_in_drift_mm": drift_mm}
 
 
 def report_table(name: str, results: dict[str, dict]) -> str:
@@ -349,7 +359,7 @@ def report_table(name: str, results: dict[str, dict]) -> str:
         cells = [label] + [f"{m:.2f} ({s:.2f})" for m, s in zip(record["cycle_mean_mm"],
                                                                   record["cycle_std_mm"])]
         cells += [f"{m:.2f}" for m in record["cycle_max_mm"]]
-        cells.append(", ".join(str(n) for n in record.get("learnt_per_cycle", ())) or "-")
+        cells.append(", ".join(str(n) for n in record["learnt_per_cycle"]))
         cells.append(", ".join(f"{v:.2f}" for v in experiment.paper.get(label, ())))
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)

@@ -4,9 +4,9 @@ ho2018 Table 1: online local learning under an unknown 14.2 g tip load takes the
 from 4.42 to 1.63 mm over three cycles. On the shorter protocol with pressure-driven chambers
 (:data:`MEASURED_ON`: 40 s cycles, 10 Hz decisions; :mod:`eval.papers.ho2018`'s ``static``
 experiment), ``lwpr_rwr`` levels off about where the unloaded offline model tracks (2.0-2.1 mm
-against 1.9 on the present arm; 2.4-2.6 mm on an earlier, lighter one). Each factor below is one change to that experiment (both of its
-runs, offline unloaded and online with the tip load), on the same seeds, so its effect on the
-floor is measured, not guessed:
+against 1.9 on the present arm; 2.4-2.6 mm on an earlier, lighter one). Each factor below is one
+change to that experiment (both of its runs, offline unloaded and online with the tip load), on
+the same seeds, so its effect on the floor is measured, not guessed:
 
 ========================  ===========================================================
 factor                    change
@@ -43,7 +43,7 @@ NO_EM_NOISE = {"sensor_config": {"em": {"position_noise_m": 0.0, "orientation_no
 
 FACTORS: dict[str, dict[str, Any]] = {
     "default": {},
-    "no EM noise": {"env_options": {"actuation": "pressure", **NO_EM_NOISE}},
+    "no EM noise": {"env_options": NO_EM_NOISE},
     "ridge 2": {"ridge": 2.0},
     "no minimum step": {"min_step_mm": 0.0},
     "window 850": {"window": 850},
@@ -51,12 +51,21 @@ FACTORS: dict[str, dict[str, Any]] = {
     "K_p 1.0": {"kp": 1.0},
     "path 3x slower": {"cycle_s": 120.0},
 }
-"""Each factor's change to ``run_experiment("static", ...)`` (keywords)."""
+"""Each factor's change to ``run_experiment("static", ...)`` (keywords; ``env_options`` are
+added to :data:`MEASURED_ON`'s)."""
 
 MEASURED_ON: dict[str, Any] = {"protocol": "quick", "env_options": {"actuation": "pressure"}}
 """The experiment the factors change: the shorter protocol (40 s cycles, 10 Hz decisions) with
-the chambers driven by pressure, where the floor was found; on the paper's protocol with its
-volume-driven chambers the floor is gone (docs/architecture.md)."""
+the chambers driven by pressure, where the floor was found (on the paper's protocol, with its
+volume-driven chambers: docs/architecture.md, "ho2018: the paper's protocol")."""
+
+
+def factor_keywords(name: str) -> dict[str, Any]:
+    """``run_experiment``'s keywords for factor ``name``: :data:`MEASURED_ON` with the factor's
+    change, its ``env_options`` merged into the measured experiment's."""
+    change = FACTORS[name]
+    return {**MEASURED_ON, **change,
+            "env_options": {**MEASURED_ON["env_options"], **change.get("env_options", {})}}
 
 RUNS = ("offline, no load", "online, 14.2 g tip")
 
@@ -73,8 +82,8 @@ def run_factors(seeds: list[int], factors: list[str] | None = None,
     for name in names:
         per_run: dict[str, list[list[float]]] = {run: [] for run in RUNS}
         for seed in seeds:
-            records = run_experiment("static", seed=seed, progress=False, **{**MEASURED_ON,
-                                                                            **FACTORS[name]})
+            records = run_experiment("static", seed=seed, progress=False,
+                                     **factor_keywords(name))
             for run in RUNS:
                 per_run[run].append(records[run]["cycle_mean_mm"])
             bar.update(1)

@@ -328,6 +328,14 @@ def _summary_p2p(run: dict, tolerance_mm: float) -> dict:
             "distance_rises": int(rises.sum())}
 
 
+def _local_ik(env, sensing: dict, seed: int, controller: dict | None, *, step_mm: float,
+              adaptive: bool):
+    """``local_ik_asdm`` on ``env``, trained on the experiment's exploration, with the further
+    ``controller`` settings (its network's training, e.g. :data:`PAPER_TRAINING`'s)."""
+    return make_policy("local_ik_asdm", env, step_mm=step_mm, adaptive=adaptive,
+                       exploration=_exploration(sensing), seed=seed, **(controller or {}))
+
+
 def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
             runs=P2P_RUNS, baselines: tuple[str, ...] = (),
             max_steps: int = MAX_P2P_STEPS, controller: dict | None = None) -> dict:
@@ -342,9 +350,8 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
         start = p2p_start_m(scenario) if scenario else free_start
         env = _make_env(sensing, scenario, start, goal, (max_steps + 2) * 20)
         try:
-            policy = make_policy("local_ik_asdm", env, step_mm=step_mm, adaptive=adaptive,
-                                 exploration=_exploration(sensing), seed=seed,
-                                 **(controller or {}))
+            policy = _local_ik(env, sensing, seed, controller, step_mm=step_mm,
+                               adaptive=adaptive)
             run = _drive(env, policy, goal, max_steps, seed, f"p2p {label}", progress,
                          advance_within_mm=policy.tolerance_mm)
         finally:
@@ -378,8 +385,7 @@ def run_sway(sensing: dict, seed: int = 0, progress: bool = True,
     start = p2p_start_m(scenario)
     env = _make_env(sensing, scenario, start, goal, (MAX_P2P_STEPS + 2) * 20)
     try:
-        policy = make_policy("local_ik_asdm", env, step_mm=8.0, adaptive=True,
-                             exploration=_exploration(sensing), seed=seed, **(controller or {}))
+        policy = _local_ik(env, sensing, seed, controller, step_mm=8.0, adaptive=True)
         run = _drive(env, policy, goal, MAX_P2P_STEPS, seed, "sway and pull", progress,
                      advance_within_mm=policy.tolerance_mm)
     finally:
@@ -435,9 +441,7 @@ def run_circle(sensing: dict, seed: int = 0, progress: bool = True,
                              end_s=CIRCLE_LOAD_STEPS[1] * SETTLE_S)] if load else [])
         env = _make_env(sensing, scenario, points[0], points[0], (MAX_CIRCLE_STEPS + 2) * 20)
         try:
-            policy = make_policy("local_ik_asdm", env, step_mm=8.0, adaptive=True,
-                                 exploration=_exploration(sensing), seed=seed,
-                                 **(controller or {}))
+            policy = _local_ik(env, sensing, seed, controller, step_mm=8.0, adaptive=True)
             run = _drive(env, policy, points[1:], MAX_CIRCLE_STEPS, seed, f"circle {label}",
                          progress, advance_within_mm=policy.tolerance_mm)
         finally:

@@ -217,7 +217,7 @@ HO2018 = ArmSpec(
                               "fibre-wound bores of 4.5 mm radius (63.6 mm^2) at 8.0 mm from the "
                               "axis around a 2.5 mm central cavity (Section 2.1: the proximal "
                               "segment's centre cavity carries the distal segment's three tubes, "
-                              "1.6 mm OD), leaving 1.0 mm outer and inner walls and 4.9 mm between "
+                              "assumed 1.6 mm OD), leaving 1.0 mm outer and inner walls and 4.9 mm between "
                               "bores (SegmentSpec.wall_thickness_m)",
            "density_kg_m3": "Dragon Skin 10's 1.07 g/cm^3: the body's mass follows from the "
                             "material, 30.0 g per segment, 60.0 g in all. The paper states "

@@ -61,9 +61,22 @@ def test_learnt_transitions_are_counted_per_cycle(tiny_static):
     assert len(online) == 3 and all(0 < n <= 120 for n in online)
 
 
+def test_lead_in_settling_is_the_last_windows_mean_and_its_change():
+    """Written out: errors 9, 7, 5, 3, 2, 2 mm read in windows of 2 steps settle at 2 mm, having
+    fallen by 2 mm from the 4 mm of the window before; a lead-in of one window has no change,
+    one shorter than a window is read over what it has, an empty one over nothing."""
+    settled, drift = ho2018.lead_in_settling(np.array([9.0, 7.0, 5.0, 3.0, 2.0, 2.0]), 2)
+    assert (settled, drift) == (2.0, -2.0)
+    settled, drift = ho2018.lead_in_settling(np.array([3.0, 1.0]), 2)
+    assert settled == 2.0 and math.isnan(drift)
+    settled, drift = ho2018.lead_in_settling(np.array([4.0]), 2)
+    assert settled == 4.0 and math.isnan(drift)
+    assert all(math.isnan(v) for v in ho2018.lead_in_settling(np.zeros(0), 2))
+
+
 def test_lead_in_settling_is_read_from_its_last_two_windows(tiny_static):
-    """The lead-in's last 5 s mean error and its change from the 5 s before are finite, and the
-    recorded errors start after the lead-in: three cycles of 120 control steps."""
+    """The 12 s lead-in holds two 5 s windows, so both readings are finite, and the recorded
+    errors start after the lead-in: three cycles of 120 control steps."""
     for record in tiny_static.values():
         assert math.isfinite(record["lead_in_settled_mm"]) and record["lead_in_settled_mm"] > 0
         assert math.isfinite(record["lead_in_drift_mm"])

@@ -5,19 +5,22 @@ from __future__ import annotations
 import pytest
 
 from eval.papers import ho2018_factors
-from eval.papers.ho2018_factors import FACTORS, MEASURED_ON, RUNS, main, report, run_factors
+from eval.papers.ho2018_factors import (FACTORS, MEASURED_ON, RUNS, factor_keywords, main,
+                                         report, run_factors)
 
 
 def test_every_factor_changes_one_thing_the_experiment_takes():
-    """Each factor changes one keyword of the measured experiment (the EM noise keeps its
-    pressure actuation), which stays the shorter protocol with pressure-driven chambers."""
+    """Each factor changes one keyword of the measured experiment, which stays the shorter
+    protocol with pressure-driven chambers (the EM noise's env options included)."""
     assert MEASURED_ON == {"protocol": "quick", "env_options": {"actuation": "pressure"}}
     assert FACTORS["default"] == {}
     for name, change in FACTORS.items():
         assert len(change) <= 1, name
-        for key, value in change.items():
-            if key == "env_options":
-                assert value["actuation"] == "pressure" and len(value) == 2, name
+        keywords = factor_keywords(name)
+        assert keywords["protocol"] == "quick", name
+        assert keywords["env_options"]["actuation"] == "pressure", name
+    assert factor_keywords("no EM noise")["env_options"]["sensor_config"]["em"] == {
+        "position_noise_m": 0.0, "orientation_noise_deg": 0.0}
     assert set().union(*FACTORS.values()) <= {"env_options", "ridge", "min_step_mm", "window",
                                              "hold_steps", "kp", "cycle_s"}
 

@@ -30,6 +30,7 @@ def test_the_shapes_are_the_papers_eight_configurations_and_bend_in_3d():
         np.testing.assert_array_equal(key_points[0], np.zeros(3))
         # every configuration leaves the axis (bent by its chambers and the forces); some bend
         # back towards it (row 2,5's tip ends 10.7 mm off the axis), so the farthest key point
+        # is what leaves it
         assert np.max(np.hypot(key_points[:, 0], key_points[:, 1])) > 0.02, name
 
 

@@ -17,7 +17,7 @@ import pytest
 import soft_gym  # noqa: F401  (registers the env ids)
 from soft_gym.procedures.workspace import reach_distances, reachable_tips
 from soft_gym.robots.presets import PRESETS, get_preset
-from soft_gym.tasks.paths import PATH_SHAPES, PathSpec, make_reference_trajectory
+from soft_gym.tasks.paths import PATH_SHAPES
 from soft_gym.tasks.tasks import TrackTask
 
 REACHED_MM = 2.0
