@@ -55,7 +55,8 @@ PLATEAU = ("on the paper's protocol (volume-driven chambers, 20 Hz updates, 400 
            "2,237-2,315 transitions a cycle where the paper had about 400 (the EM tracker's 0.8 "
            "mm noise per axis puts 86 % of the 50 ms transitions past the 1 mm minimum step), "
            "and seed 1's pre-trained model tracks at 6.7 mm unloaded, its online run drifting up "
-           "in cycle 3 (docs/architecture.md, 'ho2018: the paper's protocol')")
+           "in cycle 3 (docs/architecture.md, \"ho2018: the paper's protocol, and what sets the "
+           "online floor\")")
 """The measured cause shared by the claims of online learning that do not reproduce."""
 
 

@@ -56,8 +56,9 @@ added to :data:`MEASURED_ON`'s)."""
 
 MEASURED_ON: dict[str, Any] = {"protocol": "quick", "env_options": {"actuation": "pressure"}}
 """The experiment the factors change: the shorter protocol (40 s cycles, 10 Hz decisions) with
-the chambers driven by pressure, where the floor was found (on the paper's protocol, with its
-volume-driven chambers: docs/architecture.md, "ho2018: the paper's protocol")."""
+the chambers driven by pressure, where the floor was found. The paper's protocol, with its
+volume-driven chambers, is in
+docs/architecture.md, "ho2018: the paper's protocol, and what sets the online floor"."""
 
 
 def factor_keywords(name: str) -> dict[str, Any]:
