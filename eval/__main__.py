@@ -465,6 +465,18 @@ def _zhao2021_parser(sub) -> argparse.ArgumentParser:
                                "differ: SFE-PD dropout 0.3 and Adam at 0.001, the local IK "
                                "network at 0.001 without its skip connection (separate cache "
                                "entries; about as long to build as the defaults)")
+    zhao2021.add_argument("--goal-mm", type=float, nargs=3, metavar=("X", "Y", "Z"),
+                          default=list(zhao2021_module.P2P_GOAL_MM),
+                          help="the point-to-point goal in the paper's frame (mm; paper: "
+                               "-50 70 210); refused unless the arm holds it with every load")
+    zhao2021.add_argument("--p2p-loads-g", type=float, nargs="*",
+                          default=[1000 * m for m in zhao2021_module.P2P_LOADS_KG[1:]],
+                          help="tip loads of the loaded ASDM point-to-point runs (g; paper: "
+                               "50 75 100)")
+    zhao2021.add_argument("--circle-load-g", type=float,
+                          default=1000 * zhao2021_module.CIRCLE_MASS_KG,
+                          help="the block added at step 29 and removed at step 60 of the "
+                               "circle (g; paper: 263)")
     zhao2021.add_argument("--baselines", nargs="*", default=[],
                           help="further policies on the free point-to-point run and circle, "
                                "e.g. lwpr_rwr cc_model sb3:PATH")
@@ -480,6 +492,15 @@ def _run_zhao2021(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         parser.error(f"--samples must be two counts >= 0 adding up to >= 24, got "
                      f"{args.samples}")
     _check_baselines(parser, args.baselines, zhao2021_module.check_baselines)
+    setup = {"goal_mm": tuple(args.goal_mm),
+             "p2p_loads_kg": tuple(g / 1000.0 for g in args.p2p_loads_g),
+             "circle_mass_kg": args.circle_load_g / 1000.0}
+    if {"p2p", "sway", "circle"} & set(args.experiments):
+        try:
+            zhao2021_module.check_setup(**setup)
+        except ValueError as error:  # "goal_mm: ..." names its option: "--goal-mm: ..."
+            name, _, reason = str(error).partition(":")
+            parser.error(f"--{name.replace('_', '-')}:{reason}")
     paper = zhao2021_module.PAPER_TRAINING if args.paper_training else {}
     config = ReconstructionConfig(n_free=free, n_loaded=loaded,
                                   max_iterations=args.iterations,
@@ -487,7 +508,7 @@ def _run_zhao2021(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
                                   **paper.get("sensing", {}))
     zhao2021_module.run_and_report(args.experiments, args.seeds, args.out, config=config,
                                    baselines=tuple(args.baselines),
-                                   controller=paper.get("controller"))
+                                   controller=paper.get("controller"), **setup)
     print(f"output directory: {args.out}")
 
 

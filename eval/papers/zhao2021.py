@@ -28,18 +28,19 @@ ASDM from ``d`` = 8, and ASDM with 50, 75 and 100 g on the tip. Steps until the 
 pull at the arm's middle (``PULL_N`` towards the axis), released at step 12.
 
 ``circle`` (Section VI-D): a 100 mm diameter circle of ``CIRCLE_POINTS`` path points, ASDM from
-``d`` = 8, a point counted reached within ``E`` (then the next is presented); free, and with a
-block added at step 29 and removed at step 60: the paper's 263 g and 50 g (see
-``CIRCLE_LOADS_KG``).
+``d`` = 8, a point counted reached within ``E`` (then the next is presented); free, and with the
+paper's 263 g block added at step 29 and removed at step 60.
 
 A controller step is one command held 1 s (20 env steps). ``--baselines`` adds other policies
 (``lwpr_rwr``, ``sb3:PATH``; ``cc_model`` and ``hybrid_gpr`` refuse the two-segment arm, which the
 table records) on the free point-to-point run and the free circle, for the same time.
 
-Where the simulation differs from the paper is said in docs/architecture.md ("zhao2021
-experiments"): the calibrated arm cannot reach the paper's end point exactly (the preset's
-``notes["reach"]``), so the point-to-point goal is the point nearest to it that the arm reaches
-with the heaviest tip load of the runs; nor can it carry 263 g around the circle.
+The goal, the loads and the circle's block are the paper's (``--goal-mm``, ``--p2p-loads-g`` and
+``--circle-load-g`` change them); :func:`check_setup` refuses, before any work, a goal or load
+that puts the goal or the circle out of the arm's reach, naming the distance. Where the
+simulation differs from the paper is said in docs/architecture.md ("zhao2021 experiments"):
+the arm is fitted to hold these poses, which costs Table III's key points
+(docs/architecture.md, "zhao2021 arm fit").
 """
 
 from __future__ import annotations
@@ -70,6 +71,11 @@ from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensors.strain_gauge import StrainGauges
 from soft_gym.engines import make_simulator
 from soft_gym.procedures.positioning import drive_tip_to
+from soft_gym.procedures.static_reach import closest_reach
+from soft_gym.procedures.zhao2021_arm_fit import (
+    CIRCLE_DIAMETER_MM, CIRCLE_MASS_KG, P2P_GOAL_MM, P2P_LOADS_KG, P2P_START_MM, SWAY_MASS_KG,
+    TABLE3_KEY_POINTS_MM, TABLE3_PRESSURES_BAR, ZHAO2021_ARM_FIT)
+from soft_gym.robots.statics import StaticArm
 
 EXPERIMENTS = ("table2", "shape", "p2p", "sway", "circle")
 PRESET = "zhao2021"
@@ -83,9 +89,7 @@ PAPER_TRAINING = {"sensing": {"dropout": 0.3, "learning_rate": 1e-3},
 networks with its dropout of 0.3 and Adam at 0.001 (Section III-A), the local IK network at 0.001
 without the skip connection that adds ``A_n`` to its output (Section IV)."""
 
-TABLE3_PRESSURES_BAR = (0.0, 0.5, 0.6, 0.8, 0.7, 0.0)
-TABLE3_TRUE_MM = np.array([[-0.1, 0.5, 49.6], [4.2, 4.9, 90.1], [3.8, 9.6, 133.2],
-                           [-22.6, 19.9, 172.9], [-35.9, 35.2, 210.8], [-58.7, 64.7, 248.5]])
+TABLE3_TRUE_MM = TABLE3_KEY_POINTS_MM
 TABLE3_PAPER_ERRORS_MM = (1.31, 1.3, 2.14, 1.7, 1.45, 1.51)
 TABLE4_LOADS_G = (0, 50, 75, 119, 150)
 TABLE4_PAPER_MEAN_MM = {0: (5.63, 5.78, 6.01, 5.57), 50: (5.64, 5.81, 5.97, 5.62),
@@ -93,21 +97,32 @@ TABLE4_PAPER_MEAN_MM = {0: (5.63, 5.78, 6.01, 5.57), 50: (5.64, 5.81, 5.97, 5.62
                         150: (6.56, 6.49, 6.94, 6.45)}
 PAPER_MEAN_BACKBONE_ERROR_MM = 5.85
 
-P2P_START_MM = (40.0, 20.0, 300.0)
-P2P_END_MM = (-50.0, 70.0, 210.0)
-P2P_RUNS = (("d = 8", 8.0, False, 0.0), ("d = 2", 2.0, False, 0.0),
-            ("ASDM (d1 = 8)", 8.0, True, 0.0), ("ASDM, 50 g", 8.0, True, 0.050),
-            ("ASDM, 75 g", 8.0, True, 0.075), ("ASDM, 100 g", 8.0, True, 0.100))
-"""Label, ``d`` (mm), adaptive, tip mass (kg) (Section VI-C-1)."""
+P2P_END_MM = P2P_GOAL_MM
+
+
+def p2p_runs(loads_kg: tuple[float, ...] = P2P_LOADS_KG[1:]) -> tuple:
+    """Section VI-C-1's runs: label, ``d`` (mm), adaptive, tip mass (kg): d = 8, d = 2 and ASDM
+    free, then ASDM with each of ``loads_kg`` (the paper's 50, 75 and 100 g)."""
+    return ((("d = 8", 8.0, False, 0.0), ("d = 2", 2.0, False, 0.0),
+             ("ASDM (d1 = 8)", 8.0, True, 0.0))
+            + tuple((f"ASDM, {load * 1000:g} g", 8.0, True, float(load)) for load in loads_kg))
+
+
+P2P_RUNS = p2p_runs()
 PAPER_P2P_STEPS = {"d = 8": 24, "d = 2": 75, "ASDM (d1 = 8)": 14}
 MAX_P2P_STEPS = 100
+REACH_TOLERANCE_MM = 2.0
+"""A goal or circle point counts as within the arm's reach when the resting tip gets this near
+it with the run's heaviest load (mm)."""
 
-SWAY_MASS_KG, PULL_N, PULL_STEPS = 0.119, 1.0, (7, 12)
-CIRCLE_DIAMETER_MM, CIRCLE_Z_MM, CIRCLE_POINTS = 100.0, 250.0, 24
-CIRCLE_LOADS_KG, CIRCLE_LOAD_STEPS, MAX_CIRCLE_STEPS = (0.050, 0.263), (29, 60), 150
-"""The paper's 263 g block, and 50 g, which the calibrated arm can carry around the circle (with
-263 g its tip hangs 41-51 mm off the circle whatever the pressures: docs/architecture.md,
-"zhao2021 experiments")."""
+PULL_N, PULL_STEPS = 1.0, (7, 12)
+CIRCLE_POINTS = 24
+CIRCLE_Z_MM = ZHAO2021_ARM_FIT.circle_z_mm
+"""The circle's height in the paper's frame (mm): not stated; chosen with the arm's fit
+(:data:`soft_gym.procedures.zhao2021_arm_fit.ZHAO2021_ARM_FIT`) where the arm carries the 263 g
+block round it."""
+CIRCLE_LOADS_KG, CIRCLE_LOAD_STEPS, MAX_CIRCLE_STEPS = (CIRCLE_MASS_KG,), (29, 60), 150
+"""The paper's 263 g block, added at step 29 and removed at step 60."""
 
 
 # ---------------------------------------------------------------------------- shape (VI-B)
@@ -253,13 +268,56 @@ def _search_reachable_point(point_m: np.ndarray, scenario, tries: int) -> np.nda
                      f"workspace is reachable with scenario {scenario!r}")
 
 
-def p2p_goal_m() -> np.ndarray:
-    """The point-to-point goal in our frame, the same for every run: the paper's end point, or
-    the point nearest to it that the arm reaches with the heaviest of the runs' tip loads (see
-    :func:`reachable_point`)."""
-    heaviest = max(load for *_, load in P2P_RUNS)
-    return reachable_point(base_point_from_paper(np.array(P2P_END_MM) / 1000.0),
-                           [TipMass(mass_kg=heaviest)])
+def require_within_reach(name: str, point_m: np.ndarray, mass_kg: float) -> float:
+    """Refuse (``ValueError``, naming ``name``) a point the resting arm's tip cannot get within
+    :data:`REACH_TOLERANCE_MM` of with ``mass_kg`` on it (the static pressure search,
+    :func:`~soft_gym.procedures.static_reach.closest_reach`), or a load past the arm's limit;
+    returns the distance (mm)."""
+    spec = get_preset(PRESET)
+    limit_kg = spec.max_load_n / float(np.linalg.norm(spec.gravity_base))
+    if not 0.0 <= mass_kg <= limit_kg:
+        raise ValueError(f"{name}: a {mass_kg * 1000:g} g tip load is past the {PRESET} arm's "
+                         f"limit; allowed 0-{limit_kg * 1000:.0f} g")
+    key = (name, tuple(np.round(point_m, 9)), float(mass_kg))
+    if key not in _REACH_DISTANCES:
+        reach = closest_reach(StaticArm(spec), np.asarray(point_m, dtype=float), mass_kg)
+        _REACH_DISTANCES[key] = (reach.distance_m * 1000.0,
+                                 paper_point_from_base(reach.tip_m) * 1000.0)
+    distance_mm, nearest_mm = _REACH_DISTANCES[key]
+    if distance_mm > REACH_TOLERANCE_MM:
+        raise ValueError(
+            f"{name}: {_xyz(paper_point_from_base(point_m) * 1000)} mm (paper frame) lies "
+            f"{distance_mm:.1f} mm from the nearest tip the {PRESET} arm holds with "
+            f"{mass_kg * 1000:g} g on it, {_xyz(nearest_mm)} mm; allowed within "
+            f"{REACH_TOLERANCE_MM:g} mm of its reach")
+    return distance_mm
+
+
+_REACH_DISTANCES: dict[tuple, tuple[float, np.ndarray]] = {}
+""":func:`require_within_reach`'s searches in this process."""
+
+
+def check_setup(goal_mm=P2P_GOAL_MM, p2p_loads_kg=P2P_LOADS_KG[1:],
+                circle_mass_kg: float = CIRCLE_MASS_KG) -> None:
+    """Refuse, before any work, a point-to-point goal (mm, paper frame) the arm cannot hold
+    with the heaviest of ``p2p_loads_kg`` on its tip, and loads past its limit or that put the
+    goal or the circle (``circle_mass_kg``) out of its reach (``ValueError`` naming the
+    setting and the distance)."""
+    goal = base_point_from_paper(np.asarray(goal_mm, dtype=float) / 1000.0)
+    loads = tuple(float(load) for load in p2p_loads_kg)
+    require_within_reach("goal_mm", goal, 0.0)
+    for load in sorted(set(loads)):
+        require_within_reach("p2p_loads_g", goal, load)
+    for point in circle_points_m(4)[:4]:
+        require_within_reach("circle_load_g", point, circle_mass_kg)
+
+
+def p2p_goal_m(goal_mm=P2P_GOAL_MM, loads_kg=P2P_LOADS_KG) -> np.ndarray:
+    """The point-to-point goal (m, our frame): the paper's end point (-50, 70, 210) mm, checked
+    to lie within the arm's reach with the heaviest of ``loads_kg`` (:func:`require_within_reach`)."""
+    goal = base_point_from_paper(np.asarray(goal_mm, dtype=float) / 1000.0)
+    require_within_reach("goal_mm", goal, max(loads_kg))
+    return goal
 
 
 def p2p_start_m(scenario=()) -> np.ndarray:
@@ -338,11 +396,12 @@ def _local_ik(env, sensing: dict, seed: int, controller: dict | None, *, step_mm
 
 def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
             runs=P2P_RUNS, baselines: tuple[str, ...] = (),
-            max_steps: int = MAX_P2P_STEPS, controller: dict | None = None) -> dict:
+            max_steps: int = MAX_P2P_STEPS, controller: dict | None = None,
+            goal_mm=P2P_GOAL_MM) -> dict:
     """Section VI-C-1's runs (and ``baselines`` on the free run), each at most ``max_steps``
-    controller steps; ``controller``: further ``local_ik_asdm`` settings (its network's
-    training, e.g. :data:`PAPER_TRAINING`'s)."""
-    goal = p2p_goal_m()
+    controller steps, to ``goal_mm`` (paper frame; the paper's by default); ``controller``:
+    further ``local_ik_asdm`` settings (its network's training, e.g. :data:`PAPER_TRAINING`'s)."""
+    goal = p2p_goal_m(goal_mm, tuple(load for *_, load in runs) + (0.0,))
     free_start = p2p_start_m()
     results = {}
     for label, step_mm, adaptive, load_kg in runs:
@@ -370,10 +429,10 @@ def run_p2p(sensing: dict, seed: int = 0, progress: bool = True,
 
 
 def run_sway(sensing: dict, seed: int = 0, progress: bool = True,
-             controller: dict | None = None) -> dict:
+             controller: dict | None = None, goal_mm=P2P_GOAL_MM) -> dict:
     """Section VI-C-2: a swaying 119 g block, then a pull at the middle from step 7 to 12
-    (``controller`` as :func:`run_p2p`'s)."""
-    goal = p2p_goal_m()
+    (``controller`` and ``goal_mm`` as :func:`run_p2p`'s)."""
+    goal = p2p_goal_m(goal_mm, (0.0,))
     paper_start = base_point_from_paper(np.array(P2P_START_MM) / 1000.0)
     toward_axis = -np.r_[paper_start[:2], 0.0] / np.linalg.norm(paper_start[:2])
     spec = get_preset(PRESET)
@@ -398,18 +457,21 @@ def run_sway(sensing: dict, seed: int = 0, progress: bool = True,
 
 
 def circle_points_m(n: int = CIRCLE_POINTS) -> np.ndarray:
-    """The 100 mm circle about the arm's axis at ``CIRCLE_Z_MM`` (m), first point on +x."""
+    """The 100 mm circle about the arm's axis at ``CIRCLE_Z_MM`` (paper frame), ``n + 1``
+    points (m, our frame), the first and last on the paper's +x."""
     angles = 2.0 * np.pi * np.arange(n + 1) / n
-    radius = CIRCLE_DIAMETER_MM / 2000.0
-    return np.column_stack([radius * np.cos(angles), radius * np.sin(angles),
-                            np.full(n + 1, CIRCLE_Z_MM / 1000.0)])
+    radius = CIRCLE_DIAMETER_MM / 2.0
+    paper = np.column_stack([radius * np.cos(angles), radius * np.sin(angles),
+                             np.full(n + 1, CIRCLE_Z_MM)])
+    return base_point_from_paper(paper / 1000.0)
 
 
 def _summary_circle(run: dict, load_steps) -> dict:
     records = run["records"]
     tips = np.array([r["tip_mm"] for r in records])
     radius = np.hypot(tips[:, 0], tips[:, 1])
-    path_error = np.hypot(radius - CIRCLE_DIAMETER_MM / 2, tips[:, 2] - CIRCLE_Z_MM)
+    height = circle_points_m(1)[0, 2] * 1000.0  # the circle's height in our frame (mm)
+    path_error = np.hypot(radius - CIRCLE_DIAMETER_MM / 2, tips[:, 2] - height)
     feedback = np.array([r["feedback_distance_mm"] for r in records])
     recovery = {}
     for name, step in zip(("added", "removed"), load_steps or ()):
@@ -595,10 +657,15 @@ def plot_control(path: str | Path, results: dict) -> Path:
 def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
                    config: ReconstructionConfig | None = None,
                    baselines: tuple[str, ...] = (), progress: bool = True,
-                   controller: dict | None = None) -> dict:
+                   controller: dict | None = None, goal_mm=P2P_GOAL_MM,
+                   p2p_loads_kg: tuple[float, ...] = P2P_LOADS_KG[1:],
+                   circle_mass_kg: float = CIRCLE_MASS_KG) -> dict:
     """Run the experiments for every seed; write ``zhao2021_seed<N>.md/.png`` (and
     ``zhao2021_table2_seed<N>.png``) and ``zhao2021.json`` under ``out`` and print the tables;
-    ``controller``: further ``local_ik_asdm`` settings for every control run."""
+    ``controller``: further ``local_ik_asdm`` settings for every control run; ``goal_mm``
+    (paper frame), ``p2p_loads_kg`` and ``circle_mass_kg``: the point-to-point goal, the loaded
+    ASDM runs' tip loads and the circle's block (the paper's by default, checked by
+    :func:`check_setup`)."""
     unknown = sorted(set(experiments) - set(EXPERIMENTS))
     if unknown:
         raise ValueError(f"experiments must be among {list(EXPERIMENTS)}, got {unknown}")
@@ -616,12 +683,15 @@ def run_and_report(experiments: list[str], seeds: list[int], out: str | Path,
         if "shape" in experiments:
             results["shape"] = run_shape(seeded, seed, progress)
         if "p2p" in experiments:
-            results["p2p"] = run_p2p(sensing, seed, progress, baselines=baselines,
-                                     controller=controller)
+            results["p2p"] = run_p2p(sensing, seed, progress, runs=p2p_runs(p2p_loads_kg),
+                                     baselines=baselines, controller=controller,
+                                     goal_mm=goal_mm)
         if "sway" in experiments:
-            results["sway"] = run_sway(sensing, seed, progress, controller=controller)
+            results["sway"] = run_sway(sensing, seed, progress, controller=controller,
+                                       goal_mm=goal_mm)
         if "circle" in experiments:
             results["circle"] = run_circle(sensing, seed, progress, baselines=baselines,
+                                           masses_kg=(0.0, circle_mass_kg),
                                            controller=controller)
         table = report_tables(results)
         print(f"\nzhao2021, seed {seed}\n{table}")

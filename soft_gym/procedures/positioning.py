@@ -24,6 +24,9 @@ from __future__ import annotations
 import numpy as np
 
 from soft_gym._validation import as_finite_array, as_points, require_integer, require_positive
+from soft_gym.procedures.static_reach import closest_reach
+from soft_gym.robots.statics import StaticArm
+from soft_gym.scenarios.loads import SwayingMass
 from soft_gym.simulator import Simulator
 
 
@@ -65,14 +68,52 @@ def drive_tip_to(sim: Simulator, start_m: np.ndarray, hold_s: float = 1.0, toler
                                                                         spec.n_chambers))])
     reached = [settle(candidate) for candidate in candidates]
     closest = int(np.argmin([np.linalg.norm(tip - start_m) for tip in reached]))
-    fraction = candidates[closest].copy()
+    fraction, distance = _search_from(settle, start_m, candidates[closest].copy(), tolerance_m,
+                                      max_trials, damping)
+    if distance > tolerance_m:  # not found: search again from the static arm's answer
+        static = _static_start(sim, start_m)
+        if static is not None:
+            second, second_distance = _search_from(settle, start_m, static, tolerance_m,
+                                                   max_trials, damping)
+            if second_distance < distance:
+                fraction, distance = second, second_distance
+            else:
+                settle(fraction)
+    return low + fraction * span, distance
+
+
+def _search_from(settle, point: np.ndarray, fraction: np.ndarray, tolerance_m: float,
+                 max_trials: int, damping: float) -> tuple[np.ndarray, float]:
+    """The damped search from ``fraction``; the arm is left holding its best trial, whose
+    fraction and distance from ``point`` (m) are returned."""
     jacobian, tip = _jacobian(settle, fraction, settle(fraction))
-    best_fraction, _, best_distance, tip = _damped_search(settle, start_m, fraction, tip, jacobian,
+    best_fraction, _, best_distance, tip = _damped_search(settle, point, fraction, tip, jacobian,
                                                           tolerance_m, max_trials, damping)
-    fraction = best_fraction
-    if np.linalg.norm(tip - start_m) > best_distance:  # the arm ended past its best trial
+    if np.linalg.norm(tip - point) > best_distance:  # the arm ended past its best trial
         tip = settle(best_fraction)
-    return low + fraction * span, float(np.linalg.norm(tip - start_m))
+    return best_fraction, float(np.linalg.norm(tip - point))
+
+
+def _static_start(sim: Simulator, point: np.ndarray) -> np.ndarray | None:
+    """Chamber fractions (of each chamber's range) that hold the resting arm's tip nearest
+    ``point`` with the weight hanging at its tip (tip masses and swaying masses), by the static
+    search (:func:`~soft_gym.procedures.static_reach.closest_reach`), kept for the process;
+    ``None`` for volume-actuated arms, whose pressures follow the chambers' lengths."""
+    spec = sim.spec
+    if spec.cylinders is not None:
+        return None
+    mass = sim.tip_payload_kg + sum(load.mass_kg for load in sim.loads
+                                    if isinstance(load, SwayingMass))
+    key = (repr(spec), tuple(np.round(point, 9)), round(float(mass), 9))
+    if key not in _STATIC_STARTS:
+        reach = closest_reach(StaticArm(spec), point, mass)
+        low, span = spec.p_pre_pa, spec.p_max_pa - spec.p_pre_pa
+        _STATIC_STARTS[key] = np.clip((reach.pressures_pa - low) / span, 0.0, 1.0)
+    return _STATIC_STARTS[key].copy()
+
+
+_STATIC_STARTS: dict[tuple, np.ndarray] = {}
+""":func:`_static_start`'s answers in this process, by arm, point and hanging mass."""
 
 
 def follow_path(sim: Simulator, points_m: np.ndarray, hold_s: float = 1.0,

@@ -7,9 +7,10 @@ docs/architecture.md, "Pneumatic actuation": chamber ``i`` at gauge pressure ``p
 moment, so pre-pressure only lengthens the arm.
 
 A chamber whose bore widens with pressure (:attr:`soft_gym.robots.spec.SegmentSpec.chamber_area_growth`
-``g``, zhao2021's thread-wrapped chambers) pushes ``F_i = p_i A_c (1 + g p_i / p_max)``: the map
-stays linear in the *effective pressure* ``p_i (1 + g p_i / p_max)``
-(:func:`effective_pressure_pa`), which is what the simulator feeds its linear load matrix.
+``g`` and ``chamber_area_growth_exponent`` ``n``, zhao2021's thread-wrapped chambers) pushes
+``F_i = p_i A_c (1 + g (p_i / p_max)^n)``: the map stays linear in the *effective pressure*
+``p_i (1 + g (p_i / p_max)^n)`` (:func:`effective_pressure_pa`, :class:`BoreGrowth`), which is
+what the simulators feed their linear load matrix.
 """
 
 from __future__ import annotations
@@ -80,18 +81,46 @@ def chamber_area_growth(spec: ArmSpec) -> np.ndarray:
     return np.repeat([segment.chamber_area_growth for segment in spec.segments], 3).astype(float)
 
 
+class BoreGrowth:
+    """The chambers' bores widening with pressure: ``A_c(p) = A_c (1 + g (p / p_max)^n)`` per
+    chamber (:attr:`~soft_gym.robots.spec.SegmentSpec.chamber_area_growth` ``g``,
+    :attr:`~soft_gym.robots.spec.SegmentSpec.chamber_area_growth_exponent` ``n``), looked up once
+    for a simulator's every actuation update.
+
+    Attributes:
+        grows: whether any bore grows (else the effective pressure is the pressure).
+    """
+
+    def __init__(self, spec: ArmSpec) -> None:
+        self.growth = chamber_area_growth(spec)
+        exponent = np.repeat([s.chamber_area_growth_exponent for s in spec.segments], 3)
+        self.exponent = exponent.astype(float)
+        self._linear = bool(np.all(self.exponent == 1.0))
+        self.p_max_pa = spec.p_max_pa
+        self.grows = bool(np.any(self.growth))
+
+    def effective(self, pressure_pa: np.ndarray) -> np.ndarray:
+        """``p (1 + g (p / p_max)^n)`` (Pa) of pressures ``(..., n_chambers)`` (Pa)."""
+        pressure = np.asarray(pressure_pa, dtype=float)
+        if not self.grows:
+            return pressure
+        if self._linear:  # the exponent-1 law, evaluated as it always was (bit for bit)
+            return pressure * (1.0 + self.growth * pressure / self.p_max_pa)
+        return pressure * (1.0 + self.growth * (pressure / self.p_max_pa) ** self.exponent)
+
+    def key(self) -> bytes:
+        """Bytes equal for equal growth laws (arms that can share an actuation update)."""
+        return self.growth.tobytes() + self.exponent.tobytes()
+
+
 def effective_pressure_pa(spec: ArmSpec, pressure_pa: np.ndarray) -> np.ndarray:
-    """Chamber pressures (Pa) scaled by their bores' growth: ``p (1 + g p / p_max)`` (Pa).
+    """Chamber pressures (Pa) scaled by their bores' growth: ``p (1 + g (p / p_max)^n)`` (Pa).
 
     ``p A_c`` of the effective pressure is the chamber's force ``p A_c(p)`` with
-    ``A_c(p) = A_c (1 + g p / p_max)`` (:attr:`soft_gym.robots.spec.SegmentSpec.chamber_area_growth`);
-    equal to ``pressure_pa`` where ``g = 0``. Works on ``(..., n_chambers)`` arrays.
+    ``A_c(p) = A_c (1 + g (p / p_max)^n)`` (:class:`BoreGrowth`); equal to ``pressure_pa`` where
+    ``g = 0``. Works on ``(..., n_chambers)`` arrays.
     """
-    pressure = np.asarray(pressure_pa, dtype=float)
-    growth = chamber_area_growth(spec)
-    if not np.any(growth):
-        return pressure
-    return pressure * (1.0 + growth * pressure / spec.p_max_pa)
+    return BoreGrowth(spec).effective(pressure_pa)
 
 
 def chamber_loads(spec: ArmSpec, pressure_pa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

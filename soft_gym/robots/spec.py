@@ -46,6 +46,10 @@ MAX_CHAMBER_AREA_GROWTH = 4.0
 """Largest :attr:`SegmentSpec.chamber_area_growth`: a bore up to five times its rest area at
 ``p_max``. A wrapped chamber bulging further is past what the quadratic force law describes."""
 
+MAX_CHAMBER_AREA_GROWTH_EXPONENT = 6.0
+"""Largest :attr:`SegmentSpec.chamber_area_growth_exponent`: how late in the pressure range the
+bore's growth may set in."""
+
 
 @dataclass(frozen=True)
 class SegmentSpec:
@@ -83,6 +87,10 @@ class SegmentSpec:
             and its bore widens as the walls thin, so its force ``p A_c(p)`` (axial and bending
             alike, :func:`soft_gym.robots.pneumatics.effective_pressure_pa`) grows faster than
             linearly with the pressure. In ``[0, 4]``.
+        chamber_area_growth_exponent: ``n`` of the bore's growth law
+            ``A_c(p) = A_c (1 + g (p / p_max)^n)``: 1 grows the bore in proportion to the pressure;
+            larger, the growth sets in late, as a wrapped membrane that bulges little until its
+            windings are taken up and then balloons. In ``[1, 6]``.
         max_bend_per_m_rad: largest curvature allowed by the joint limits (rad/m).
         damping_ratio: damping ratio of the arm's first bending mode. The damping is
             stiffness-proportional, as for a viscoelastic solid: every joint of the segment gets
@@ -118,6 +126,7 @@ class SegmentSpec:
     max_extension_ratio: float = 1.6
     thread_length_m: float | None = None
     chamber_area_growth: float = 0.0
+    chamber_area_growth_exponent: float = 1.0
     max_bend_per_m_rad: float = 40.0
     damping_ratio: float = 0.7
     torsion: bool = False
@@ -150,6 +159,13 @@ class SegmentSpec:
             raise ValueError(
                 f"chamber_area_growth must be a number in [0, {MAX_CHAMBER_AREA_GROWTH}] (relative "
                 f"growth of the chamber area at p_max), got {growth!r}")
+        exponent = self.chamber_area_growth_exponent
+        if (isinstance(exponent, (bool, np.bool_)) or not isinstance(
+                exponent, (int, float, np.integer, np.floating)) or not np.isfinite(exponent)
+                or not 1.0 <= exponent <= MAX_CHAMBER_AREA_GROWTH_EXPONENT):
+            raise ValueError(
+                f"chamber_area_growth_exponent must be a number in "
+                f"[1, {MAX_CHAMBER_AREA_GROWTH_EXPONENT}], got {exponent!r}")
         if self.thread_length_m is not None:
             longest = self.length_m * self.max_extension_ratio
             if (not isinstance(self.thread_length_m, (int, float, np.floating))

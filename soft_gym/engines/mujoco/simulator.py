@@ -27,7 +27,7 @@ from soft_gym.engines.mujoco.model import ArmModel, build_arm_model
 from soft_gym.engines.mujoco.stepping import step_arms
 from soft_gym.engines.mujoco.world import MujocoWorld
 from soft_gym.robots.chain import build_chain, pressure_to_rest_matrix, weightless_equilibrium
-from soft_gym.robots.pneumatics import chamber_area_growth, effective_pressure_pa, make_supply
+from soft_gym.robots.pneumatics import BoreGrowth, effective_pressure_pa, make_supply
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.simulator import Load
 
@@ -74,8 +74,7 @@ class MujocoArmSimulator(CommonArm):
         self._readout = ChainReadout(spec, self.chain)
         self._bodies = self._arm.body_ids
         self._station_bodies = self._arm.station_body_ids
-        self.area_growth = chamber_area_growth(spec)
-        self.area_grows = bool(np.any(self.area_growth))
+        self.bore = BoreGrowth(spec)
         self._nominal_stiffness = self.model.jnt_stiffness.copy()
         self._nominal_cubic = self.model.jnt_stiffnesspoly.copy()
         self._nominal_damping = self.model.dof_damping.copy()
@@ -91,7 +90,7 @@ class MujocoArmSimulator(CommonArm):
         self.supply = make_supply(spec, self._rest_chamber_lengths)
         # arms with equal keys can share one actuation update (stepping.step_arms)
         self.lockstep_key = (self.physics_dt_s, self.per_actuation, self.moments.tobytes(),
-                             self.area_growth.tobytes(), spec.p_max_pa.tobytes(),
+                             self.bore.key(), spec.p_max_pa.tobytes(),
                              spec.cylinders)
         self._held = HeldForceTable(self.chain)
         self.joint_force = self.joint_force_previous = np.zeros(self.model.nv)

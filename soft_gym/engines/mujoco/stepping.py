@@ -20,7 +20,7 @@ from typing import Protocol, Sequence
 import mujoco
 import numpy as np
 
-from soft_gym.robots.pneumatics import PneumaticSupply, VolumeSupply
+from soft_gym.robots.pneumatics import BoreGrowth, PneumaticSupply, VolumeSupply
 from soft_gym.robots.spec import ArmSpec
 
 
@@ -38,8 +38,7 @@ class MujocoArm(Protocol):
     substep: int            # substeps since the reset (or the clock's restart)
     time_s: float
     moments: np.ndarray     # (n_chambers, n_dofs) joint force per unit effective pressure
-    area_grows: bool
-    area_growth: np.ndarray
+    bore: BoreGrowth        # the chambers' bore growth (effective pressures)
     joint_force: np.ndarray
     joint_force_previous: np.ndarray
     wrench: np.ndarray | None
@@ -167,8 +166,8 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
                           for sim in sims])
         pressure = pressure + (command - pressure) * alpha
     effective = pressure
-    if first.area_grows:
-        effective = pressure * (1.0 + first.area_growth * pressure / first.spec.p_max_pa)
+    if first.bore.grows:
+        effective = first.bore.effective(pressure)
     joint = pressure_moments(first.moments, effective)
     lookahead_s = STOP_LOOKAHEAD_UPDATES * interval_s
     for i, sim in enumerate(sims):

@@ -23,7 +23,7 @@ from soft_gym.engines.pybullet.external_loads import HeldForces, TipPayload
 from soft_gym.engines.pybullet.mass_matrix import LinkInertias
 from soft_gym.engines.pybullet.springs import STIFFNESS_MARGIN, SpringGains, tangent_stiffness_at
 from soft_gym.engines.pybullet.world import PyBulletWorld
-from soft_gym.robots.pneumatics import chamber_area_growth, effective_pressure_pa, make_supply
+from soft_gym.robots.pneumatics import BoreGrowth, effective_pressure_pa, make_supply
 from soft_gym.robots.chain import pressure_to_rest_matrix, weightless_equilibrium
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.simulator import Load
@@ -85,8 +85,7 @@ class ArmSimulator(CommonArm):
                                       on_change=self._gains.invalidate)
         self._held = HeldForces(self.client, self.arm)
         self._payload = TipPayload(self.arm, self._inertias, self._held)
-        self._area_growth = chamber_area_growth(spec)
-        self._area_grows = bool(np.any(self._area_growth))
+        self._bore = BoreGrowth(spec)
         self._joints = list(range(self.arm.n_joints))
         self._kind = self.arm.joint_kind
         self._stiffening = bool(np.any(self.arm.stiffening > 0))
@@ -413,8 +412,8 @@ class ArmSimulator(CommonArm):
                                            self._readout.chamber_lengths(q))
         else:
             pressure = self.supply.advance(self._substeps_per_actuation * self.physics_dt_s)
-        if self._area_grows:  # effective_pressure_pa, with the growth looked up once
-            pressure = pressure * (1.0 + self._area_growth * pressure / self.spec.p_max_pa)
+        if self._bore.grows:  # effective_pressure_pa, with the growth looked up once
+            pressure = self._bore.effective(pressure)
         self._load_torque = self._stiffness0 * (self._pressure_to_rest @ pressure)
         tangent = tangent_stiffness_at(q, self._stiffness0, self._stiffening, self.arm, self._stops)
         gains = self._gains

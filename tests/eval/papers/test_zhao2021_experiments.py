@@ -20,16 +20,27 @@ SMALL = ReconstructionConfig(n_free=240, n_loaded=120, max_iterations=80)
 per test process)."""
 
 
-def test_paper_start_is_reached_and_the_goal_is_the_nearest_reachable_point():
+def test_the_papers_start_and_goal_are_run():
+    """zhao2021 Section VI-C: from (40, 20, 300) to (-50, 70, 210) mm, a 137 mm move, the
+    start reached by the env's drive, the goal within reach with 100 g."""
     start = zhao2021.p2p_start_m()
     paper_start = zhao2021.base_point_from_paper(np.array(zhao2021.P2P_START_MM) / 1000.0)
     assert np.linalg.norm(start - paper_start) < 2e-3
     goal = zhao2021.p2p_goal_m()
     paper_goal = zhao2021.base_point_from_paper(np.array(zhao2021.P2P_END_MM) / 1000.0)
-    # the calibrated arm falls ~23 mm short of the paper's end free (presets notes["reach"]),
-    # 72 mm with the heaviest load of the runs (100 g)
-    assert 0.015 < np.linalg.norm(goal - paper_goal) < 0.08
-    assert np.linalg.norm(goal - start) > 0.06  # still a long move (73 mm)
+    np.testing.assert_array_equal(goal, paper_goal)
+    assert np.linalg.norm(goal - start) * 1000 == pytest.approx(137.0, abs=1.0)
+
+
+@pytest.mark.parametrize("setup, message", [
+    ({"goal_mm": (-200.0, 70.0, 150.0)}, r"goal_mm: .* lies \d+\.\d mm from the nearest tip"),
+    ({"p2p_loads_kg": (0.05, 0.4)}, r"p2p_loads_g: .* lies \d+\.\d mm from the nearest tip"),
+    ({"p2p_loads_kg": (5.0,)}, r"p2p_loads_g: a 5000 g tip load is past .* allowed 0-\d+ g"),
+    ({"circle_mass_kg": 0.6}, r"circle_load_g: .* lies \d+\.\d mm from the nearest tip"),
+])
+def test_a_goal_or_load_out_of_reach_is_refused_with_the_distance(setup, message):
+    with pytest.raises(ValueError, match=message):
+        zhao2021.check_setup(**setup)
 
 
 @pytest.mark.slow

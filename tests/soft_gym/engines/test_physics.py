@@ -537,11 +537,12 @@ def test_library_load_map_matches_the_cross_product_reference():
         spec = get_preset(name)
         pressures = rng.uniform(0.0, 1.0, spec.n_chambers) * spec.p_max_pa
         axial, moment = chamber_loads(spec, pressures)
-        # a growing bore (zhao2021's chamber_area_growth g) pushes p A_c (1 + g p / p_max): the
-        # reference's p A_c at that scaled pressure
+        # a growing bore (zhao2021's chamber_area_growth g, exponent n) pushes
+        # p A_c (1 + g (p / p_max)^n): the reference's p A_c at that scaled pressure
         growth = np.repeat([segment.chamber_area_growth for segment in spec.segments], 3)
+        exponent = np.repeat([s.chamber_area_growth_exponent for s in spec.segments], 3)
         reference_axial, reference_moment = pneumatic_loads_reference(
-            spec, pressures * (1.0 + growth * pressures / spec.p_max_pa))
+            spec, pressures * (1.0 + growth * (pressures / spec.p_max_pa) ** exponent))
         np.testing.assert_allclose(axial, reference_axial, rtol=1e-12)
         np.testing.assert_allclose(moment, reference_moment, rtol=1e-9, atol=1e-15)
 

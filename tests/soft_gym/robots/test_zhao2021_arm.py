@@ -16,13 +16,27 @@ import dataclasses
 import numpy as np
 import pytest
 
+from soft_gym.procedures.static_reach import closest_reach
+from soft_gym.procedures.zhao2021_arm_fit import (
+    CIRCLE_MASS_KG,
+    P2P_GOAL_MM,
+    P2P_LOADS_KG,
+    P2P_START_MM,
+    SWAY_MASS_KG,
+    ZHAO2021_ARM_FIT,
+    circle_point_mm,
+    evaluate_table3,
+)
 from soft_gym.robots.presets import (
     ZHAO2021,
     ZHAO2021_PAPER_CHAMBERS,
+    ZHAO2021_PAPER_FRAME_DEG,
+    ZHAO2021_PAPER_ORIGIN_Z_M,
     base_point_from_paper,
     paper_point_from_base,
     paper_pressures_to_chambers,
 )
+from soft_gym.robots.statics import StaticArm
 from soft_gym.robots.spec import SegmentSpec
 from soft_gym.engines.pybullet.simulator import ArmSimulator
 
@@ -37,54 +51,16 @@ TABLE_III_TRUE_MM = np.array([
     (-22.6, 19.9, 172.9), (-35.9, 35.2, 210.8), (-58.7, 64.7, 248.5)])
 """zhao2021 Table III, "True Position" of P0..P6 (mm, paper frame)."""
 
-TABLE_III_TOLERANCE_MM = np.array([2.5, 8.5, 11.5, 10.0, 6.5, 8.0])
-"""Allowed distance of P1..P6 from Table III (mm): the simulated errors (1.0, 7.1, 10.1, 8.4,
-5.0, 6.6 mm, RMS 7.0) plus about 1.5 mm. The paper's segment 1 bends 10 mm sideways in a direction about
-70 deg off segment 2's, which a pressure moment plus gravity does not reproduce: P2 and P3 carry
-the largest errors."""
-
-TABLE_III_RMS_MM = 7.5
-"""Allowed RMS distance of P1..P6 from Table III (mm); simulated 7.0 mm."""
+PAPER_KEY_POINT_RMS_MM = 3.0
+"""zhao2021 Table III / Section VI-B: the key points are known to within 3 mm (the RGB-D
+camera's and the networks' errors both under it)."""
 
 REACH_TOLERANCE_MM = 2.0
-"""A point counts as reached when the tip settles within this distance of it (mm)."""
+"""A point counts as reached when the tip rests within this distance of it (mm)."""
 
-START_MM = np.array([40.0, 20.0, 300.0])
-END_MM = np.array([-50.0, 70.0, 210.0])
+START_MM = np.array(P2P_START_MM)
+END_MM = np.array(P2P_GOAL_MM)
 """zhao2021 Section VI-C: the point-to-point task's start and end (mm, paper frame)."""
-
-START_PRESSURES_BAR = np.array([0.762, 0.452, 0.800, 0.710, 0.730, 0.758])
-"""Paper-order pressures (bar) that put the tip on the start point (0.13 mm off; found with
-``scipy.optimize.least_squares`` over the six pressures in [0, 0.8] bar, as
-:func:`test_the_paper_points_by_optimisation` does): segment 1 at 148 mm, segment 2 at its
-150 mm thread."""
-
-END_PRESSURES_BAR = np.array([0.0, 0.721, 0.692, 0.8, 0.0, 0.0])
-"""Paper-order pressures (bar) that bring the tip nearest the end point: 23.1 mm off, at
-(-48.0, 74.1, 232.7) mm, 22.7 mm too far from the base. The end point is out of reach: with the
-stretch and bend per pressure that Table III fixes, the arm is too long when bent that far."""
-
-END_SHORTFALL_MM = (21.0, 25.0)
-"""Range the tip's nearest distance to the end point lies in (mm): measured 23.1 mm."""
-
-CIRCLE_HEIGHT_MM = 240.0
-CIRCLE_RADIUS_MM = 50.0
-CIRCLE_PRESSURES_BAR = np.array([
-    [0.504, 0.028, 0.317, 0.358, 0.002, 0.455],
-    [0.497, 0.008, 0.525, 0.295, 0.001, 0.241],
-    [0.332, 0.085, 0.590, 0.348, 0.049, 0.215],
-    [0.156, 0.242, 0.602, 0.368, 0.125, 0.146],
-    [0.051, 0.410, 0.557, 0.375, 0.202, 0.019],
-    [0.010, 0.553, 0.476, 0.298, 0.220, 0.003],
-    [0.087, 0.616, 0.313, 0.256, 0.277, 0.048],
-    [0.243, 0.629, 0.146, 0.168, 0.298, 0.124],
-    [0.469, 0.606, 0.048, 0.074, 0.279, 0.058],
-    [0.376, 0.608, 0.060, 0.054, 0.002, 0.661],
-    [0.468, 0.444, 0.122, 0.107, 0.028, 0.672],
-    [0.480, 0.256, 0.263, 0.178, 0.023, 0.677]])
-"""Paper-order regulator pressures (bar) that put the tip on twelve points, 30 deg apart, of a
-100 mm diameter circle about the paper's z axis at z = 240 mm (found with
-``scipy.optimize.least_squares`` over the six pressures in [0, 0.8] bar; each within 0.05 mm)."""
 
 
 def _settle(sim: ArmSimulator, paper_bar: np.ndarray, hold_s: float = 3.0) -> None:
@@ -129,7 +105,8 @@ def sim():
 
 def test_thread_length_is_validated():
     base = ZHAO2021.segments[0]
-    for bad in (0.10, 0.2, float("nan"), float("inf"), True, "0.15"):
+    longest = base.length_m * base.max_extension_ratio
+    for bad in (0.9 * base.length_m, 1.05 * longest, float("nan"), float("inf"), True, "0.15"):
         with pytest.raises(ValueError, match="thread_length_m"):
             dataclasses.replace(base, thread_length_m=bad)
     rest = dataclasses.replace(base, length_m=THREAD_M, thread_length_m=THREAD_M)
@@ -148,18 +125,30 @@ def test_paper_frame_mapping_round_trips():
         paper_pressures_to_chambers(np.zeros(5))
 
 
-def test_table_iii_key_points(sim):
-    """zhao2021 Table III: the seven key points under the table's pressures."""
+def _table_iii_errors_mm(sim: ArmSimulator) -> np.ndarray:
     _settle(sim, TABLE_III_PRESSURES_BAR)
     simulated = paper_point_from_base(_key_points(sim)) * 1e3
-    errors = np.linalg.norm(simulated - TABLE_III_TRUE_MM, axis=1)[1:]
-    assert np.all(errors <= TABLE_III_TOLERANCE_MM), (np.round(simulated, 1), np.round(errors, 1))
-    assert np.sqrt(np.mean(errors**2)) <= TABLE_III_RMS_MM, np.round(errors, 1)
-    # the paper's tip: 87.4 mm off axis at z = 248.5 mm
-    tip = paper_point_from_base(sim.tip_pose()[0]) * 1e3
-    assert np.linalg.norm(tip[:2]) == pytest.approx(87.4, abs=5.0)
-    # Table III's pressures leave both segments short of their threads
-    assert np.all(_segment_lengths(sim) < THREAD_M - 0.01)
+    return np.linalg.norm(simulated - TABLE_III_TRUE_MM, axis=1)[1:]
+
+
+def test_table_iii_key_points_are_the_fits(sim):
+    """The simulated arm settles where the fit's static arm rests: Table III's key points as
+    far from the paper's as the fit's residuals say (the preset's notes)."""
+    errors = _table_iii_errors_mm(sim)
+    fitted = evaluate_table3(ZHAO2021_ARM_FIT)
+    np.testing.assert_allclose(errors, fitted, atol=0.3)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "the arm that holds the paper's experiments (the goal (-50, 70, 210) mm with 100 g on the "
+    "tip) cannot also rest on Table III's key points: RMS 27.8 mm (P1..P6 2.5, 9.4, 16.7, 19.7, "
+    "25.2, 56.9 mm). Fitted to Table III alone the arm gets 7.0 mm, and with the circle and "
+    "the starts too, but then the goal lies 63 mm out of reach with 100 g (12.2 mm RMS with "
+    "the goal unloaded): docs/architecture.md, \"zhao2021 arm fit\""))
+def test_table_iii_key_points_within_the_papers_3_mm(sim):
+    """zhao2021 Table III: the arm under the table's pressures rests on its key points."""
+    errors = _table_iii_errors_mm(sim)
+    assert np.sqrt(np.mean(errors ** 2)) < PAPER_KEY_POINT_RMS_MM, np.round(errors, 1)
 
 
 def test_the_thread_holds_every_segment_to_150_mm(sim):
@@ -188,61 +177,70 @@ def _tip_in_paper_frame_mm(sim: ArmSimulator) -> np.ndarray:
     return paper_point_from_base(sim.tip_pose()[0]) * 1e3
 
 
-def _circle_point_mm(k: int, n: int) -> np.ndarray:
-    angle = 2 * np.pi * k / n
-    return np.array([CIRCLE_RADIUS_MM * np.cos(angle), CIRCLE_RADIUS_MM * np.sin(angle),
-                     CIRCLE_HEIGHT_MM])
+@pytest.fixture(scope="module")
+def static_arm():
+    return StaticArm(ZHAO2021)
 
 
-def test_a_100_mm_circle_is_within_reach(sim):
-    """zhao2021 Section VI-D: a 100 mm diameter circle (here about the paper's z axis at 240 mm),
-    twelve points on it."""
-    n = len(CIRCLE_PRESSURES_BAR)
-    for k, pressures in enumerate(CIRCLE_PRESSURES_BAR):
-        target = _circle_point_mm(k, n)
-        _settle(sim, pressures)
-        tip = _tip_in_paper_frame_mm(sim)
-        assert np.linalg.norm(tip - target) <= REACH_TOLERANCE_MM, (k, np.round(tip, 1), target)
+@pytest.mark.parametrize("mass_kg", [
+    pytest.param(m, marks=[] if m == max(P2P_LOADS_KG) else [pytest.mark.slow])
+    for m in P2P_LOADS_KG])
+def test_the_goal_is_within_reach_with_every_load(static_arm, mass_kg):
+    """zhao2021 Section VI-C-1: the goal (-50, 70, 210) mm, free and with 50, 75 and 100 g."""
+    goal = base_point_from_paper(END_MM / 1000.0)
+    reach = closest_reach(static_arm, goal, mass_kg)
+    assert reach.distance_m * 1e3 < REACH_TOLERANCE_MM, reach
 
 
-def test_point_to_point_start_is_reached_and_end_is_not(sim):
-    """zhao2021 Section VI-C: the start (40, 20, 300) mm is within reach, both segments within
-    2 mm of their threads;
-    the end (-50, 70, 210) mm stays out of reach by ~23 mm (the tip bends far enough sideways
-    but the arm is too long)."""
-    _settle(sim, START_PRESSURES_BAR)
-    tip = _tip_in_paper_frame_mm(sim)
-    assert np.linalg.norm(tip - START_MM) <= REACH_TOLERANCE_MM, np.round(tip, 1)
-    # segment 1 at 148 mm, segment 2 on its thread
-    assert np.all(_segment_lengths(sim) > THREAD_M - 2.5e-3), _segment_lengths(sim)
-    _settle(sim, END_PRESSURES_BAR)
-    tip = _tip_in_paper_frame_mm(sim)
-    low, high = END_SHORTFALL_MM
-    assert low <= np.linalg.norm(tip - END_MM) <= high, np.round(tip, 1)
-    assert np.linalg.norm(tip[:2]) == pytest.approx(np.linalg.norm(END_MM[:2]), abs=3.0)
+@pytest.mark.parametrize("mass_kg", [0.0, pytest.param(SWAY_MASS_KG, marks=pytest.mark.slow)])
+def test_the_start_is_within_reach(static_arm, mass_kg):
+    """zhao2021 Section VI-C: the start (40, 20, 300) mm, free and with the 119 g block."""
+    reach = closest_reach(static_arm, base_point_from_paper(START_MM / 1000.0), mass_kg)
+    assert reach.distance_m * 1e3 < REACH_TOLERANCE_MM, reach
+
+
+def _circle_reach_mm(arm: StaticArm, k: int, n: int, mass_kg: float) -> float:
+    point = base_point_from_paper(circle_point_mm(k, ZHAO2021_ARM_FIT.circle_z_mm, n=n) / 1000.0)
+    return closest_reach(arm, point, mass_kg).distance_m * 1e3
+
+
+@pytest.mark.parametrize("mass_kg", [pytest.param(0.0, marks=pytest.mark.slow), CIRCLE_MASS_KG])
+def test_the_circle_is_within_reach_free_and_with_263_g(static_arm, mass_kg):
+    """zhao2021 Section VI-D: four points, 90 deg apart, of the 100 mm circle (at the fitted
+    height) free and carrying the 263 g block; twelve in the slow test below."""
+    for k in range(4):
+        assert _circle_reach_mm(static_arm, 2 * k + 1, 8, mass_kg) < REACH_TOLERANCE_MM, k
 
 
 @pytest.mark.slow
-def test_the_paper_points_by_optimisation(sim):
-    """Search the six pressures in [0, 0.8] bar (``least_squares``) for the start, the end and
-    four circle points: the start and the circle are reached within 2 mm, the end is not."""
-    from scipy.optimize import least_squares
+@pytest.mark.parametrize("mass_kg", [0.0, CIRCLE_MASS_KG])
+def test_twelve_circle_points_are_within_reach(static_arm, mass_kg):
+    for k in range(12):
+        assert _circle_reach_mm(static_arm, k, 12, mass_kg) < REACH_TOLERANCE_MM, k
 
-    def nearest(target_mm, start_bar):
-        def residual(paper_bar):
-            _settle(sim, paper_bar, hold_s=2.0)
-            return _tip_in_paper_frame_mm(sim) - target_mm
-        fit = least_squares(residual, start_bar, bounds=(0.0, 0.8), diff_step=0.02,
-                            x_scale=0.2, max_nfev=60)
-        _settle(sim, fit.x)
-        return np.linalg.norm(_tip_in_paper_frame_mm(sim) - target_mm)
 
-    assert nearest(START_MM, np.full(6, 0.75)) <= REACH_TOLERANCE_MM
-    for k in (0, 3, 6, 9):
-        assert nearest(_circle_point_mm(k, 12), np.full(6, 0.3)) <= REACH_TOLERANCE_MM, k
-    # the end: from the best pressures known and from a bend towards it, no closer than ~21 mm
-    for start in (END_PRESSURES_BAR, np.array([0.0, 0.5, 0.5, 0.5, 0.0, 0.0])):
-        assert nearest(END_MM, start) >= END_SHORTFALL_MM[0]
+def test_the_simulated_arm_holds_the_goal_with_100_g(sim, static_arm):
+    """The pressures the static search finds for the goal with 100 g hold the simulated arm's
+    tip there."""
+    goal = base_point_from_paper(END_MM / 1000.0)
+    reach = closest_reach(static_arm, goal, 0.100)
+    sim.reset(settle_s=0.2)
+    sim.set_tip_payload("goal", 0.100)
+    try:
+        sim.set_pressures(reach.pressures_pa)
+        sim.step_physics(10.0)
+        tip = _tip_in_paper_frame_mm(sim)
+    finally:
+        sim.set_tip_payload("goal", 0.0)
+    assert np.linalg.norm(tip - END_MM) < REACH_TOLERANCE_MM + 0.5, np.round(tip, 1)
+
+
+def test_the_fit_is_the_preset():
+    """The preset is the fit's arm: its segments and the paper's frame."""
+    fitted = ZHAO2021_ARM_FIT.spec()
+    assert fitted.segments == ZHAO2021.segments
+    assert ZHAO2021_PAPER_FRAME_DEG == pytest.approx(ZHAO2021_ARM_FIT.frame_deg)
+    assert ZHAO2021_PAPER_ORIGIN_Z_M == pytest.approx(ZHAO2021_ARM_FIT.origin_z_m)
 
 
 def test_chamber_area_growth_is_validated_and_grows_the_force():
@@ -254,9 +252,39 @@ def test_chamber_area_growth_is_validated_and_grows_the_force():
     for bad in (-0.1, 4.5, float("nan"), float("inf"), True, "1", None):
         with pytest.raises(ValueError, match="chamber_area_growth"):
             dataclasses.replace(base, chamber_area_growth=bad)
-    growth = base.chamber_area_growth
+    growth = 1.1
+    linear = dataclasses.replace(base, chamber_area_growth=growth, chamber_area_growth_exponent=1.0)
+    spec = dataclasses.replace(ZHAO2021, segments=(linear, linear))
     pressure = np.array([0.0, 0.4, 0.8, 0.8, 0.8, 0.8]) * BAR_PA
-    effective = effective_pressure_pa(ZHAO2021, pressure)
+    effective = effective_pressure_pa(spec, pressure)
     np.testing.assert_allclose(effective, pressure * (1 + growth * pressure / base.p_max_pa))
-    axial, _ = chamber_loads(ZHAO2021, pressure)
+    axial, _ = chamber_loads(spec, pressure)
     assert axial[1] == pytest.approx(3 * 0.8 * BAR_PA * base.chamber_area_m2 * (1 + growth))
+
+
+def test_chamber_area_growth_exponent_sets_the_growth_in_late():
+    """``SegmentSpec.chamber_area_growth_exponent`` ``n``: a number in [1, 6]; the force goes
+    with ``p (1 + g (p / p_max)^n)``, the same at ``p_max`` for every ``n`` and lower below it
+    for larger ``n``; ``n`` = 1 is the linear law."""
+    from soft_gym.robots.pneumatics import effective_pressure_pa
+
+    base = ZHAO2021.segments[0]
+    for bad in (0.5, 6.5, float("nan"), True, "2", None):
+        with pytest.raises(ValueError, match="chamber_area_growth_exponent"):
+            dataclasses.replace(base, chamber_area_growth_exponent=bad)
+    pressure = np.array([0.0, 0.4, 0.8, 0.2, 0.6, 0.8]) * BAR_PA
+    growth, p_max = 2.0, base.p_max_pa
+    for exponent in (1.0, 3.0):
+        segment = dataclasses.replace(base, chamber_area_growth=growth,
+                                      chamber_area_growth_exponent=exponent)
+        spec = dataclasses.replace(ZHAO2021, segments=(segment, segment))
+        np.testing.assert_allclose(effective_pressure_pa(spec, pressure),
+                                   pressure * (1 + growth * (pressure / p_max) ** exponent),
+                                   rtol=1e-12)
+    late = dataclasses.replace(base, chamber_area_growth=growth, chamber_area_growth_exponent=3.0)
+    spec = dataclasses.replace(ZHAO2021, segments=(late, late))
+    linear = dataclasses.replace(ZHAO2021, segments=(dataclasses.replace(
+        base, chamber_area_growth=growth, chamber_area_growth_exponent=1.0),) * 2)
+    assert effective_pressure_pa(spec, pressure)[2] == pytest.approx(
+        effective_pressure_pa(linear, pressure)[2])
+    assert effective_pressure_pa(spec, pressure)[1] < effective_pressure_pa(linear, pressure)[1]
