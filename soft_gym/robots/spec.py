@@ -38,7 +38,7 @@ and from any direction (``tests/soft_gym/engines/test_runaway.py``); at eight ti
 arm under random pressures no longer does. An upright arm folds over under a load on top: an
 upright ho2018 arm of 41.7 g stayed on its stops under random pressures with 120 g (2.9 times
 its weight) and not with 150 g, so upright arms bear twice their weight (the present 60.0 g arm
-is checked at its 120 g). The papers' loads are well inside it (zhao2021's 263 g is 1.4 times
+is checked at its 120 g). The papers' loads are well inside it (zhao2021's 263 g is 1.3 times
 its hanging arm's own weight, ho2018's 32 g fluid tip 0.53 of its upright arm's)."""
 """How the arm base is mounted: hanging (tip down, the papers' setups), upright, horizontal."""
 

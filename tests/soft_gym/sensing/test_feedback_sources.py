@@ -186,7 +186,7 @@ def test_every_sensor_is_sampled_once_per_step():
 # ==========================================================================================
 
 
-ZHAO = get_preset("zhao2021")   # two segments of 107 mm, four links each, six chambers
+ZHAO = get_preset("zhao2021")   # two segments of 100.9 mm, four links each, six chambers
 
 
 # ---------------------------------------------------------------------------------- ground truth

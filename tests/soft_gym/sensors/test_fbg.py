@@ -27,11 +27,12 @@ from soft_gym.sensors.fbg import FBGFiber, FBGLayout, fbg_strain
 from arm_variants import vertex_arcs
 
 WANG = get_preset("wang2023")    # one segment of 90 mm, four links of 22.5 mm, r = 10 mm
-ZHAO = get_preset("zhao2021")    # two segments of 107 mm, r = 17.5 mm
+ZHAO = get_preset("zhao2021")    # two segments of 100.9 mm, r = 17.5 mm
+L = ZHAO.segments[0].length_m    # a zhao2021 segment's rest length (m)
 # zhao2021 with a thinner second segment of another material: the fiber per arc, the radius and
 # the Poisson ratio differ between the segments
 THIN = dataclasses.replace(ZHAO, segments=(ZHAO.segments[0], dataclasses.replace(
-    ZHAO.segments[1], outer_radius_m=0.012, poisson_ratio=0.45)))
+    ZHAO.segments[1], outer_radius_m=0.012, chamber_offset_m=0.007, poisson_ratio=0.45)))
 
 
 class StandIn:
@@ -162,7 +163,7 @@ def _fiber_per_arc(r: float, pitch: float) -> float:
 def test_layout_error_reports_the_arc_range_before_the_start() -> None:
     """A grating centred at the start of the covered part sticks out by half its length along
     the fiber; the arc range continues the first segment's helix before the start."""
-    for segments, start in ((None, 0.0), ((1,), 0.107)):
+    for segments, start in ((None, 0.0), ((1,), L)):
         layout = FBGLayout(n_gratings=2, start_m=start, segments=segments)
         stretch = _fiber_per_arc(0.0175, 0.0165)
         half = 0.003
@@ -176,19 +177,19 @@ def test_layout_error_reports_the_arc_range_beyond_the_end() -> None:
     """Past the end the arc range continues the *last* segment's helix (a thinner one here; a
     pitch of 30 mm keeps the whole fiber under 1 m)."""
     first, last = _fiber_per_arc(0.0175, 0.03), _fiber_per_arc(0.012, 0.03)
-    total = 0.107 * first + 0.107 * last
+    total = L * first + L * last
     assert total < 1.0
     centre = total - 0.021                                   # 21 mm of fiber before the end
-    start = 0.107 + (centre - 0.107 * first) / last
+    start = L + (centre - L * first) / last
     layout = FBGLayout(n_gratings=3, spacing_m=0.02, start_m=start, pitch_m=0.03)
     j = 1                                                    # the first one past the end
     low, high = centre + 0.02 - 0.003, centre + 0.02 + 0.003
-    assert 0.107 * first < low < total < high
-    arc_low = 0.107 + (low - 0.107 * first) / last
-    arc_high = 0.214 + (high - total) / last
+    assert L * first < low < total < high
+    arc_low = L + (low - L * first) / last
+    arc_high = 2 * L + (high - total) / last
     message = (_span_message(THIN, layout, j, low, high, arc_low, arc_high)
                + rf", beyond the fiber-covered part: fiber \[0, {total:.4g}\] m = arc "
-               r"\[0, 0.214\] m \(segments \(0, 1\)\)")
+               rf"\[0, {2 * L:.4g}\] m \(segments \(0, 1\)\)")
     with pytest.raises(ValueError, match=message):
         layout.resolve(THIN)
     # and before the start of a thin first segment followed by a thick one
@@ -199,20 +200,20 @@ def test_layout_error_reports_the_arc_range_beyond_the_end() -> None:
         layout.resolve(swapped)
     # three segments, a grating longer than one: its inner end lies on the middle segment
     three = dataclasses.replace(THIN, segments=THIN.segments + ZHAO.segments[:1])
-    total = 0.107 * (first + last + first)
+    total = L * (first + last + first)
     centre = total - 0.1
-    start = 0.214 + (centre - 0.107 * (first + last)) / first
+    start = 2 * L + (centre - L * (first + last)) / first
     layout = FBGLayout(n_gratings=1, grating_length_m=1.0, spacing_m=1.0, start_m=start,
                        pitch_m=0.03)
     low, high = centre - 0.5, centre + 0.5
-    assert 0.107 * first < low < 0.107 * (first + last)
-    message = _span_message(three, layout, 0, low, high, 0.107 + (low - 0.107 * first) / last,
-                            0.321 + (high - total) / first)
+    assert L * first < low < L * (first + last)
+    message = _span_message(three, layout, 0, low, high, L + (low - L * first) / last,
+                            3 * L + (high - total) / first)
     with pytest.raises(ValueError, match=message):
         layout.resolve(three)
     # one segment of two: the covered part starts at the second
-    layout = FBGLayout(n_gratings=1, start_m=0.214, segments=(1,))
-    with pytest.raises(ValueError, match=r"^FBG layout does not fit: .* = arc \[0.107, 0.214\] m "
+    layout = FBGLayout(n_gratings=1, start_m=2 * L, segments=(1,))
+    with pytest.raises(ValueError, match=rf"^FBG layout does not fit: .* = arc \[{L:.4g}, {2 * L:.4g}\] m "
                                          r"\(segments \(1,\)\)"):
         layout.resolve(ZHAO)
 
@@ -227,7 +228,7 @@ def test_gratings_may_touch_the_ends_of_the_covered_part() -> None:
 
 def test_start_must_lie_on_the_covered_part() -> None:
     with pytest.raises(ValueError, match=r"^start_m must lie on the fiber-covered part "
-                                         r"\[0.107, 0.214\] m of the arm \(segments \(1,\)\), "
+                                         rf"\[{L:.4g}, {2 * L:.4g}\] m of the arm \(segments \(1,\)\), "
                                          r"got 0.05$"):
         FBGLayout(start_m=0.05, segments=(1,)).resolve(ZHAO)
     # at the very end the start is on the arm, but the grating is not
@@ -240,7 +241,7 @@ def test_start_must_lie_on_the_covered_part() -> None:
 
 def test_geometry_takes_radius_and_poisson_ratio_of_the_segment_under_each_point() -> None:
     geometry = FBGLayout(pitch_m=0.03).resolve(THIN)
-    on_second = geometry.arc_m >= 0.107
+    on_second = geometry.arc_m >= L
     assert on_second.any() and (~on_second).any()
     np.testing.assert_array_equal(geometry.radius_m, np.where(on_second, 0.012, 0.0175))
     np.testing.assert_array_equal(geometry.poisson_ratio, np.where(on_second, 0.45, 0.48))
@@ -255,11 +256,11 @@ def test_default_layout_is_centred_on_the_covered_part() -> None:
     """On two equal segments the array is centred at the middle of the arm; on the first
     segment alone, at the middle of that segment."""
     both = FBGLayout(n_gratings=20).resolve(ZHAO)
-    assert both.center_arc_m.mean() == pytest.approx(0.107, rel=1e-12)
-    assert both.covered_m == (0.0, 0.214)
+    assert both.center_arc_m.mean() == pytest.approx(L, rel=1e-12)
+    assert both.covered_m == (0.0, 2 * L)
     first = FBGLayout(segments=(0,)).resolve(ZHAO)
-    assert first.covered_m == (0.0, 0.107)
-    assert first.center_arc_m.mean() == pytest.approx(0.0535, rel=1e-12)
+    assert first.covered_m == (0.0, L)
+    assert first.center_arc_m.mean() == pytest.approx(L / 2, rel=1e-12)
 
 
 # ---------------------------------------------------------------------------------- layout settings
@@ -369,12 +370,12 @@ def test_space_is_sized_from_the_joint_limits_contact_and_heat() -> None:
     assert space.shape == (17,) and space.dtype == np.float32
     np.testing.assert_allclose(space.high, bound, rtol=1e-6)
     np.testing.assert_allclose(space.low, -bound, rtol=1e-6)
-    # zhao2021, two segments: extension ratio 1.5 (0.5 counts, above the floor of 0.4)
+    # zhao2021, two segments: extension ratio 2.0 (1.0 counts, above the floor of 0.4)
     zhao = FBGFiber(strain_transfer=0.01, noise_std_nm=0.0, contact_strain_per_n=0.0,
                     temperature_coefficient_nm_per_c=0.0)
     r, a = 0.0175, math.atan(2.0 * math.pi * 0.0175 / 0.0165)
     axial = abs(math.cos(a) ** 2 - 0.48 * math.sin(a) ** 2)
-    strain = axial * (0.5 + 40.0 * r) + r * math.sin(a) * math.cos(a) * 0.5 / 0.02675
+    strain = axial * (1.0 + 40.0 * r) + r * math.sin(a) * math.cos(a) * 0.5 / (L / 4)
     np.testing.assert_allclose(zhao.space(StandIn(ZHAO)).high,
                                1.5 * 1550.0 * 0.79 * 0.01 * strain + 1e-3, rtol=1e-6)
 

@@ -22,7 +22,8 @@ from soft_gym.robots import get_preset
 from soft_gym.sensors.strain_gauge import StrainGauges
 from arm_variants import vertex_arcs
 
-ZHAO = get_preset("zhao2021")    # two segments of 107 mm, four links each, r = 17.5 mm
+ZHAO = get_preset("zhao2021")    # two segments of 100.9 mm, four links each, r = 17.5 mm
+L = ZHAO.segments[0].length_m    # a zhao2021 segment's rest length (m)
 WANG = get_preset("wang2023")    # one segment of 90 mm
 SIGMA = 2.0 * np.pi * np.arange(3) / 3.0
 
@@ -120,7 +121,7 @@ def test_placement_reported_per_gauge() -> None:
     gauges.space(_profile(ZHAO))
     np.testing.assert_allclose(gauges.angles_rad, np.tile(SIGMA + 0.4, 2), rtol=0, atol=1e-15)
     np.testing.assert_allclose(gauges.center_arc_m,
-                               np.repeat([0.25 * 0.107, 0.107 + 0.75 * 0.107], 3), rtol=1e-12)
+                               np.repeat([0.25 * L, L + 0.75 * L], 3), rtol=1e-12)
     np.testing.assert_allclose(gauges.radii_m, 0.0175, rtol=1e-12)
 
 
@@ -165,12 +166,12 @@ def test_default_noise_is_one_hundred_microstrain() -> None:
 
 def test_space_is_sized_from_the_joint_limits() -> None:
     """``offset -+ (|gain| 1.5 (max(ext - 1, 0.4) + kappa_max r_max) + 10 noise + 1e-6)``;
-    zhao2021: extension ratio 1.5, 40 rad/m; at r = 20 mm: 1.5 (0.5 + 0.8) = 1.95."""
+    zhao2021: extension ratio 2.0, 40 rad/m; at r = 20 mm: 1.5 (1.0 + 0.8) = 2.7."""
     gain = np.array([1.0, -2.0, 0.5, 3.0, 1.5, -1.0])
     offset = np.array([0.01, -0.02, 0.0, 0.03, 0.005, -0.01])
     gauges = StrainGauges(gain=gain, offset=offset, radius_m=0.02, noise_std=2e-3)
     space = gauges.space(_profile(ZHAO))
-    bound = np.abs(gain) * 1.95 + 10.0 * 2e-3 + 1e-6
+    bound = np.abs(gain) * 2.7 + 10.0 * 2e-3 + 1e-6
     assert space.dtype == np.float32
     np.testing.assert_array_equal(space.low, (offset - bound).astype(np.float32))
     np.testing.assert_array_equal(space.high, (offset + bound).astype(np.float32))
