@@ -273,11 +273,8 @@ def require_within_reach(name: str, point_m: np.ndarray, mass_kg: float) -> floa
     :data:`REACH_TOLERANCE_MM` of with ``mass_kg`` on it (the static pressure search,
     :func:`~soft_gym.procedures.static_reach.closest_reach`), or a load past the arm's limit;
     returns the distance (mm)."""
+    _require_load(name, mass_kg)
     spec = get_preset(PRESET)
-    limit_kg = spec.max_load_n / float(np.linalg.norm(spec.gravity_base))
-    if not 0.0 <= mass_kg <= limit_kg:
-        raise ValueError(f"{name}: a {mass_kg * 1000:g} g tip load is past the {PRESET} arm's "
-                         f"limit; allowed 0-{limit_kg * 1000:.0f} g")
     key = (name, tuple(np.round(point_m, 9)), float(mass_kg))
     if key not in _REACH_DISTANCES:
         reach = closest_reach(StaticArm(spec), np.asarray(point_m, dtype=float), mass_kg)
@@ -293,6 +290,15 @@ def require_within_reach(name: str, point_m: np.ndarray, mass_kg: float) -> floa
     return distance_mm
 
 
+def _require_load(name: str, mass_kg: float) -> None:
+    """Refuse (``ValueError``, naming ``name``) a tip load past the arm's limit."""
+    spec = get_preset(PRESET)
+    limit_kg = spec.max_load_n / float(np.linalg.norm(spec.gravity_base))
+    if not 0.0 <= mass_kg <= limit_kg:
+        raise ValueError(f"{name}: a {mass_kg * 1000:g} g tip load is past the {PRESET} arm's "
+                         f"limit; allowed 0-{limit_kg * 1000:.0f} g")
+
+
 _REACH_DISTANCES: dict[tuple, tuple[float, np.ndarray]] = {}
 """:func:`require_within_reach`'s searches in this process."""
 
@@ -305,6 +311,9 @@ def check_setup(goal_mm=P2P_GOAL_MM, p2p_loads_kg=P2P_LOADS_KG[1:],
     setting and the distance)."""
     goal = base_point_from_paper(np.asarray(goal_mm, dtype=float) / 1000.0)
     loads = tuple(float(load) for load in p2p_loads_kg)
+    for load in loads:  # the cheap checks first, before any search
+        _require_load("p2p_loads_g", load)
+    _require_load("circle_load_g", circle_mass_kg)
     require_within_reach("goal_mm", goal, 0.0)
     for load in sorted(set(loads)):
         require_within_reach("p2p_loads_g", goal, load)

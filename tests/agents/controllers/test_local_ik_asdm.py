@@ -112,6 +112,7 @@ def test_bad_options_are_refused(env):
         make_policy("local_ik_asdm", env=env, exploration={"samples": 3})
 
 
+@pytest.mark.slow  # 45 s: the exploration of 900 steps
 def test_network_learns_the_exploration_and_reloads_identically(tmp_path):
     from soft_gym.robots.presets import get_preset
     from soft_gym.procedures.zhao2021_exploration import collect_exploration

@@ -34,9 +34,11 @@ def test_the_papers_start_and_goal_are_run():
 
 @pytest.mark.parametrize("setup, message", [
     ({"goal_mm": (-200.0, 70.0, 150.0)}, r"goal_mm: .* lies \d+\.\d mm from the nearest tip"),
-    ({"p2p_loads_kg": (0.05, 0.4)}, r"p2p_loads_g: .* lies \d+\.\d mm from the nearest tip"),
+    pytest.param({"p2p_loads_kg": (0.05, 0.4)},
+                 r"p2p_loads_g: .* lies \d+\.\d mm from the nearest tip", marks=pytest.mark.slow),
     ({"p2p_loads_kg": (5.0,)}, r"p2p_loads_g: a 5000 g tip load is past .* allowed 0-\d+ g"),
-    ({"circle_mass_kg": 0.6}, r"circle_load_g: .* lies \d+\.\d mm from the nearest tip"),
+    pytest.param({"circle_mass_kg": 0.6}, r"circle_load_g: .* lies \d+\.\d mm from the nearest tip",
+                 marks=pytest.mark.slow),
 ])
 def test_a_goal_or_load_out_of_reach_is_refused_with_the_distance(setup, message):
     with pytest.raises(ValueError, match=message):
