@@ -223,8 +223,7 @@ def reachable_point(point_m: np.ndarray, scenario=(), tries: int = 12) -> np.nda
     that the drive reaches, in 5 % steps (m, rounded to 0.1 mm).
 
     The search is deterministic (the preset, the point and the loads decide it), so its answer
-    is kept for the process: the goal, searched with the heaviest load, takes about 20 s and is
-    read by the point-to-point, sway and baseline runs alike."""
+    is kept for the process: the start under each run's loads is read by every run with them."""
     key = (tuple(np.asarray(point_m, dtype=float).tolist()), repr(list(scenario)), tries)
     if key not in _REACHABLE:
         _REACHABLE[key] = _search_reachable_point(point_m, scenario, tries)
@@ -275,7 +274,7 @@ def require_within_reach(name: str, point_m: np.ndarray, mass_kg: float) -> floa
     returns the distance (mm)."""
     _require_load(name, mass_kg)
     spec = get_preset(PRESET)
-    key = (name, tuple(np.round(point_m, 9)), float(mass_kg))
+    key = (tuple(np.round(point_m, 9)), float(mass_kg))
     if key not in _REACH_DISTANCES:
         reach = closest_reach(StaticArm(spec), np.asarray(point_m, dtype=float), mass_kg)
         _REACH_DISTANCES[key] = (reach.distance_m * 1000.0,
@@ -300,7 +299,7 @@ def _require_load(name: str, mass_kg: float) -> None:
 
 
 _REACH_DISTANCES: dict[tuple, tuple[float, np.ndarray]] = {}
-""":func:`require_within_reach`'s searches in this process."""
+""":func:`require_within_reach`'s searches in this process, by point and mass."""
 
 
 def check_setup(goal_mm=P2P_GOAL_MM, p2p_loads_kg=P2P_LOADS_KG[1:],

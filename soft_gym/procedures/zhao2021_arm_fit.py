@@ -31,7 +31,8 @@ from scipy.optimize import least_squares
 
 from soft_gym._cli import HelpFormatter, finite_float, int_at_least
 from soft_gym.procedures.static_reach import closest_reach
-from soft_gym.robots.presets import ZHAO2021, ZHAO2021_PAPER_CHAMBERS
+from soft_gym.robots.presets import (ZHAO2021, ZHAO2021_PAPER_CHAMBERS, base_point_from_paper,
+                                     paper_point_from_base, paper_pressures_to_chambers)
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.robots.statics import StaticArm
 from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
@@ -105,19 +106,13 @@ class ArmParameters:
         return dataclasses.replace(base, segments=segments)
 
     def base_from_paper(self, point_mm: np.ndarray) -> np.ndarray:
-        """A paper-frame point (mm) in our base frame (m)."""
-        angle = np.radians(self.frame_deg)
-        c, s = np.cos(angle), np.sin(angle)
-        x, y, z = np.asarray(point_mm, dtype=float) / 1000.0
-        return np.array([c * x + s * y, -s * x + c * y, z - self.origin_z_m])
+        """A paper-frame point (mm) in our base frame (m), in this fit's paper frame."""
+        return base_point_from_paper(np.asarray(point_mm, dtype=float) / 1000.0,
+                                     self.frame_deg, self.origin_z_m)
 
     def paper_from_base(self, points_m: np.ndarray) -> np.ndarray:
-        """Base-frame points (m, (..., 3)) in the paper's frame (mm)."""
-        angle = np.radians(self.frame_deg)
-        c, s = np.cos(angle), np.sin(angle)
-        p = np.asarray(points_m, dtype=float)
-        return 1000.0 * np.stack([c * p[..., 0] - s * p[..., 1], s * p[..., 0] + c * p[..., 1],
-                                  p[..., 2] + self.origin_z_m], axis=-1)
+        """Base-frame points (m, (..., 3)) in this fit's paper frame (mm)."""
+        return 1000.0 * paper_point_from_base(points_m, self.frame_deg, self.origin_z_m)
 
 
 MAX_EXTENSION_RATIO = 2.0
@@ -179,11 +174,6 @@ def target_mm(pose: Pose, parameters: ArmParameters) -> np.ndarray:
             else circle_point_mm(pose.circle_index, parameters.circle_z_mm))
 
 
-def paper_pressures(bar: tuple[float, ...]) -> np.ndarray:
-    """Paper-order regulator pressures (bar) as our chamber pressures (Pa)."""
-    return np.asarray(bar, dtype=float)[list(ZHAO2021_PAPER_CHAMBERS)] * BAR_PA
-
-
 @dataclass
 class FitResult:
     """A fit's arm and what it leaves: Table III's key-point errors, each pose's distance."""
@@ -215,7 +205,8 @@ class _Problem:
         return x[self.n_arm + 6 * i:self.n_arm + 6 * (i + 1)]
 
     def table3(self, arm: StaticArm, parameters: ArmParameters) -> np.ndarray:
-        state = arm.equilibrium(paper_pressures(TABLE3_PRESSURES_BAR), q_start=self._q.get(-1))
+        state = arm.equilibrium(paper_pressures_to_chambers(np.array(TABLE3_PRESSURES_BAR) * BAR_PA),
+                               q_start=self._q.get(-1))
         self._q[-1] = state.q
         points = parameters.paper_from_base(key_points_from_backbone(arm.spec, state.backbone_m))
         return (points - TABLE3_KEY_POINTS_MM).ravel()
@@ -253,7 +244,8 @@ class _Problem:
         parameters = self.parameters(x)
         arm = StaticArm(parameters.spec())
         for i in range(len(self.poses)):
-            rows = slice(18 + 3 * i, 18 + 3 * (i + 1))
+            first = TABLE3_KEY_POINTS_MM.size  # Table III's residuals come first
+            rows = slice(first + 3 * i, first + 3 * (i + 1))
             for k in range(6):
                 column = self.n_arm + 6 * i + k
                 shifted = x.copy()

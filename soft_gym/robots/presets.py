@@ -100,7 +100,7 @@ ZHAO2021 = ArmSpec(
            "chamber_area_growth": "not stated; segment 1 3.96 with exponent 6.0, segment 2 3.22 "
                                   "with 5.79 (each segment is wound with its own nylon "
                                   "thread): a wound bore (Section II-A) that hardly grows to "
-                                  "0.5 bar (+ 24 % and + 16 % of its area) and balloons "
+                                  "0.5 bar (+ 24 % and + 21 % of its area) and balloons "
                                   "between the windings above it, to 5.0 and 4.2 times its "
                                   "area at 0.8 bar, more than the body's cross-section holds "
                                   "as a round bore: the fit pushes it to the edge of its "
@@ -150,28 +150,31 @@ def paper_pressures_to_chambers(paper_pa: np.ndarray) -> np.ndarray:
     return paper[list(ZHAO2021_PAPER_CHAMBERS)]
 
 
-def paper_point_from_base(point_m: np.ndarray) -> np.ndarray:
+def paper_point_from_base(point_m: np.ndarray, frame_deg: float = ZHAO2021_PAPER_FRAME_DEG,
+                          origin_z_m: float = ZHAO2021_PAPER_ORIGIN_Z_M) -> np.ndarray:
     """A point in our zhao2021 base frame (m) in the paper's key-point frame (m).
 
     Both z axes run from the base towards the tip (the paper's key points have z = 0 at O and
-    248.5 mm at the tip); the paper's x axis is ours turned by ``ZHAO2021_PAPER_FRAME_DEG`` about
-    z, and its origin lies ``ZHAO2021_PAPER_ORIGIN_Z_M`` before our base along z. Works on
-    ``(..., 3)`` arrays.
+    248.5 mm at the tip); the paper's x axis is ours turned by ``frame_deg`` (default
+    ``ZHAO2021_PAPER_FRAME_DEG``) about z, and its origin lies ``origin_z_m`` (default
+    ``ZHAO2021_PAPER_ORIGIN_Z_M``) before our base along z. Works on ``(..., 3)`` arrays.
     """
-    angle = np.radians(ZHAO2021_PAPER_FRAME_DEG)
+    angle = np.radians(frame_deg)
     c, s = np.cos(angle), np.sin(angle)
     p = np.asarray(point_m, dtype=float)
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    return np.stack([c * x - s * y, s * x + c * y, z + ZHAO2021_PAPER_ORIGIN_Z_M], axis=-1)
+    return np.stack([c * x - s * y, s * x + c * y, z + origin_z_m], axis=-1)
 
 
-def base_point_from_paper(point_m: np.ndarray) -> np.ndarray:
-    """A point in the paper's key-point frame (m) in our zhao2021 base frame (m)."""
-    angle = np.radians(ZHAO2021_PAPER_FRAME_DEG)
+def base_point_from_paper(point_m: np.ndarray, frame_deg: float = ZHAO2021_PAPER_FRAME_DEG,
+                          origin_z_m: float = ZHAO2021_PAPER_ORIGIN_Z_M) -> np.ndarray:
+    """A point in the paper's key-point frame (m) in our zhao2021 base frame (m) (the inverse of
+    :func:`paper_point_from_base`)."""
+    angle = np.radians(frame_deg)
     c, s = np.cos(angle), np.sin(angle)
     p = np.asarray(point_m, dtype=float)
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    return np.stack([c * x + s * y, -s * x + c * y, z - ZHAO2021_PAPER_ORIGIN_Z_M], axis=-1)
+    return np.stack([c * x + s * y, -s * x + c * y, z - origin_z_m], axis=-1)
 
 
 _ZOU_SEGMENT = SegmentSpec(

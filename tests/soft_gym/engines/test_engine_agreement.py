@@ -27,12 +27,15 @@ from soft_gym.scenarios import make_scenario
 
 PRESETS = ("wang2023", "zhao2021", "zou2022", "ho2018")
 AGREEMENT_MM = 0.5
-CONVERGED_REFINEMENT = {"zou2022": 4, "ho2018": 8, "zhao2021": 2}
+CONVERGED_REFINEMENT = {"zou2022": 4, "ho2018": 8}
 """Physics-step refinement at which the two engines are compared where the preset step is not
-converged enough for both engines' own errors to add up to under 0.5 mm. zhao2021's ballooning
-bores (the arm fitted to its experiments' loads) move it fast under random pressures: PyBullet's
-tip comes within 0.35 mm of its 4x finer step and MuJoCo's within 0.18 mm, 0.65 mm apart at
-their own steps and 0.33 mm at half of them."""
+converged."""
+
+ZHAO2021_RANDOM_GAP = (
+    "zhao2021's refitted arm, whose bores balloon above 0.5 bar, moves fast under random "
+    "pressures: PyBullet's tip comes within 0.35 mm of its 4x finer step and MuJoCo's within "
+    "0.18 mm, but the engines end 0.65 mm apart at their own steps (0.33 mm at half of them)")
+"""Why the engines miss 0.5 mm on zhao2021's random sequence at their own steps (measured)."""
 
 
 def _pair(spec, refinement: int = 1, scenario=None):
@@ -138,9 +141,11 @@ def test_mujoco_springs_and_end_stops_are_the_chain_springs(preset):
 
 @pytest.mark.parametrize("kind", ["held", "ramp", "random"])
 @pytest.mark.parametrize("preset", PRESETS)
-def test_mujoco_tip_follows_pybullet_within_half_a_millimetre(preset, kind):
-    """At each engine's own step on wang2023; converged (finer steps,
-    ``CONVERGED_REFINEMENT``) on zhao2021, zou2022 and ho2018."""
+def test_mujoco_tip_follows_pybullet_within_half_a_millimetre(preset, kind, request):
+    """At each engine's own step on wang2023 and zhao2021; converged (finer steps,
+    ``CONVERGED_REFINEMENT``) on zou2022 and ho2018."""
+    if (preset, kind) == ("zhao2021", "random"):
+        request.applymarker(pytest.mark.xfail(strict=True, reason=ZHAO2021_RANDOM_GAP))
     spec = get_preset(preset)
     commands, hold_s = _sequence(spec, kind)
     sims = _pair(spec, refinement=CONVERGED_REFINEMENT.get(preset, 1))
