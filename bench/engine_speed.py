@@ -9,7 +9,10 @@ For every preset (or ``--presets``), in one process, taking turns block by block
 2. **MuJoCo env**: the same with ``engine="mujoco"``;
 3. **MuJoCo batch**: ``gym.make_vec(id, num_envs=--batch, vectorization_mode=
    "vector_entry_point", engine="mujoco", threads=--threads)``, ``--steps // --batch`` vector
-   steps a block, counted as arm-steps (aggregate env steps per second).
+   steps a block, counted as arm-steps (aggregate env steps per second);
+4. **MuJoCo physics alone**: ``mj_step`` over one control period of substeps, on the model an
+   arm far from its stops rides, nothing else: ``phys/pb`` is the ceiling of any env (single or
+   batched, per core) on this model and physics step.
 
 Ratios are over the PyBullet env in the same run: ``mj/pb`` (one env each, one core) and
 ``batch/pb`` (aggregate; per core when ``--threads 1``). Also per preset: each engine's physics
@@ -31,6 +34,7 @@ import sys
 import time
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 
 import soft_gym  # noqa: F401  (registers the ids)
@@ -69,6 +73,15 @@ def _time_batch(vector, actions: np.ndarray) -> float:
     return actions.shape[0] * actions.shape[1] / (time.perf_counter() - start)
 
 
+def _time_physics(model, data, periods: int, substeps: int) -> float:
+    """Control periods per second of ``mj_step`` alone (``substeps`` each), no actuation, no
+    env: the ceiling of any env on this model."""
+    start = time.perf_counter()
+    for _ in range(periods):
+        mujoco.mj_step(model, data, substeps)
+    return periods / (time.perf_counter() - start)
+
+
 def _tips(spec, engine: str, physics_dt_s: float, commands: np.ndarray) -> np.ndarray:
     sim = make_simulator(spec, engine, physics_dt_s=physics_dt_s)
     sim.reset(settle_s=0.5)
@@ -105,28 +118,37 @@ def speed(preset: str, steps: int, rounds: int, batch: int, threads: int) -> dic
     vector = gym.make_vec("SoftArmReach-v0", num_envs=batch, vectorization_mode="vector_entry_point",
                           preset=preset, engine="mujoco", feedback="ground_truth", threads=threads)
     vector.reset(seed=0)
-    n_chambers = get_preset(preset).n_chambers
+    spec = get_preset(preset)
+    # the physics alone: the model an arm far from its stops rides, bent by held moments
+    physics = make_simulator(spec, "mujoco")
+    physics.reset(pressure_pa=0.5 * (spec.p_pre_pa + spec.p_max_pa))
+    if physics.with_stops:
+        raise RuntimeError(f"{preset}: the physics-alone timing expects the arm far from its stops")
+    substeps = int(round(spec.control_period_s / physics.physics_dt_s))
     rng = np.random.default_rng(0)
-    runs: dict[str, list[float]] = {"pybullet": [], "mujoco": [], "batch": []}
+    runs: dict[str, list[float]] = {"pybullet": [], "mujoco": [], "batch": [], "physics": []}
     for _ in range(rounds):
-        actions = rng.uniform(-1, 1, (steps, n_chambers)).astype(np.float32)
+        actions = rng.uniform(-1, 1, (steps, spec.n_chambers)).astype(np.float32)
         runs["pybullet"].append(_time_single(pybullet_env, actions))
         runs["mujoco"].append(_time_single(mujoco_env, actions))
-        batch_actions = rng.uniform(-1, 1, (max(1, steps // batch), batch, n_chambers))
+        batch_actions = rng.uniform(-1, 1, (max(1, steps // batch), batch, spec.n_chambers))
         runs["batch"].append(_time_batch(vector, batch_actions.astype(np.float32)))
+        runs["physics"].append(_time_physics(physics.model, physics.data, steps, substeps))
     for env in (pybullet_env, mujoco_env, vector):
         env.close()
     median = {name: float(np.median(values)) for name, values in runs.items()}
     return {"pybullet_steps_per_s": median["pybullet"], "mujoco_steps_per_s": median["mujoco"],
-            "batch_steps_per_s": median["batch"],
+            "batch_steps_per_s": median["batch"], "physics_steps_per_s": median["physics"],
             "mujoco_over_pybullet": median["mujoco"] / median["pybullet"],
             "batch_over_pybullet": median["batch"] / median["pybullet"],
+            "physics_over_pybullet": median["physics"] / median["pybullet"],
             "ratio_ranges": {name: [min(values), max(values)] for name, values in runs.items()}}
 
 
 COLUMNS = (("preset", "preset", "{}"), ("pb st/s", "pybullet_steps_per_s", "{:.0f}"),
            ("mj st/s", "mujoco_steps_per_s", "{:.0f}"), ("mj/pb", "mujoco_over_pybullet", "{:.2f}"),
            ("batch st/s", "batch_steps_per_s", "{:.0f}"), ("batch/pb", "batch_over_pybullet", "{:.2f}"),
+           ("phys/pb", "physics_over_pybullet", "{:.1f}"),
            ("pb dt ms", "pybullet_dt_ms", "{:.3g}"), ("mj dt ms", "mujoco_dt_ms", "{:.3g}"),
            ("pb dev mm", "pybullet_dev_mm", "{:.3f}"), ("mj dev mm", "mujoco_dev_mm", "{:.3f}"),
            ("gap mm", "gap_mm", "{:.3f}"))

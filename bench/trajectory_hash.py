@@ -73,6 +73,20 @@ CASES: dict[str, dict] = {
                                  "randomization": True, "task": "track", "path": "star"},
     "wang2023_start_render": {"preset": "wang2023", "feedback": "ground_truth", "steps": 30,
                               "start_m": [-0.028, 0.0, 0.09], "render": True},
+    "wang2023_mujoco_truth": {"preset": "wang2023", "feedback": "ground_truth",
+                              "engine": "mujoco", "obs": ("pose", "target", "pressure", "fbg")},
+    "zhao2021_mujoco_loads": {"preset": "zhao2021", "feedback": "ground_truth",
+                              "engine": "mujoco", "obs": ("pose", "target", "strain"),
+                              "scenario": [{"name": "tip_mass", "mass_kg": 0.05}, "push"]},
+    "zou2022_mujoco_randomised": {"preset": "zou2022", "feedback": "ground_truth",
+                                  "engine": "mujoco", "task": "track",
+                                  "randomization": {"load_weights": {"none": 0.3, "tip_mass": 0.4,
+                                                                     "filling_load": 0.15,
+                                                                     "push": 0.15}},
+                                  "path": "star"},
+    "ho2018_mujoco_em_track": {"preset": "ho2018", "feedback": "em", "engine": "mujoco",
+                               "task": "track", "path": "rectangle",
+                               "scenario": ["filling_load", "flick"]},
 }
 """Case name -> env keyword arguments, plus ``steps`` (default 200), ``task`` and ``render``."""
 

@@ -37,6 +37,9 @@ class ChainReadout:
     def __init__(self, spec: ArmSpec, chain: Chain) -> None:
         self.spec, self.chain = spec, chain
         self._kind = chain.joint_kind
+        self._is_bend_x, self._is_bend_y = self._kind == BEND_X, self._kind == BEND_Y
+        self._offsets = spec.chamber_offset_m[:, None]
+        self._sin_sigma, self._cos_sigma = np.sin(CHAMBER_ANGLES_RAD), np.cos(CHAMBER_ANGLES_RAD)
         self._chamber_weights = self._segment_bend_weights()
         threaded = chain.thread_band > 0
         # a thread may stop a link at or near its rest length (upper limit 0 or tiny): judge
@@ -75,9 +78,8 @@ class ChainReadout:
         total bending rotation (consistent with :mod:`soft_gym.kinematics`).
         """
         arc, theta_x, theta_y = self._segment_arc_and_bend(q)
-        sigma = CHAMBER_ANGLES_RAD
-        d = self.spec.chamber_offset_m[:, None]
-        lengths = arc[:, None] + d * (theta_x[:, None] * np.sin(sigma) - theta_y[:, None] * np.cos(sigma))
+        lengths = arc[:, None] + self._offsets * (theta_x[:, None] * self._sin_sigma
+                                                  - theta_y[:, None] * self._cos_sigma)
         return lengths.reshape(-1)
 
     def segment_bend_angles_rad(self, q: np.ndarray) -> np.ndarray:
@@ -146,8 +148,10 @@ class ChainReadout:
 
     def _segment_arc_and_bend(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         chain = self.chain
-        arc = np.zeros(self.spec.n_segments)
-        np.add.at(arc, chain.station_segment, chain.station_rest_length + q[chain.station_axial_joint])
-        qx = np.where(self._kind == BEND_X, q, 0.0)
-        qy = np.where(self._kind == BEND_Y, q, 0.0)
+        # bincount adds each station's length into its segment in order, as np.add.at does
+        arc = np.bincount(chain.station_segment,
+                          chain.station_rest_length + q[chain.station_axial_joint],
+                          minlength=self.spec.n_segments)
+        qx = np.where(self._is_bend_x, q, 0.0)
+        qy = np.where(self._is_bend_y, q, 0.0)
         return arc, self._chamber_weights @ qx, self._chamber_weights @ qy

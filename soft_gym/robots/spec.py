@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
+from functools import cached_property
 
 import numpy as np
 
@@ -383,20 +384,23 @@ class ArmSpec:
         """Total rest length (m)."""
         return sum(segment.length_m for segment in self.segments)
 
-    @property
+    @cached_property
     def p_max_pa(self) -> np.ndarray:
-        """Per-chamber pressure limit (Pa), shape (n_chambers,)."""
-        return np.repeat([segment.p_max_pa for segment in self.segments], 3).astype(float)
+        """Per-chamber pressure limit (Pa), shape (n_chambers,), read-only (computed once: the
+        spec is frozen and this is read every control step)."""
+        return _read_only(np.repeat([segment.p_max_pa for segment in self.segments], 3)
+                          .astype(float))
 
-    @property
+    @cached_property
     def p_pre_pa(self) -> np.ndarray:
-        """Per-chamber pre-pressure (Pa), shape (n_chambers,)."""
-        return np.repeat([segment.p_pre_pa for segment in self.segments], 3).astype(float)
+        """Per-chamber pre-pressure (Pa), shape (n_chambers,), read-only."""
+        return _read_only(np.repeat([segment.p_pre_pa for segment in self.segments], 3)
+                          .astype(float))
 
-    @property
+    @cached_property
     def chamber_offset_m(self) -> np.ndarray:
-        """Per-segment chamber offset ``d`` (m), shape (n_segments,)."""
-        return np.array([segment.chamber_offset_m for segment in self.segments])
+        """Per-segment chamber offset ``d`` (m), shape (n_segments,), read-only."""
+        return _read_only(np.array([segment.chamber_offset_m for segment in self.segments]))
 
     @property
     def substeps_per_control(self) -> int:
@@ -439,6 +443,12 @@ class ArmSpec:
         g = GRAVITY_M_S2
         return {"hanging": np.array([0.0, 0.0, g]), "upright": np.array([0.0, 0.0, -g]),
                 "horizontal": np.array([-g, 0.0, 0.0])}[self.mount]
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """``array``, marked read-only (a cached value shared by every reader)."""
+    array.flags.writeable = False
+    return array
 
 
 def _dataclass_repr(spec: ArmSpec) -> str:

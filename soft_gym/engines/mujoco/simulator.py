@@ -24,7 +24,7 @@ from soft_gym.engines.chain_readout import ChainReadout, PhysicsDivergedError
 from soft_gym.engines.common_arm import CommonArm
 from soft_gym.engines.held_loads import HeldForceTable, carry_tip_payload, update_payload
 from soft_gym.engines.mujoco.model import ArmModel, build_arm_model
-from soft_gym.engines.mujoco.stepping import step_arms
+from soft_gym.engines.mujoco.stepping import STOP_LOOKAHEAD_UPDATES, step_arms
 from soft_gym.engines.mujoco.world import MujocoWorld
 from soft_gym.robots.chain import build_chain, pressure_to_rest_matrix, weightless_equilibrium
 from soft_gym.robots.pneumatics import BoreGrowth, effective_pressure_pa, make_supply
@@ -60,6 +60,10 @@ class MujocoArmSimulator(CommonArm):
         self.physics_dt_s = default_dt if physics_dt_s is None else require_positive(
             "physics_dt_s", physics_dt_s)
         self.per_actuation = max(1, int(round(spec.actuation_update_s / self.physics_dt_s)))
+        self.actuation_interval_s = self.per_actuation * self.physics_dt_s
+        # an arm moves onto the model with the stops' tendons this long before it could reach one
+        self.stop_lookahead_s = STOP_LOOKAHEAD_UPDATES * self.actuation_interval_s
+        self._stops_ahead: tuple[float, bool] | None = None
         self.chain = build_chain(spec)
         self._arm: ArmModel = build_arm_model(spec, self.chain, self.physics_dt_s)
         # the same arm without the end stops' tendons, for while no joint is near a stop
@@ -104,7 +108,7 @@ class MujocoArmSimulator(CommonArm):
         self.loads: list[Load] = []
         self.time_s = 0.0
         self.substep = 0
-        self._kinematics_substep = self._tip_substep = -1
+        self._kinematics_substep = self._tip_substep = self._backbone_substep = -1
         self.reset()
 
     # ------------------------------------------------------------------ commands and stepping
@@ -140,7 +144,7 @@ class MujocoArmSimulator(CommonArm):
     def forget_reads(self) -> None:
         """Drop the read-out caches (the state changed without a substep count, e.g. a batch
         stepped the arm)."""
-        self._kinematics_substep = self._tip_substep = -1
+        self._kinematics_substep = self._tip_substep = self._backbone_substep = -1
 
     def check_within_stops(self) -> None:
         """Raise :class:`PhysicsDivergedError` if a joint is far past its end stop."""
@@ -150,8 +154,9 @@ class MujocoArmSimulator(CommonArm):
         """Set every joint's position (rad or m) at rest, e.g. to impose a shape in a test."""
         self.data.qpos[:] = as_finite_array("positions", positions, shape=(self.chain.n_joints,))
         self.data.qvel[:] = 0.0
+        self._stops_ahead = None
         self.choose_model()
-        self._kinematics_substep = self._tip_substep = -1
+        self._kinematics_substep = self._tip_substep = self._backbone_substep = -1
 
     def close(self) -> None:
         """Nothing to release (the model and data are freed with the object)."""
@@ -172,8 +177,11 @@ class MujocoArmSimulator(CommonArm):
 
     def backbone(self) -> np.ndarray:
         """The base and every link's distal end (m, (n_links + 1, 3))."""
-        positions, _, rotations = self._link_frames()
-        return self._readout.backbone(positions, rotations)
+        if self._backbone_substep != self.substep:  # read by the truth sensor and the info
+            positions, _, rotations = self._link_frames()
+            self._backbone = self._readout.backbone(positions, rotations)
+            self._backbone_substep = self.substep
+        return self._backbone.copy()
 
     def chamber_lengths(self) -> np.ndarray:
         """Chamber lengths (m), shape (n_chambers,)."""
@@ -272,13 +280,21 @@ class MujocoArmSimulator(CommonArm):
         arm now, which lacks them while every joint is far from its stops)."""
         return self._models[True]
 
-    def near_stops(self, lookahead_s: float = 0.0) -> bool:
-        """Whether a joint is in (or, moving at its present speed, could within
-        ``lookahead_s`` reach) the band where a stop acts."""
+    def stop_proximity(self) -> tuple[bool, bool]:
+        """``(now, ahead)``: whether a joint is in the band where a stop acts, and whether one
+        is or, moving at its present speed, could reach it within ``stop_lookahead_s``."""
         reach = np.abs(self.data.qpos - self._free_centre)
-        if lookahead_s:
-            reach += np.abs(self.data.qvel) * lookahead_s
-        return bool((reach >= self._free_half_width).any())
+        now = bool((reach >= self._free_half_width).any())
+        if now:
+            return True, True
+        reach += np.abs(self.data.qvel) * self.stop_lookahead_s
+        return False, bool((reach >= self._free_half_width).any())
+
+    def note_stops_ahead(self, ahead: bool) -> None:
+        """Remember :meth:`stop_proximity`'s ``ahead`` for the present state, for the next
+        :meth:`choose_model` with ``lookahead=True`` (the block of substeps that just ended
+        computed it; any change of the state forgets it)."""
+        self._stops_ahead = (self.data.time, ahead)
 
     def save_state(self) -> tuple:
         """The state a block of substeps starts from (time, positions, velocities)."""
@@ -287,12 +303,20 @@ class MujocoArmSimulator(CommonArm):
     def restore_state(self, state: tuple) -> None:
         """Put back a state from :meth:`save_state`."""
         self.data.time, self.data.qpos[:], self.data.qvel[:] = state[0], state[1], state[2]
+        self._stops_ahead = None
 
-    def choose_model(self, lookahead_s: float = 0.0, force_stops: bool = False) -> None:
-        """Carry the arm on the model with the end stops' tendons if it is near a stop
-        (:meth:`near_stops`, or ``force_stops``), else on the model without them; the state
-        moves across when the choice changes."""
-        near = force_stops or self.near_stops(lookahead_s)
+    def choose_model(self, lookahead: bool = False, force_stops: bool = False) -> None:
+        """Carry the arm on the model with the end stops' tendons if it is near a stop (now, or
+        with ``lookahead`` within ``stop_lookahead_s``: :meth:`stop_proximity`; or
+        ``force_stops``), else on the model without them; the state moves across when the
+        choice changes."""
+        noted, self._stops_ahead = self._stops_ahead, None
+        if force_stops:
+            near = True
+        elif lookahead and noted is not None and noted[0] == self.data.time:
+            near = noted[1]
+        else:
+            near = self.stop_proximity()[1 if lookahead else 0]
         if near == self.with_stops:
             return
         old, new = self.data, self._datas[near]

@@ -35,6 +35,7 @@ class MujocoArm(Protocol):
     loads: list
     physics_dt_s: float
     per_actuation: int      # substeps per actuation update
+    actuation_interval_s: float  # per_actuation * physics_dt_s
     substep: int            # substeps since the reset (or the clock's restart)
     time_s: float
     moments: np.ndarray     # (n_chambers, n_dofs) joint force per unit effective pressure
@@ -47,9 +48,11 @@ class MujocoArm(Protocol):
     with_stops: bool
     lockstep_key: tuple     # equal keys: one actuation update serves the arms
 
-    def choose_model(self, lookahead_s: float = 0.0, force_stops: bool = False) -> None: ...
+    def choose_model(self, lookahead: bool = False, force_stops: bool = False) -> None: ...
 
-    def near_stops(self, lookahead_s: float = 0.0) -> bool: ...
+    def stop_proximity(self) -> tuple[bool, bool]: ...
+
+    def note_stops_ahead(self, ahead: bool) -> None: ...
 
     def save_state(self) -> tuple: ...
 
@@ -79,10 +82,9 @@ def pressure_moments(moments: np.ndarray, effective_pa: np.ndarray) -> np.ndarra
         moments: (n_chambers, n_dofs) joint force per unit effective pressure (N m/Pa or N/Pa).
         effective_pa: (..., n_chambers) effective chamber pressures (Pa).
     """
-    total = effective_pa[..., 0, None] * moments[0]
-    for chamber in range(1, moments.shape[0]):
-        total = total + effective_pa[..., chamber, None] * moments[chamber]
-    return total
+    # NumPy reduces over an outer axis row by row, in order: the same bits as a loop over the
+    # chambers, whatever the batch's shape
+    return np.add.reduce(effective_pa[..., :, None] * moments, axis=-2)
 
 
 def write_forces(sim: MujocoArm, midpoint: bool) -> None:
@@ -136,11 +138,14 @@ def _substeps(sims: Sequence[MujocoArm], pieces: int, at_update: bool) -> None:
             continue
         start, started = sim.save_state(), sim.forces_started
         _arm_block(sim, pieces, at_update)
-        if sim.near_stops():
+        now, ahead = sim.stop_proximity()
+        if now:
             sim.restore_state(start)
             sim.forces_started = started
             sim.choose_model(force_stops=True)
             _arm_block(sim, pieces, at_update)
+        else:  # the next update's choice of model, from the same pass over the joints
+            sim.note_stops_ahead(ahead)
 
 
 def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
@@ -150,7 +155,7 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
     :class:`~soft_gym.robots.pneumatics.VolumeSupply`), the pressure moments and the held
     forces."""
     first = sims[0]
-    interval_s = first.per_actuation * first.physics_dt_s
+    interval_s = first.actuation_interval_s
     for sim in sims:
         if sim.loads:
             now_s = sim.substep * sim.physics_dt_s
@@ -159,6 +164,10 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
     if first.spec.cylinders is not None:  # lockstep arms share their actuation
         pressure = np.array([sim.supply.advance(interval_s, sim.chamber_lengths())
                              for sim in sims])
+    elif len(sims) == 1:  # the same arithmetic as below, without stacking one arm
+        supply = first.supply
+        alpha = 1.0 - math.exp(-interval_s / supply.time_constant_s)
+        pressure = (supply.pressure_pa + (supply.command_pa - supply.pressure_pa) * alpha)[None]
     else:
         pressure = np.array([sim.supply.pressure_pa for sim in sims])
         command = np.array([sim.supply.command_pa for sim in sims])
@@ -169,9 +178,8 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
     if first.bore.grows:
         effective = first.bore.effective(pressure)
     joint = pressure_moments(first.moments, effective)
-    lookahead_s = STOP_LOOKAHEAD_UPDATES * interval_s
     for i, sim in enumerate(sims):
-        sim.choose_model(lookahead_s)
+        sim.choose_model(lookahead=True)
         sim.supply.pressure_pa = pressure[i]
         sim.joint_force_previous, sim.joint_force = sim.joint_force, joint[i]
         sim.wrench_previous, sim.wrench = sim.wrench, sim.held_wrench()

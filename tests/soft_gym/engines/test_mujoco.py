@@ -187,7 +187,7 @@ def test_leaving_the_stop_tendons_out_far_from_the_stops_changes_no_motion(tip_m
         if tip_mass_kg:
             sim.add_load(TipMass(mass_kg=tip_mass_kg))
         if not switching:
-            monkeypatch.setattr(sim, "near_stops", lambda lookahead_s=0.0: True)
+            monkeypatch.setattr(sim, "stop_proximity", lambda: (True, True))
         sim.reset(settle_s=0.3)
         out, free = [], 0
         for pressure in commands:
