@@ -18,7 +18,6 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym._validation import as_finite_array, require_non_negative, require_positive
 from soft_gym.engines.chain_readout import ChainReadout, PhysicsDivergedError
 from soft_gym.engines.common_arm import CommonArm

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
 import pybullet
 
 from soft_gym.robots.chain import AXIAL, BEND_X, BEND_Y, JOINT_AXES, TORSION, Chain, build_chain
