@@ -25,6 +25,7 @@ from agents.policies import (SHIPPED_DIR, BaselinePolicy, make_policy, mark_mode
                              model_normalization_mark, resolve_sb3_path)
 from eval.runner import run_episode
 from soft_gym._cli import HelpFormatter
+from soft_gym.engines import DEFAULT_ENGINE, ENGINES
 from train.trainer import (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE, MODEL_FILE,
                            NORMALIZATION_FILE)
 
@@ -57,21 +58,34 @@ def _agent_directory(agent: str | Path) -> Path:
     return directory
 
 
-def nominal_evaluation(agent: str | Path) -> dict:
+def training_engine(config: dict) -> str:
+    """The physics engine an agent trained on (its run's env keyword ``engine``, default
+    PyBullet)."""
+    return config["env_kwargs"].get("engine", DEFAULT_ENGINE)
+
+
+def nominal_evaluation(agent: str | Path, engine: str | None = None) -> dict:
     """A shipped agent's nominal tracking: one episode (:func:`eval.runner.run_episode`) of the
     env it trained on, with its recipe's keyword arguments less the randomisation (its feedback
     and path, no load), reset with seed 123, deterministic actions.
 
     :param agent: the agent's directory, or a shipped agent's name.
+    :param engine: the physics engine to run it on (one of
+        :data:`soft_gym.engines.ENGINES`); ``None``, the one it trained on.
     :return: ``settled_error_mm``, the mean tip error (mm) after the first quarter of the steps
         (the start from rest left out); ``resting_error_mm``, the mean error of holding every
-        chamber at its pre-pressure over the same episode; the env id and keyword arguments,
-        the reset seed and the steps.
+        chamber at its pre-pressure over the same episode; the env id and keyword arguments
+        (``engine`` among them where it is not the training engine), the reset seed and the
+        steps.
     """
     directory = _agent_directory(agent)
     config = yaml.safe_load((directory / "config.yaml").read_text())
     env_kwargs = {key: value for key, value in config["env_kwargs"].items()
                   if key != "randomization"}
+    if engine is not None and engine != training_engine(config):
+        if engine not in ENGINES:
+            raise ValueError(f"engine must be one of {sorted(ENGINES)}, got {engine!r}")
+        env_kwargs["engine"] = engine
     env = gym.make(config["env_id"], **env_kwargs)
     try:
         errors = run_episode(env, make_policy(f"sb3:{directory}", env=env),
@@ -84,13 +98,29 @@ def nominal_evaluation(agent: str | Path) -> dict:
             "env_kwargs": env_kwargs, "reset_seed": EVALUATION_SEED, "steps": int(len(errors))}
 
 
+def engine_gap(directory: str | Path) -> dict:
+    """The agent's nominal error (:func:`nominal_evaluation`) on every engine that runs its env:
+    ``{"training_engine": name, "settled_error_mm": {engine: mm}}``, the sim-to-sim gap beside
+    the engine it trained on (an engine that lacks a feature of its env is left out)."""
+    config = yaml.safe_load((Path(directory) / "config.yaml").read_text())
+    errors = {}
+    for engine in ENGINES:
+        try:
+            errors[engine] = nominal_evaluation(directory, engine)["settled_error_mm"]
+        except ValueError as error:  # e.g. camera feedback, which the MuJoCo engine refuses
+            if "engine" not in str(error):
+                raise
+    return {"training_engine": training_engine(config), "settled_error_mm": errors}
+
+
 def write_evaluation(directory: str | Path) -> dict:
-    """Evaluate the agent in ``directory`` (:func:`nominal_evaluation`) and write the result to
-    its ``evaluation.yaml``; returns it."""
-    evaluation = nominal_evaluation(directory)
+    """Evaluate the agent in ``directory`` (:func:`nominal_evaluation`, and on every engine,
+    :func:`engine_gap`) and write the result to its ``evaluation.yaml``; returns it."""
+    evaluation = {**nominal_evaluation(directory), "engines": engine_gap(directory)}
     text = ("# Nominal tracking of this agent, written by python -m train.ship (train/ship.py,\n"
             "# nominal_evaluation); tests/agents/policies/test_shipped_agents.py checks the\n"
-            "# agent against settled_error_mm (within 20 %).\n")
+            "# agent against settled_error_mm (within 20 %). engines: the same episode on\n"
+            "# each physics engine, beside the one it trained on (the sim-to-sim gap).\n")
     (Path(directory) / EVALUATION_FILE).write_text(text + yaml.safe_dump(evaluation,
                                                                          sort_keys=False))
     return evaluation
