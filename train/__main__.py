@@ -31,7 +31,7 @@ from pathlib import Path
 import yaml
 
 from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_output_dir, fail,
-                           non_negative_int, positive_int, seed_int)
+                           finite_float, non_negative_int, positive_int, seed_int)
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
@@ -66,6 +66,25 @@ def build_parser() -> argparse.ArgumentParser:
                         help="env steps between evaluations (0: none)")
     parser.add_argument("--eval-episodes", type=positive_int, default=2,
                         help="episodes per evaluation (>= 1)")
+    parser.add_argument("--curve-freq", type=non_negative_int, default=0,
+                        help="env steps between tracking evaluations: the mean last-cycle error "
+                             "on the recipe's paths, nominal and with a load from its "
+                             "randomised range, written to eval/tracking_curve.csv and "
+                             "tracking_curve.png, the best kept as best_tracking_model.zip "
+                             "(0: none; track envs; train/tracking_curve.py)")
+    parser.add_argument("--until-plateau", action="store_true",
+                        help="stop once the tracking curve has flattened: the last "
+                             "--plateau-fraction of the steps lowered the best error by under "
+                             "--plateau-improvement of it (needs --curve-freq; --timesteps is "
+                             "then the most it may take)")
+    parser.add_argument("--plateau-fraction", type=finite_float(0.0, 1.0, True, True),
+                        default=0.2, help="the plateau rule's share of the latest steps, in (0, 1)")
+    parser.add_argument("--plateau-improvement", type=finite_float(0.0, 1.0, True, True),
+                        default=0.05,
+                        help="the plateau rule's relative improvement, in (0, 1)")
+    parser.add_argument("--min-timesteps", type=non_negative_int, default=0,
+                        help="env steps before --until-plateau may stop training (a curve flat "
+                             "before learning takes hold is not a plateau)")
     parser.add_argument("--checkpoint-freq", type=non_negative_int, default=50_000,
                         help="env steps between checkpoints (0: none)")
     parser.add_argument("--threads", type=positive_int, default=1, help="torch threads (>= 1)")
@@ -183,7 +202,18 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         threads=args.threads, progress=not args.no_progress, demos=args.demos,
         demo_dataset=args.demo_dataset, demo_root=args.demo_root,
         demo_episodes=args.demo_episodes, demo_params=check_demonstrations(parser, args),
-        bc_epochs=args.bc_epochs, critic_warmup=args.critic_warmup)
+        bc_epochs=args.bc_epochs, critic_warmup=args.critic_warmup,
+        curve_freq=args.curve_freq, until_plateau=args.until_plateau,
+        plateau_fraction=args.plateau_fraction, plateau_improvement=args.plateau_improvement,
+        min_timesteps=args.min_timesteps)
+    if args.until_plateau and args.curve_freq == 0:
+        parser.error("--until-plateau stops on the tracking curve: give --curve-freq N (env "
+                     "steps between its evaluations, >= 1)")
+    if args.min_timesteps and not args.until_plateau:
+        parser.error("--min-timesteps applies with --until-plateau, which is not given")
+    if args.curve_freq and not env_id.startswith("SoftArmTrack"):
+        parser.error(f"--curve-freq evaluates tracking of a path: --env must be a track env "
+                     f"(SoftArmTrack...), got {env_id!r}")
     try:
         settings, _ = resolve(request)
     except ValueError as error:  # the config file's entry (the overrides passed above)

@@ -64,7 +64,8 @@ def plot_learning_curve(run_dir: str | Path, title: str = "") -> Path:
     ax.set_ylabel("reward per step x 1000 (~ -tip error, mm)")
     ax.set_title(title)
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower right", fontsize=8)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="lower right", fontsize=8)
     out = Path(run_dir, "learning_curve.png")
     fig.savefig(out, dpi=120)
     plt.close(fig)
@@ -77,3 +78,35 @@ def _eval_length(run_dir: str | Path) -> float:
         return 0.0
     data = np.load(path)
     return float(np.mean(data["ep_lengths"])) if "ep_lengths" in data else 0.0
+
+
+def plot_tracking_curve(run_dir: str | Path, title: str = "") -> Path:
+    """Write ``tracking_curve.png``: the mean last-cycle tracking error (mm) of every evaluation
+    in ``eval/tracking_curve.csv`` (:mod:`train.tracking_curve`) against env steps, each case
+    faint behind it, the best so far marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(run_dir, "eval", "tracking_curve.csv")
+    with open(path) as handle:
+        rows = list(csv.DictReader(handle))
+    steps = np.array([int(row["timesteps"]) for row in rows])
+    fig, ax = plt.subplots(figsize=(6.4, 3.6), constrained_layout=True)
+    for name in [key for key in rows[0] if key.endswith("(mm)")]:
+        ax.plot(steps, [float(row[name]) for row in rows], lw=0.8, alpha=0.4,
+                label=name.replace(" (mm)", ""))
+    mean = np.array([float(row["mean_last_cycle_mm"]) for row in rows])
+    ax.plot(steps, mean, "o-", color="black", ms=3, label="mean of the cases")
+    ax.plot(steps, np.minimum.accumulate(mean), "--", color="tab:red", lw=1,
+            label="best so far")
+    ax.set_xlabel("env steps")
+    ax.set_ylabel("last-cycle tracking error (mm)")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    out = Path(run_dir, "tracking_curve.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out

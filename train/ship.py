@@ -26,11 +26,18 @@ from agents.policies import (SHIPPED_DIR, BaselinePolicy, make_policy, mark_mode
 from eval.runner import run_episode
 from soft_gym._cli import HelpFormatter
 from soft_gym.engines import DEFAULT_ENGINE, ENGINES
+from train.tracking_curve import (BEST_TRACKING_MODEL_FILE, BEST_TRACKING_NORMALIZATION_FILE,
+                                  CURVE_FILE)
 from train.trainer import (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE, MODEL_FILE,
                            NORMALIZATION_FILE)
 
 
 EVALUATION_FILE = "evaluation.yaml"
+MODEL_CHOICES = {"final": (MODEL_FILE, NORMALIZATION_FILE),
+                 "best": (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE),
+                 "best_tracking": (BEST_TRACKING_MODEL_FILE, BEST_TRACKING_NORMALIZATION_FILE)}
+"""Which model of a run to ship: the final one, SB3's best evaluated (by return), or the best on
+the tracking curve (:mod:`train.tracking_curve`), each with its normalisation statistics."""
 EVALUATION_SEED = 123
 
 
@@ -131,10 +138,9 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
     """Copy ``run_dir``'s final or best model with its provenance to ``destination/name``, and
     (``evaluate``) write its nominal evaluation there (:func:`write_evaluation`)."""
     run_dir = Path(run_dir)
-    if model not in ("final", "best"):
-        raise ValueError(f"model must be 'final' or 'best', got {model!r}")
-    model_file, normalization_file = ((MODEL_FILE, NORMALIZATION_FILE) if model == "final" else
-                                      (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE))
+    if model not in MODEL_CHOICES:
+        raise ValueError(f"model must be one of {list(MODEL_CHOICES)}, got {model!r}")
+    model_file, normalization_file = MODEL_CHOICES[model]
     if not (run_dir / model_file).is_file() or not (run_dir / "config.yaml").is_file():
         raise ValueError(f"run_dir {str(run_dir)!r} holds no {model_file} with a config.yaml")
     target = Path(destination) / name
@@ -145,8 +151,10 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
         shutil.copy(run_dir / normalization_file, target / NORMALIZATION_FILE)
     if model_normalization_mark(target / MODEL_FILE) is None:  # a model saved before the mark
         mark_model_file(target / MODEL_FILE, normalized)
-    for extra in ("config.yaml", "versions.yaml", "training.yaml", "learning_curve.png"):
+    for extra in ("config.yaml", "versions.yaml", "training.yaml", "learning_curve.png",
+                  "tracking_curve.png", CURVE_FILE):
         if (run_dir / extra).is_file():
+            (target / extra).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy(run_dir / extra, target / extra)
     (target / "source.txt").write_text(f"{model} model of run {run_dir.name}\n")
     if evaluate:
@@ -159,8 +167,9 @@ def main(argv: list[str] | None = None) -> None:
                                      formatter_class=HelpFormatter)
     parser.add_argument("run_dir", nargs="?", help="a run directory of python -m train")
     parser.add_argument("name", nargs="?", help="the shipped agent's name (sb3:<name> loads it)")
-    parser.add_argument("--model", choices=("final", "best"), default="final",
-                        help="the final model or the best evaluated one")
+    parser.add_argument("--model", choices=list(MODEL_CHOICES), default="final",
+                        help="the final model, the best evaluated one (by return), or the best "
+                             "on the tracking curve (a run with --curve-freq)")
     parser.add_argument("--evaluate", nargs="+", default=None, metavar="AGENT",
                         help="instead of shipping, write the evaluation.yaml of agents already "
                              "shipped (names or directories)")

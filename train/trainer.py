@@ -10,7 +10,10 @@ A run directory holds:
 * ``config.yaml``: the resolved algorithm, env id, env kwargs, hyperparameters, seed and envs;
 * ``versions.yaml``: Python and package versions and the git revision;
 * ``logs/`` (``progress.csv`` and TensorBoard events), ``monitor/`` (per-episode CSVs),
-  ``eval/evaluations.npz``, and ``learning_curve.png``.
+  ``eval/evaluations.npz``, and ``learning_curve.png``;
+* with ``curve_freq`` (:mod:`train.tracking_curve`): ``eval/tracking_curve.csv``,
+  ``tracking_curve.png`` and ``best_tracking_model.zip`` (with
+  ``best_tracking_vecnormalize.pkl``).
 """
 
 from __future__ import annotations
@@ -39,9 +42,11 @@ from agents.policies.sb3 import mark_normalization
 from train.batched import Sb3VectorEnv
 from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class,
                           build_action_noise, read_hyperparameters, split_hyperparameters)
-from train.curves import plot_learning_curve
+from train.curves import plot_learning_curve, plot_tracking_curve
 from train.demonstrations import (load_demonstrations, record_demonstrations,
                                   start_from_demonstrations)
+from train.tracking_curve import (PLATEAU_FRACTION, PLATEAU_IMPROVEMENT, TrackingCurveCallback,
+                                  evaluation_cases)
 
 MODEL_FILE = "model.zip"
 BEST_MODEL_FILE = "best_model.zip"
@@ -86,6 +91,13 @@ class TrainRequest:
         demo_params: the ``demos`` baseline's keyword arguments.
         bc_epochs: behaviour-cloning epochs of the actor on the demonstrations.
         critic_warmup: critic gradient steps on the demonstrations with the actor held.
+        curve_freq: env steps between tracking evaluations (:mod:`train.tracking_curve`; 0:
+            none; a track env only).
+        until_plateau: stop once the tracking curve has flattened
+            (:func:`train.tracking_curve.has_plateaued`); ``timesteps`` is then the most.
+        plateau_fraction: the plateau rule's share of the latest steps (0.2).
+        plateau_improvement: the plateau rule's relative improvement (0.05).
+        min_timesteps: env steps before the plateau rule may stop training.
     """
 
     algo: str = "sac"
@@ -112,6 +124,11 @@ class TrainRequest:
     demo_params: dict = field(default_factory=dict)
     bc_epochs: int = 100
     critic_warmup: int = 2000
+    curve_freq: int = 0
+    until_plateau: bool = False
+    plateau_fraction: float = PLATEAU_FRACTION
+    plateau_improvement: float = PLATEAU_IMPROVEMENT
+    min_timesteps: int = 0
 
     @property
     def uses_demonstrations(self) -> bool:
@@ -244,7 +261,15 @@ def train(request: TrainRequest) -> Path:
     }, sort_keys=False))
     (run_dir / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))
 
-    callbacks = [ThroughputCallback()]
+    callbacks: list[BaseCallback] = [ThroughputCallback()]
+    curve = None
+    if request.curve_freq > 0:
+        curve = TrackingCurveCallback(
+            request.env_id, settings.env_kwargs, evaluation_cases(settings.env_kwargs),
+            request.curve_freq, run_dir, until_plateau=request.until_plateau,
+            fraction=request.plateau_fraction, min_improvement=request.plateau_improvement,
+            min_timesteps=request.min_timesteps)
+        callbacks.append(curve)
     if request.eval_freq > 0:
         callbacks.append(EvalCallback(
             eval_env, best_model_save_path=str(run_dir), log_path=str(run_dir / "eval"),
@@ -268,11 +293,20 @@ def train(request: TrainRequest) -> Path:
     summary = {"timesteps": int(model.num_timesteps), "wall_s": round(elapsed, 1),
                "env_steps_per_s": round(callbacks[0].steps / max(elapsed, 1e-9), 1),
                "n_envs": settings.n_envs, **(demo_report or {})}
+    if curve is not None and curve.errors_mm:
+        summary.update({"curve_evaluations": len(curve.errors_mm),
+                        "best_tracking_mm": round(min(curve.errors_mm), 4),
+                        "stopped_at_plateau": curve.plateaued,
+                        "curve_evaluation_s": round(curve.evaluation_s, 1),
+                        "training_env_steps_per_s": round(
+                            callbacks[0].steps / max(elapsed - curve.evaluation_s, 1e-9), 1)})
     with open(run_dir / "training.yaml", "a") as handle:
         yaml.safe_dump([summary], handle, sort_keys=False)
     env.close()
     eval_env.close()
     plot_learning_curve(run_dir, title=f"{request.algo.upper()} on {request.env_id}")
+    if curve is not None and curve.errors_mm:
+        plot_tracking_curve(run_dir, title=f"{request.algo.upper()} on {request.env_id}")
     return run_dir
 
 

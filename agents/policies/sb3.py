@@ -71,7 +71,9 @@ _CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<steps>\d+)_steps\.zip$")
 def normalization_file(model_path: str | Path) -> Path:
     """The VecNormalize statistics that belong to a model file (whether or not they exist).
 
-    ``best_model.zip`` -> ``best_vecnormalize.pkl``; a checkpoint ``<prefix>_<N>_steps.zip``
+    ``best_model.zip`` -> ``best_vecnormalize.pkl`` (and ``best_tracking_model.zip``, the best on
+    the tracking curve, -> ``best_tracking_vecnormalize.pkl``); a checkpoint
+    ``<prefix>_<N>_steps.zip``
     (``python -m train``'s ``checkpoints/``) -> ``<prefix>_vecnormalize_<N>_steps.pkl``, as
     ``CheckpointCallback`` saves them; any other model (``model.zip``) -> ``vecnormalize.pkl``;
     all in the model's directory.
@@ -80,6 +82,8 @@ def normalization_file(model_path: str | Path) -> Path:
     checkpoint = _CHECKPOINT.match(model_path.name)
     if checkpoint is not None:
         name = f"{checkpoint['prefix']}_vecnormalize_{checkpoint['steps']}_steps.pkl"
+    elif model_path.name.startswith("best_") and model_path.name.endswith("_model.zip"):
+        name = model_path.name[:-len("model.zip")] + "vecnormalize.pkl"
     elif model_path.name.startswith("best_"):
         name = "best_vecnormalize.pkl"
     else:
