@@ -117,7 +117,7 @@ def compare_engines(presets: list[str], steps: int, batch: int) -> list[dict]:
 
 
 def print_engine_table(rows: list[dict], batch: int) -> None:
-    labels = [label.replace("batched MuJoCo", f"{batch} batched MuJoCo")
+    labels = [label.replace("PPO, batched", f"PPO, {batch} batched")
               for label, *_ in ENGINE_RUNS]
     print(f"{'preset':<10}" + "".join(f"{label:>30}" for label in labels))
     for row in rows:
