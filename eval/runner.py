@@ -73,7 +73,7 @@ class RunConfig:
         labels = {"policy": self.policy.split("/")[-1]}
         labels.update({key: value for key, value in self.policy_params.items()
                        if isinstance(value, (int, float, str))})
-        for key in ("preset", "path", "scenario", "faults", "feedback"):
+        for key in ("preset", "path", "scenario", "faults", "feedback", "engine"):
             if key in self.env_kwargs:
                 value = self.env_kwargs[key]
                 labels[key] = value if isinstance(value, (str, int, float)) else _describe(value)

@@ -88,6 +88,21 @@ def test_eval_track_prints_its_output_directory_and_records_the_version(tmp_path
     assert [row["policy"] for row in rows] == ["cc_model"]
 
 
+def test_eval_track_runs_on_the_mujoco_engine_beside_pybullet(tmp_path):
+    """``--engine mujoco`` tracks the same path with the same controller as on PyBullet: the
+    engines' tips agree within 0.5 mm open loop, so the closed loop's mean error within 0.5 mm
+    too."""
+    errors = {}
+    for engine in ("pybullet", "mujoco"):
+        out = tmp_path / engine
+        eval_main.main(["track", "--policies", "cc_model", "--cycles", "1", "--feedback",
+                        "ground_truth", "--workers", "1", "--engine", engine, "--out", str(out)])
+        row = _read_results(out / "track.json")[0]
+        assert row["engine"] == engine
+        errors[engine] = row["track_mean_mm"]
+    assert abs(errors["mujoco"] - errors["pybullet"]) < 0.5, errors
+
+
 def test_eval_compare_prints_its_output_directory_and_records_the_version(tmp_path, capsys):
     out = tmp_path / "compare"
     eval_main.main(["compare", "--policies", "cc_model", "--paths", "circle", "--conditions",
@@ -203,6 +218,8 @@ EVAL_BAD = [
     (EVAL_TRACK + ["--faults", "not a name!"], "--faults", "JSON"),
     (EVAL_TRACK + ["--faults", "nonsense"], "--faults", "wang2023_occlusion"),
     (EVAL_TRACK + ["--obs", "pose", "nonsense"], "--obs", "strain"),
+    (EVAL_TRACK + ["--engine", "bullet"], "--engine", "mujoco"),
+    (EVAL_TRACK + ["--feedback", "fused", "--engine", "mujoco"], "--engine", "camera"),
     (["suite", "nowhere/missing.yaml"], "spec", "not found"),
     (["suite", "smal"], "spec", "did you mean 'small'"),
 ]
