@@ -205,7 +205,12 @@ P2P_BALLOONING = (
     "and 27 / 42 / 30 on seed 1, d = 8's true distance rising 0 and 6 times, ASDM's 1 and 8, so "
     "where d = 8 fluctuates ASDM's adaptive step fluctuates too; on seed 2 no run gets within E "
     "in 100 steps; with 50-100 g ASDM reaches the goal once in nine runs (50 g, 41 steps, seed "
-    "0), rising 24-26 times on seed 1. On the "
+    "0), rising 24-26 times on seed 1. With the paper's training (dropout 0.3, Adam at 0.001, "
+    "no skip connection: --paper-training) the network is less accurate and the fixed steps "
+    "fail rather than fluctuate near the goal: on seeds 0-2 d = 8 never gets within E in 100 "
+    "steps (closest 7.6 / 58.4 / 15.2 mm, its distance rising 0 / 25 / 36 times), nor does "
+    "d = 2 (closest 14.1-105.9 mm), ASDM does on seed 1 (17 steps, one rise) and no loaded run "
+    "does. On the "
     "earlier arm (fitted to Table III alone, its goal the nearest point it reached with 100 g, "
     "73 mm from the start) d = 8 never rose, every load reached the goal, and ASDM took as "
     "many steps as d = 8 (7 / 7 / 28 for d = 8 / ASDM / d = 2 on seed 0)")
