@@ -160,10 +160,17 @@ def test_the_readme_training_times_are_the_shipped_agents_measured_ones():
     assert int(minutes) == round(300_000 / td3["env_steps_per_s"] / 60)
     assert f"{round(sac['env_steps_per_s'])} env steps/s for the SAC, " \
            f"{round(td3['env_steps_per_s'])} for the TD3" in " ".join(readme.split())
-    (line,) = re.findall(r"(\d+), (\d+)\s+and (\d+) minutes of wall time for ho2018, zhao2021 "
-                         r"and zou2022", readme)
-    for agent, minutes in zip(("ho2018", "zhao2021", "zou2022"), line):
+    text = " ".join(readme.split())
+    (zhao,) = re.findall(r"`sac_zhao2021_track` \(zhao2021's circle, tip loads up to 150 g; "
+                         r"100,000 steps, (\d+) minutes", text)
+    (ho,) = re.findall(r"`sac_ho2018_track` \((\d+) minutes\)", text)
+    (steps, zou, rate) = re.findall(r"tracking curve flattened \(([\d,]+) steps, (\d+) minutes, "
+                                    r"(\d+) env steps/s", text)[0]
+    for agent, minutes in (("zhao2021", zhao), ("ho2018", ho), ("zou2022", zou)):
         assert int(minutes) == round(_training(f"sac_{agent}_track")["wall_s"] / 60), agent
+    zou2022 = _training("sac_zou2022_track")
+    assert zou2022["timesteps"] == int(steps.replace(",", ""))
+    assert round(zou2022["training_env_steps_per_s"]) == int(rate)
 
 
 def test_the_contributing_section_gives_the_loop_smoke_before_a_commit_suite_before_a_push():
