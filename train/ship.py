@@ -135,7 +135,8 @@ def write_evaluation(directory: str | Path) -> dict:
 
 def ship(run_dir: str | Path, name: str, model: str = "final",
          destination: str | Path = SHIPPED_DIR, evaluate: bool = True) -> Path:
-    """Copy ``run_dir``'s final or best model with its provenance to ``destination/name``, and
+    """Copy ``run_dir``'s final, best or best-tracking model (``model``, one of
+    :data:`MODEL_CHOICES`) with its provenance and curves to ``destination/name``, and
     (``evaluate``) write its nominal evaluation there (:func:`write_evaluation`)."""
     run_dir = Path(run_dir)
     if model not in MODEL_CHOICES:
