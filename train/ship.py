@@ -22,22 +22,20 @@ import yaml
 
 import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import (SHIPPED_DIR, BaselinePolicy, make_policy, mark_model_file,
-                             model_normalization_mark, resolve_sb3_path)
+                             model_normalization_mark, normalization_file, resolve_sb3_path)
 from eval.runner import run_episode
 from soft_gym._cli import HelpFormatter
 from soft_gym.engines import DEFAULT_ENGINE, ENGINES
-from train.tracking_curve import (BEST_TRACKING_MODEL_FILE, BEST_TRACKING_NORMALIZATION_FILE,
-                                  CURVE_FILE)
-from train.trainer import (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE, MODEL_FILE,
-                           NORMALIZATION_FILE)
+from train.tracking_curve import BEST_TRACKING_MODEL_FILE, CURVE_FILE
+from train.trainer import BEST_MODEL_FILE, MODEL_FILE, NORMALIZATION_FILE
 
 
 EVALUATION_FILE = "evaluation.yaml"
-MODEL_CHOICES = {"final": (MODEL_FILE, NORMALIZATION_FILE),
-                 "best": (BEST_MODEL_FILE, BEST_NORMALIZATION_FILE),
-                 "best_tracking": (BEST_TRACKING_MODEL_FILE, BEST_TRACKING_NORMALIZATION_FILE)}
+MODEL_CHOICES = {"final": MODEL_FILE, "best": BEST_MODEL_FILE,
+                 "best_tracking": BEST_TRACKING_MODEL_FILE}
 """Which model of a run to ship: the final one, SB3's best evaluated (by return), or the best on
-the tracking curve (:mod:`train.tracking_curve`), each with its normalisation statistics."""
+the tracking curve (:mod:`train.tracking_curve`), each with its normalisation statistics
+(:func:`~agents.policies.sb3.normalization_file`)."""
 EVALUATION_SEED = 123
 
 
@@ -141,15 +139,16 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
     run_dir = Path(run_dir)
     if model not in MODEL_CHOICES:
         raise ValueError(f"model must be one of {list(MODEL_CHOICES)}, got {model!r}")
-    model_file, normalization_file = MODEL_CHOICES[model]
+    model_file = MODEL_CHOICES[model]
+    statistics = normalization_file(run_dir / model_file)
     if not (run_dir / model_file).is_file() or not (run_dir / "config.yaml").is_file():
         raise ValueError(f"run_dir {str(run_dir)!r} holds no {model_file} with a config.yaml")
     target = Path(destination) / name
     target.mkdir(parents=True, exist_ok=True)
     shutil.copy(run_dir / model_file, target / MODEL_FILE)
-    normalized = (run_dir / normalization_file).is_file()
+    normalized = statistics.is_file()
     if normalized:
-        shutil.copy(run_dir / normalization_file, target / NORMALIZATION_FILE)
+        shutil.copy(statistics, target / NORMALIZATION_FILE)
     if model_normalization_mark(target / MODEL_FILE) is None:  # a model saved before the mark
         mark_model_file(target / MODEL_FILE, normalized)
     for extra in ("config.yaml", "versions.yaml", "training.yaml", "learning_curve.png",

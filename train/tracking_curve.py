@@ -7,7 +7,8 @@ a tip mass at the middle of the recipe's randomised range; two cycles each, dete
 actions, the training engine, reset seed :data:`CURVE_SEED`) and writes one row per evaluation
 to ``eval/tracking_curve.csv``: env steps, wall time (s), the mean of the cases' last-cycle mean
 errors (mm) and each case's. The model with the lowest mean is kept as
-``best_tracking_model.zip`` (with its normalisation statistics). With ``until_plateau``
+``best_tracking_model.zip`` (with its normalisation statistics,
+:func:`agents.policies.sb3.normalization_file`). With ``until_plateau``
 training stops once :func:`has_plateaued`: the last ``fraction`` (20 %) of the steps so far
 lowered the best error by under ``min_improvement`` (5 %) of it, so the budget comes from the
 curve, not from a time limit; ``--timesteps`` is then the most it may take.
@@ -26,13 +27,13 @@ import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
-from agents.policies.sb3 import SB3Policy
+from agents.policies.sb3 import SB3Policy, normalization_file
+from eval.metrics import summarize
 from eval.runner import run_episode
 from soft_gym.scenarios.randomization import RandomizationConfig
 
 CURVE_FILE = "eval/tracking_curve.csv"
 BEST_TRACKING_MODEL_FILE = "best_tracking_model.zip"
-BEST_TRACKING_NORMALIZATION_FILE = "best_tracking_vecnormalize.pkl"
 CURVE_SEED = 777
 """Reset seed of every evaluation episode (apart from the training and SB3 evaluation seeds)."""
 CURVE_CYCLES = 2
@@ -61,17 +62,11 @@ def _paths(env_kwargs: dict) -> list[str | None]:
 
 def _middle_tip_mass_kg(randomization: Any) -> float | None:
     """The middle of the recipe's randomised tip-mass range (kg), ``None`` without
-    randomisation or without tip masses."""
-    if not randomization:
+    randomisation or where it draws no tip masses."""
+    config = RandomizationConfig.from_any(randomization)
+    if config is None or not config.load_weights.get("tip_mass", 0.0):
         return None
-    config = RandomizationConfig()
-    low, high = config.tip_mass_kg
-    if isinstance(randomization, dict) and "tip_mass_kg" in randomization:
-        low, high = randomization["tip_mass_kg"]
-    if isinstance(randomization, dict) and randomization.get("load_weights", {}).get(
-            "tip_mass", 1.0) == 0:
-        return None
-    middle = 0.5 * (float(low) + float(high))
+    middle = 0.5 * (config.tip_mass_kg[0] + config.tip_mass_kg[1])
     return middle if middle > 0 else None
 
 
@@ -118,9 +113,9 @@ def has_plateaued(timesteps: np.ndarray, errors_mm: np.ndarray,
 
 
 def last_cycle_error_mm(record: dict) -> float:
-    """Mean tracking error (mm) over the record's last cycle."""
-    cycles = np.asarray(record["cycle"])
-    return float(np.asarray(record["error_mm"])[cycles == cycles.max()].mean())
+    """Mean tracking error (mm) over the record's last cycle: the suites' score
+    (:func:`eval.metrics.summarize`)."""
+    return float(summarize(record)["tracking"]["per_cycle"]["mean_mm"][-1])
 
 
 class TrackingCurveCallback(BaseCallback):
@@ -209,10 +204,11 @@ class TrackingCurveCallback(BaseCallback):
                              *[f"{value:.4f}" for value in errors.values()]])
 
     def _save_best(self) -> None:
-        self.model.save(str(self.run_dir / BEST_TRACKING_MODEL_FILE))
+        path = self.run_dir / BEST_TRACKING_MODEL_FILE
+        self.model.save(str(path))
         normalization = self.model.get_vec_normalize_env()
-        if normalization is not None:
-            normalization.save(str(self.run_dir / BEST_TRACKING_NORMALIZATION_FILE))
+        if normalization is not None:  # where sb3:PATH looks for the model's statistics
+            normalization.save(str(normalization_file(path)))
 
 
 def read_curve(run_dir: str | Path) -> tuple[list[int], list[float]]:

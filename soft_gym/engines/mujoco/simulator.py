@@ -153,9 +153,8 @@ class MujocoArmSimulator(CommonArm):
         """Set every joint's position (rad or m) at rest, e.g. to impose a shape in a test."""
         self.data.qpos[:] = as_finite_array("positions", positions, shape=(self.chain.n_joints,))
         self.data.qvel[:] = 0.0
-        self._stops_ahead = None
         self.choose_model()
-        self._kinematics_substep = self._tip_substep = self._backbone_substep = -1
+        self.forget_reads()
 
     def close(self) -> None:
         """Nothing to release (the model and data are freed with the object)."""

@@ -13,7 +13,6 @@ GIL (docs/architecture.md, "The MuJoCo engine").
 
 from __future__ import annotations
 
-import math
 from concurrent.futures import Executor
 from typing import Protocol, Sequence
 
@@ -161,26 +160,19 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
             now_s = sim.substep * sim.physics_dt_s
             for load in sim.loads:
                 load.update(sim, now_s)
-    if first.spec.cylinders is not None:  # lockstep arms share their actuation
+    # each supply advances its own lag (PneumaticSupply / VolumeSupply.advance, as the PyBullet
+    # arm's); lockstep arms share the rest of the update
+    if first.spec.cylinders is not None:
         pressure = np.array([sim.supply.advance(interval_s, sim.chamber_lengths())
                              for sim in sims])
-    elif len(sims) == 1:  # the same arithmetic as below, without stacking one arm
-        supply = first.supply
-        alpha = 1.0 - math.exp(-interval_s / supply.time_constant_s)
-        pressure = (supply.pressure_pa + (supply.command_pa - supply.pressure_pa) * alpha)[None]
     else:
-        pressure = np.array([sim.supply.pressure_pa for sim in sims])
-        command = np.array([sim.supply.command_pa for sim in sims])
-        alpha = np.array([[1.0 - math.exp(-interval_s / sim.supply.time_constant_s)]
-                          for sim in sims])
-        pressure = pressure + (command - pressure) * alpha
+        pressure = np.array([sim.supply.advance(interval_s) for sim in sims])
     effective = pressure
     if first.bore.grows:
         effective = first.bore.effective(pressure)
     joint = pressure_moments(first.moments, effective)
     for i, sim in enumerate(sims):
         sim.choose_model(lookahead=True)
-        sim.supply.pressure_pa = pressure[i]
         sim.joint_force_previous, sim.joint_force = sim.joint_force, joint[i]
         sim.wrench_previous, sim.wrench = sim.wrench, sim.held_wrench()
 
