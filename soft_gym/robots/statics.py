@@ -28,7 +28,6 @@ from soft_gym.robots.spec import ArmSpec
 
 _AXIS_INDEX = {BEND_X: 0, BEND_Y: 1, TORSION: 2}
 _MAX_NEWTON_STEPS = 200
-_FD_STEP = 1e-7
 
 
 @dataclass(frozen=True)
@@ -195,18 +194,67 @@ class StaticArm:
                            f"{pressure.tolist()} Pa and a {mass} kg tip did not converge")
 
     def _hessian(self, q: np.ndarray, force: np.ndarray) -> np.ndarray:
-        """The energy's Hessian: springs and stops on the diagonal, gravity's by differences."""
+        """The energy's Hessian: springs and stops on the diagonal, and the Jacobian of gravity's
+        and the tip force's generalised force (:meth:`external_jacobian`)."""
         diagonal = (self.stiffness0 * (1.0 + 3.0 * self._stiffening * q ** 2)
                     + self.stops.stiffness_at(q))
-        base = self._external(q, force)[0]
+        jacobian = self.external_jacobian(q, force)
+        return np.diag(diagonal) - 0.5 * (jacobian + jacobian.T)
+
+    def external_jacobian(self, q: np.ndarray, tip_force: np.ndarray) -> np.ndarray:
+        """``d tau / d q`` of the generalised force of gravity and the tip force (N m / rad,
+        N / m), in closed form from one pass of the kinematics.
+
+        The forces ``f_k`` on the points ``p_k`` (sub-link centres, the tip) keep their
+        directions as the chain moves. Moving joint ``j`` turns (revolute, axis ``a_j`` through
+        ``o_j``) or shifts (prismatic, along ``a_j``) every point and axis past it. With the
+        sums over the points past joint ``m`` -- the force ``F_m``, the moment about ``o_m``,
+        ``R_m``, and ``S_m = sum p_k f_k^T`` -- a revolute joint ``i`` (``tau_i = a_i . R_i``)
+        and a revolute joint ``j``, ``m = max(i, j)``, give
+
+            d tau_i / d q_j = a_i^T S_m a_j - (a_i . o_m)(a_j . F_m)
+                              - (a_i . a_j)(tr S_m - o_m . F_m) + [j < i] (a_j x a_i) . R_i,
+
+        a prismatic ``j`` past ``i`` gives ``a_i . (a_j x F_j)`` (before it, or at it, none: the
+        points and ``o_i`` shift together); a prismatic joint ``i`` (``tau_i = a_i . F_i``) gets
+        ``(a_j x a_i) . F_i`` from a revolute ``j`` before it, none otherwise. Conservative
+        forces make it symmetric; ``tests/soft_gym/robots/test_statics.py`` checks it against
+        finite differences of :meth:`_external`.
+        """
+        origins, axes, body, rotations = self.frames(q)
+        centres = body + np.einsum("nij,nj->ni", rotations, self._centres)
+        forces = self._masses[:, None] * self.gravity[None, :]
+        tip = body[-1] + rotations[-1][:, 2] * self._tip_length
+        # sums over the points past each joint (the tip is past every one)
+        force_past = np.cumsum(forces[::-1], axis=0)[::-1] + tip_force
+        outer_past = (np.cumsum(np.einsum("ni,nj->nij", centres, forces)[::-1], axis=0)[::-1]
+                      + np.outer(tip, tip_force))
+        moment_past = (np.cumsum(np.cross(centres, forces)[::-1], axis=0)[::-1]
+                       + np.cross(tip, tip_force) - np.cross(origins, force_past))
         n = len(q)
-        jacobian = np.empty((n, n))
-        for j in range(n):
-            shifted = q.copy()
-            shifted[j] += _FD_STEP
-            jacobian[:, j] = (self._external(shifted, force)[0] - base) / _FD_STEP
-        hessian = np.diag(diagonal) - 0.5 * (jacobian + jacobian.T)
-        return hessian
+        index = np.arange(n)
+        pivot = np.maximum(index[:, None], index[None, :])                 # m = max(i, j)
+        S, F, o = outer_past[pivot], force_past[pivot], origins[pivot]      # (n, n, ...)
+        a_i, a_j = axes[:, None, :], axes[None, :, :]
+        axes_dot = axes @ axes.T
+        trace = np.trace(outer_past, axis1=1, axis2=2) - np.einsum("ni,ni->n", origins,
+                                                                   force_past)
+        revolute_pair = (np.einsum("ijk,ijkl,ijl->ij", np.broadcast_to(a_i, S.shape[:3]), S,
+                                   np.broadcast_to(a_j, S.shape[:3]))
+                         - np.einsum("ijk,ijk->ij", np.broadcast_to(a_i, o.shape), o)
+                         * np.einsum("ijk,ijk->ij", np.broadcast_to(a_j, F.shape), F)
+                         - axes_dot * trace[pivot])
+        # (a_j x a_i) . R_i for j < i: the axis of i turning with j
+        turned_axis = np.einsum("jk,ik->ij", axes, np.cross(axes, moment_past))
+        revolute_pair += np.tril(turned_axis, -1)
+        # a prismatic j past i shifts the points past it: a_i . (a_j x F_j)
+        shifted = np.einsum("ik,jk->ij", axes, np.cross(axes, force_past))
+        prismatic = self._kinds == AXIAL
+        jacobian = np.where(prismatic[None, :], np.triu(shifted, 1), revolute_pair)
+        # a prismatic i: tau_i = a_i . F_i, turned by a revolute j before it
+        turned_force = np.einsum("jk,ik->ij", axes, np.cross(axes, force_past))
+        prismatic_row = np.where(prismatic[None, :], 0.0, np.tril(turned_force, -1))
+        return np.where(prismatic[:, None], prismatic_row, jacobian)
 
     def _state(self, q: np.ndarray, residual: np.ndarray) -> StaticState:
         backbone = self.backbone(q)

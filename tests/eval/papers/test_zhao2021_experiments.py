@@ -47,8 +47,8 @@ def test_a_goal_or_load_out_of_reach_is_refused_with_the_distance(setup, message
 
 @pytest.mark.slow
 def test_short_point_to_point_run_reports_and_plots(tmp_path):
-    """A 12-step ASDM run (about 30 s; slow: the default run drives the same runner through the
-    claims ledger's quick sway, tests/eval/claims/test_quick_claims.py)."""
+    """A 12-step ASDM run (about 30 s, slow, as is the claims ledger's quick sway through the
+    same runner, tests/eval/claims/test_quick_claims.py)."""
     sensing = asdict(SMALL)
     result = zhao2021.run_p2p(sensing, seed=0, progress=False,
                               runs=(("ASDM (d1 = 8)", 8.0, True, 0.0),), max_steps=12)

@@ -114,3 +114,28 @@ def test_closest_reach_finds_a_point_the_arm_was_put_on():
     assert reach.distance_m < 2e-4, reach
     np.testing.assert_allclose(arm.equilibrium(reach.pressures_pa, tip_mass_kg=0.05).tip_m,
                                reach.tip_m, atol=1e-9)
+
+
+@pytest.mark.parametrize("preset", ["wang2023", "zhao2021", "zou2022", "ho2018"])
+def test_the_closed_form_gravity_stiffness_matches_finite_differences(preset):
+    """``external_jacobian`` against central differences of the generalised force, on random
+    bent shapes with a tip force in any direction (every joint kind: bending, torsion on
+    zou2022, axial), and symmetric, as the Jacobian of a conservative force is."""
+    from soft_gym.robots.presets import get_preset
+
+    arm = StaticArm(get_preset(preset))
+    rng = np.random.default_rng(3)
+    n, step = arm.chain.n_joints, 1e-6
+    for _ in range(3):
+        q = rng.normal(0.0, 0.15, n)
+        force = 0.1 * arm.gravity + rng.normal(0.0, 0.5, 3)
+        expected = np.empty((n, n))
+        for j in range(n):
+            shift = np.zeros(n)
+            shift[j] = step
+            expected[:, j] = (arm._external(q + shift, force)[0]
+                              - arm._external(q - shift, force)[0]) / (2 * step)
+        jacobian = arm.external_jacobian(q, force)
+        scale = np.abs(expected).max()
+        np.testing.assert_allclose(jacobian, expected, rtol=0, atol=1e-7 * scale)
+        np.testing.assert_allclose(jacobian, jacobian.T, rtol=0, atol=1e-12 * scale)
