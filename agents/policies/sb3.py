@@ -43,6 +43,46 @@ def shipped_agents(env_id: str | None = None) -> dict[str, Path]:
             if _read_run_config(path / "config.yaml").get("env_id") == env_id}
 
 
+def training_budget(path: str | Path) -> dict[str, Any] | None:
+    """What training an agent took, from the ``training.yaml`` and ``config.yaml`` beside it
+    (``python -m train`` writes them; ``train.ship`` ships them); ``None`` without a
+    ``training.yaml``.
+
+    ``path``: an agent's directory, its model ``.zip``, or a shipped agent's name. Returns
+    ``timesteps`` (env steps, all segments of a resumed run), ``wall_s`` (s, demonstrations
+    included), ``n_envs``, ``engine`` (the training env's, ``pybullet`` where unset),
+    ``feedback`` (the training env's), ``plateau`` (whether the last segment stopped at the
+    tracking curve's plateau, :mod:`train.tracking_curve`) and ``demonstrations`` (whether it
+    started from a baseline's episodes).
+    """
+    resolved = resolve_sb3_path(path)
+    directory = resolved if resolved.is_dir() else resolved.parent
+    if directory.name == "checkpoints":
+        directory = directory.parent
+    record = directory / "training.yaml"
+    if not record.is_file():
+        return None
+    try:
+        segments = yaml.safe_load(record.read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        raise ValueError(f"training record {str(record)!r} is not readable YAML "
+                         f"({type(error).__name__})") from None
+    if not isinstance(segments, list) or not segments or not all(
+            isinstance(segment, dict) and "timesteps" in segment for segment in segments):
+        raise ValueError(f"training record {str(record)!r} must be a list of training "
+                         f"segments, each with its timesteps")
+    env_kwargs = _read_run_config(_run_config_file(directory / "model.zip")).get(
+        "env_kwargs") or {}
+    return {"timesteps": int(sum(segment["timesteps"] for segment in segments)),
+            "wall_s": float(sum(segment.get("wall_s", 0.0) + segment.get("demo_wall_s", 0.0)
+                                for segment in segments)),
+            "n_envs": int(segments[-1].get("n_envs", 1)),
+            "engine": str(env_kwargs.get("engine", "pybullet")),
+            "feedback": env_kwargs.get("feedback"),
+            "plateau": bool(segments[-1].get("stopped_at_plateau", False)),
+            "demonstrations": any("demonstrations" in segment for segment in segments)}
+
+
 REPOSITORY_DIR = SHIPPED_DIR.parents[1]
 """The repository's root: a relative ``sb3:`` path not found from the working directory is looked
 up here (``sb3:agents/studies/demos/...``, the agents of a study kept beside the shipped ones)."""

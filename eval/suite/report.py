@@ -14,7 +14,11 @@ Outputs (under the suite's output directory)
   the policies ranked by the mean of ``e`` over their runs (seeds, and paths when the arm has
   several, each path's mean in its own column), with the mean, max and path deviation (mean
   distance from the tip to the path, mm); ``n/a`` rows give the policy's refusal, and runs not
-  made yet are counted in the note.
+  made yet are counted in the note. Each trained agent (``sb3:`` policies) carries its training
+  budget (steps, wall time, engine and envs, feedback, whether its tracking curve reached a
+  plateau: :func:`agents.policies.sb3.training_budget`), and each arm a table of its best agent
+  against its best baseline per condition (nominal, load, visual fault) with the verdict
+  whether an agent beats every baseline under a load or a visual fault.
 * ``runs.csv``: one row per cell: labels, status, metrics (mm), wall time (s), reason.
 * ``suite.json``: provenance (suite name, file, its text and SHA-256, seeds, cycles, the
   versions and git revisions of the records, the report's bootstrap settings), counts, the
@@ -62,6 +66,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from agents.policies.sb3 import training_budget
 from eval.metrics import MM_PER_M
 from eval.palette import policy_color
 from eval.report import (error_peaks_mm, markdown_table, package_version, plot_error_time,
@@ -216,6 +221,100 @@ def leaderboards(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, str], lis
     return boards
 
 
+# ---------------------------------------------------------------------------- agents vs baselines
+def agent_budgets(spec: SuiteSpec) -> dict[str, dict[str, dict[str, Any] | None]]:
+    """Per arm, each trained agent's table label -> its training budget
+    (:func:`agents.policies.sb3.training_budget`; ``None`` where it has no readable record).
+    Every policy of an arm not listed is a baseline."""
+    budgets: dict[str, dict[str, dict[str, Any] | None]] = {}
+    for arm in spec.arms:
+        arm_budgets = budgets.setdefault(arm.preset, {})
+        for policy in arm.policies:
+            if policy.is_agent:
+                try:
+                    arm_budgets[policy.label] = training_budget(policy.name[len("sb3:"):])
+                except ValueError:
+                    arm_budgets[policy.label] = None
+    return budgets
+
+
+def budget_text(budget: Mapping[str, Any] | None) -> str:
+    """A budget in a few words: ``70k steps, 8 min, mujoco x4, encoder_cc, plateau``."""
+    if budget is None:
+        return "no training record"
+    parts = [f"{budget['timesteps'] / 1000:g}k steps", f"{budget['wall_s'] / 60:.0f} min",
+             f"{budget['engine']} x{budget['n_envs']}"]
+    if budget.get("feedback"):
+        parts.append(str(budget["feedback"]))
+    parts.append("plateau" if budget["plateau"] else "no plateau")
+    if budget.get("demonstrations"):
+        parts.append("from demonstrations")
+    return ", ".join(parts)
+
+
+def condition_kind(kwargs: Mapping[str, Any]) -> str:
+    """``nominal``, ``load``, ``visual fault`` or ``load + visual fault``: what a suite condition
+    (its env keyword arguments) puts on the arm."""
+    kinds = [kind for key, kind in (("scenario", "load"), ("faults", "visual fault"))
+             if kwargs.get(key)]
+    return " + ".join(kinds) if kinds else "nominal"
+
+
+def agents_against_baselines(spec: SuiteSpec, boards: Mapping[tuple[str, str], list[dict]]
+                             ) -> dict[str, list[dict[str, Any]]]:
+    """Per arm, one row per condition: the best baseline and the best agent by mean last-cycle
+    error (mm), their ratio (agent / baseline) and whether the agent beats every baseline
+    (``None`` where either side has no finished run)."""
+    table: dict[str, list[dict[str, Any]]] = {}
+    for arm in spec.arms:
+        agent_labels = {policy.label for policy in arm.policies if policy.is_agent}
+        rows = []
+        for condition, kwargs in arm.conditions.items():
+            finished = [e for e in boards.get((arm.preset, condition), [])
+                        if e["runs"] and math.isfinite(e["last_cycle_error_mm"])]
+            baselines = [e for e in finished if e["policy"] not in agent_labels]
+            agents = [e for e in finished if e["policy"] in agent_labels]
+            best_baseline = min(baselines, key=lambda e: e["last_cycle_error_mm"], default=None)
+            best_agent = min(agents, key=lambda e: e["last_cycle_error_mm"], default=None)
+            both = best_baseline is not None and best_agent is not None
+            rows.append({
+                "condition": condition, "kind": condition_kind(kwargs),
+                "best_baseline": best_baseline and best_baseline["policy"],
+                "best_baseline_mm": best_baseline["last_cycle_error_mm"] if best_baseline
+                else math.nan,
+                "best_agent": best_agent and best_agent["policy"],
+                "best_agent_mm": best_agent["last_cycle_error_mm"] if best_agent else math.nan,
+                "ratio": (best_agent["last_cycle_error_mm"] / best_baseline["last_cycle_error_mm"]
+                          if both and best_baseline["last_cycle_error_mm"] > 0 else math.nan),
+                "agent_beats_every_baseline": (best_agent["last_cycle_error_mm"]
+                                               < best_baseline["last_cycle_error_mm"])
+                if both else None})
+        table[arm.preset] = rows
+    return table
+
+
+def _agents_section(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The leaderboard's lines comparing an arm's best agent with its best baseline."""
+    if not any(row["best_agent"] for row in rows):
+        return []
+    shown = [{"condition": row["condition"], "kind": row["kind"],
+              "best baseline": row["best_baseline"] or "—",
+              "baseline (mm)": _fmt(row["best_baseline_mm"]),
+              "best agent": row["best_agent"] or "—",
+              "agent (mm)": _fmt(row["best_agent_mm"]),
+              "agent / baseline": _fmt(row["ratio"]),
+              "agent beats every baseline": {True: "yes", False: "no", None: "—"}[
+                  row["agent_beats_every_baseline"]]}
+             for row in rows]
+    disturbed = [row["condition"] for row in rows
+                 if row["kind"] != "nominal" and row["agent_beats_every_baseline"]]
+    verdict = (f"An agent beats every baseline under a load or visual fault: yes, on "
+               f"{', '.join(disturbed)}." if disturbed else
+               "An agent beats every baseline under a load or visual fault: no.")
+    return ["Best agent against best baseline (mean last-cycle error):", "",
+            markdown_table(shown, columns=list(shown[0])), "", verdict, ""]
+
+
 # ---------------------------------------------------------------------------- aggregates
 def score_matrices(rows: Sequence[Mapping[str, Any]], preset: str
                    ) -> tuple[dict[str, np.ndarray], list[tuple[str, str]], dict[str, str]]:
@@ -357,7 +456,9 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
         }
     counts = {status: sum(r["status"] == status for r in rows)
               for status in ("done", "n/a", "missing", "bad")}
-    text = leaderboard_markdown(spec, rows, boards, per_arm, counts)
+    budgets = agent_budgets(spec)
+    versus = agents_against_baselines(spec, boards)
+    text = leaderboard_markdown(spec, rows, boards, per_arm, counts, budgets, versus)
     (out / "leaderboard.md").write_text(text, encoding="utf-8")
     _write_runs_csv(out / "runs.csv", rows)
     record_versions = [r["versions"] for r in rows if r.get("versions")]
@@ -384,6 +485,8 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
         "leaderboards": [{"preset": preset, "condition": condition, "entries": entries}
                          for (preset, condition), entries in boards.items()],
         "arms": per_arm,
+        "agent_budgets": budgets,
+        "agents_against_baselines": versus,
     })
     if plots:
         _plot_aggregates(out / "aggregate_iqm.png", per_arm)
@@ -410,8 +513,13 @@ def _fmt(value: float, digits: int = 2) -> str:
 def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
                          boards: Mapping[tuple[str, str], list[dict]],
                          per_arm: Mapping[str, Mapping[str, Any]],
-                         counts: Mapping[str, int]) -> str:
-    """The text of ``leaderboard.md``."""
+                         counts: Mapping[str, int],
+                         budgets: Mapping[str, Mapping[str, Any]] | None = None,
+                         versus: Mapping[str, Sequence[Mapping[str, Any]]] | None = None) -> str:
+    """The text of ``leaderboard.md``; ``budgets`` (:func:`agent_budgets`) fill the agents'
+    training column, ``versus`` (:func:`agents_against_baselines`) each arm's comparison of its
+    best agent with its best baseline."""
+    budgets = agent_budgets(spec) if budgets is None else budgets
     lines = [f"# Suite {spec.name}", ""]
     if spec.description:
         lines += [spec.description.strip(), ""]
@@ -452,6 +560,9 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
                       markdown_table(aggregate_rows, columns=[
                           "policy", "IQM (mm)", "IQM 95% CI", "mean (mm)", "mean 95% CI",
                           "median (mm)", "runs x tasks"])]
+        if versus is not None:
+            lines += _agents_section(versus.get(preset, []))
+        arm_budgets = budgets.get(preset, {})
         for condition in arm.conditions:
             entries = boards.get((preset, condition), [])
             table = []
@@ -464,6 +575,8 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
                        "max (mm)": _fmt(entry["max_error_mm"]),
                        "path dev. (mm)": _fmt(entry["path_deviation_mm"]),
                        "runs": f"{entry['runs']}/{entry['of']}",
+                       "training": budget_text(arm_budgets[entry["policy"]])
+                       if entry["policy"] in arm_budgets else "",
                        "note": entry["note"] or ("n/a" if entry["status"] == "n/a" else "")}
                 if len(arm.paths) > 1:
                     for path in arm.paths:
@@ -472,7 +585,10 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
             columns = ["rank", "policy", "last cycle (mm)"]
             if len(arm.paths) > 1:
                 columns += [f"{path} (mm)" for path in arm.paths]
-            columns += ["mean (mm)", "max (mm)", "path dev. (mm)", "runs", "note"]
+            columns += ["mean (mm)", "max (mm)", "path dev. (mm)", "runs"]
+            if any(entry["policy"] in arm_budgets for entry in entries):
+                columns.append("training")
+            columns.append("note")
             lines += [f"### {preset}: {condition}", "", markdown_table(table, columns=columns)]
     return "\n".join(lines).rstrip() + "\n"
 
@@ -649,6 +765,8 @@ def _plot_trajectories(path: Path, records: Mapping[str, Mapping[str, np.ndarray
     save_figure(figure, path)
 
 
-__all__ = ["DEFAULT_REPS", "PROFILE_REPS", "SCORE", "aggregate_scores", "collect_rows",
-           "fraction_within", "leaderboard_markdown", "leaderboards", "performance_profiles",
-           "profile_taus", "require_rliable", "score_matrices", "write_report"]
+__all__ = ["DEFAULT_REPS", "PROFILE_REPS", "SCORE", "agent_budgets",
+           "agents_against_baselines", "aggregate_scores", "budget_text", "collect_rows",
+           "condition_kind", "fraction_within", "leaderboard_markdown",
+           "leaderboards", "performance_profiles", "profile_taus", "require_rliable",
+           "score_matrices", "write_report"]

@@ -398,3 +398,78 @@ def test_another_backend_can_be_registered(tmp_path):
     finally:
         suite.BACKENDS.pop("backwards")
     assert os.path.isdir(tmp_path) and calls == []
+
+
+AGENT_SUITE = """\
+name: agents
+seeds: [0, 1]
+cycles: 2
+arms:
+  zou2022:
+    paths: [circle]
+    feedback: encoder_cc
+    conditions:
+      nominal: {}
+      loaded: {scenario: {name: tip_mass, mass_kg: 0.02}}
+      dark: {faults: {name: low_light, strength: 1.0}}
+    policies: [cc_model, lwpr_rwr, "sb3:sac_zou2022_track"]
+"""
+
+AGENT_SCORES = {  # policy -> (nominal, loaded, dark) last-cycle errors (mm), both seeds
+    "cc_model": (2.0, 6.0, 9.0), "lwpr_rwr": (1.0, 5.0, 8.0), "sac_zou2022_track": (1.5, 4.0, 8.0)}
+
+
+def test_the_leaderboard_sets_each_arms_best_agent_against_its_best_baseline(tmp_path):
+    """Per condition the best baseline and the best agent, their ratio and whether the agent
+    beats every baseline (a tie does not); the verdict names the loads and faults it wins
+    under; each agent row carries its training budget from its training.yaml."""
+    from agents.policies.sb3 import training_budget
+
+    spec = suite.load_suite(_write(tmp_path, AGENT_SUITE))
+    out = tmp_path / "out"
+    column = {"nominal": 0, "loaded": 1, "dark": 2}
+    for cell in suite.expand(spec):
+        labels = cell.labels
+        error = AGENT_SCORES[labels["policy"]][column[labels["condition"]]]
+        suite.write_record(out, {
+            "key": cell.key, "suite": spec.name, "labels": labels, "config": cell.config,
+            "wall_s": 1.0, "versions": {}, "git_revision": "abc", "steps": None,
+            "status": "done", "reason": None,
+            "metrics": {"last_cycle_error_mm": error, "mean_error_mm": error,
+                        "max_error_mm": error, "path_deviation_mm": error}})
+    rows = report.collect_rows(suite.expand(spec), out)
+    versus = {row["condition"]: row for row in report.agents_against_baselines(
+        spec, report.leaderboards(rows))["zou2022"]}
+    assert [versus[c]["kind"] for c in column] == ["nominal", "load", "visual fault"]
+    assert (versus["nominal"]["best_baseline"], versus["nominal"]["best_agent"]) == (
+        "lwpr_rwr", "sac_zou2022_track")
+    assert versus["nominal"]["ratio"] == pytest.approx(1.5)
+    assert [versus[c]["agent_beats_every_baseline"] for c in column] == [False, True, False]
+
+    text = report.write_report(spec, out, reps=50, profile_reps=50, plots=False)
+    assert "An agent beats every baseline under a load or visual fault: yes, on loaded." in text
+    budget = report.budget_text(training_budget("sac_zou2022_track"))
+    assert f"| {budget} |" in text and "k steps" in budget
+    saved = json.loads((out / "suite.json").read_text())
+    assert saved["agent_budgets"]["zou2022"]["sac_zou2022_track"] == training_budget(
+        "sac_zou2022_track")
+
+
+def test_a_training_budget_sums_the_segments_of_a_resumed_run(tmp_path):
+    from agents.policies.sb3 import training_budget
+
+    (tmp_path / "config.yaml").write_text(
+        "env_kwargs: {engine: mujoco, feedback: em}\n")
+    (tmp_path / "training.yaml").write_text(
+        "- {timesteps: 50000, wall_s: 100.0, n_envs: 4}\n"
+        "- {timesteps: 20000, wall_s: 40.0, n_envs: 4, stopped_at_plateau: true}\n")
+    assert training_budget(tmp_path) == {
+        "timesteps": 70000, "wall_s": 140.0, "n_envs": 4, "engine": "mujoco",
+        "feedback": "em", "plateau": True, "demonstrations": False}
+    assert report.budget_text(training_budget(tmp_path)) == (
+        "70k steps, 2 min, mujoco x4, em, plateau")
+    (tmp_path / "training.yaml").write_text("- {wall_s: 100.0}\n")
+    with pytest.raises(ValueError, match="training.yaml"):
+        training_budget(tmp_path)
+    (tmp_path / "untrained").mkdir()
+    assert training_budget(tmp_path / "untrained") is None
