@@ -400,20 +400,10 @@ def test_another_backend_can_be_registered(tmp_path):
     assert os.path.isdir(tmp_path) and calls == []
 
 
-AGENT_SUITE = """\
-name: agents
-seeds: [0, 1]
-cycles: 2
-arms:
-  zou2022:
-    paths: [circle]
-    feedback: encoder_cc
-    conditions:
-      nominal: {}
-      loaded: {scenario: {name: tip_mass, mass_kg: 0.02}}
-      dark: {faults: {name: low_light, strength: 1.0}}
-    policies: [cc_model, lwpr_rwr, "sb3:sac_zou2022_track"]
-"""
+AGENT_SUITE = REPORT_SUITE.replace("seeds: [0, 1, 2]", "seeds: [0, 1]").replace(
+    "mass_kg: 0.02}}\n", "mass_kg: 0.02}}\n      dark: {faults: {name: low_light, strength: 1.0}}\n"
+).replace("[cc_model, lwpr_rwr, hybrid_gpr]", '[cc_model, lwpr_rwr, "sb3:sac_zou2022_track"]')
+"""REPORT_SUITE on two seeds with a visual fault, hybrid_gpr replaced by the zou2022 agent."""
 
 AGENT_SCORES = {  # policy -> (nominal, loaded, dark) last-cycle errors (mm), both seeds
     "cc_model": (2.0, 6.0, 9.0), "lwpr_rwr": (1.0, 5.0, 8.0), "sac_zou2022_track": (1.5, 4.0, 8.0)}
