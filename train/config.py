@@ -38,7 +38,10 @@ import numpy as np
 import yaml
 
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
-ALGORITHMS = ("sac", "td3", "ppo", "a2c", "ddpg")
+ALGORITHMS = ("sac", "td3", "ppo", "a2c", "ddpg", "ppo_lstm")
+"""``--algo`` names, as rl-baselines3-zoo spells them: ``ppo_lstm`` is sb3-contrib's
+``RecurrentPPO`` (an LSTM policy that carries a memory through the episode), the others
+stable-baselines3's classes of the same name."""
 OFF_POLICY = ("sac", "td3", "ddpg")
 VEC_KINDS = ("subprocess", "batched")
 """How ``n_envs`` envs run (:func:`train.trainer.make_vec_env`)."""
@@ -120,12 +123,17 @@ _POSITIVE = _number_in(0.0, None, True, "a finite number > 0")
 _NON_NEGATIVE = _number_in(0.0, None, False, "a finite number >= 0")
 _BOOL = ((lambda v: isinstance(v, bool)), "true or false")
 
+POLICY_CLASSES = ("MlpPolicy", "MultiInputPolicy", "MlpLstmPolicy", "MultiInputLstmPolicy")
+"""Policy class names a config may give; the ``Lstm`` ones are ``ppo_lstm``'s, and only its."""
+
+
 VALUE_RULES: dict[str, tuple] = {
     "n_timesteps": ((lambda v: _is_number(v) and float(v).is_integer() and v >= 1),
                     "a whole number >= 1"),
     "n_envs": _int_at_least(1),
-    "policy": ((lambda v: isinstance(v, str) and v in ("MlpPolicy", "MultiInputPolicy")),
-               "'MlpPolicy' (flat observations) or 'MultiInputPolicy' (obs_format=dict)"),
+    "policy": ((lambda v: isinstance(v, str) and v in POLICY_CLASSES),
+               "'MlpPolicy' (flat observations) or 'MultiInputPolicy' (obs_format=dict), "
+               "'MlpLstmPolicy' or 'MultiInputLstmPolicy' for ppo_lstm"),
     "normalize": ((lambda v: isinstance(v, (bool, dict)) or _literal_or_text(dict)(v)),
                   "true, false, a mapping or a 'dict(...)' string of VecNormalize arguments"),
     "env_kwargs": (_literal_or_text(dict), "a mapping or a 'dict(...)' string"),
@@ -188,6 +196,11 @@ def check_hyperparameters(algo: str, hyperparameters: dict) -> None:
             rule, text = VALUE_RULES[key]
             if not rule(value):
                 raise ValueError(f"{key} must be {text}, got {value!r}")
+    policy = hyperparameters.get("policy")
+    if isinstance(policy, str) and ("Lstm" in policy) != (algo == "ppo_lstm"):
+        wanted = ("'MlpLstmPolicy' or 'MultiInputLstmPolicy'" if algo == "ppo_lstm"
+                  else "'MlpPolicy' or 'MultiInputPolicy'")
+        raise ValueError(f"policy must be {wanted} for {algo}, got {policy!r}")
     if isinstance(hyperparameters.get("ent_coef"), str) and algo != "sac":
         raise ValueError(f"ent_coef must be a finite number >= 0 for {algo} ('auto' is SAC's "
                          f"only), got {hyperparameters['ent_coef']!r}")
@@ -196,10 +209,15 @@ def check_hyperparameters(algo: str, hyperparameters: dict) -> None:
 
 
 def algorithm_class(algo: str):
-    """The stable-baselines3 class of ``algo`` (``sac``, ``td3``, ``ppo``, ``a2c``, ``ddpg``)."""
+    """The stable-baselines3 class of ``algo`` (``sac``, ``td3``, ``ppo``, ``a2c``, ``ddpg``),
+    or sb3-contrib's ``RecurrentPPO`` for ``ppo_lstm``."""
     if algo not in ALGORITHMS:
         raise ValueError(f"algo must be one of {list(ALGORITHMS)}, got {algo!r}")
     # lazy: stable-baselines3 costs 1.2 s (-X importtime) that python -m train --help skips
+    if algo == "ppo_lstm":
+        import sb3_contrib
+
+        return sb3_contrib.RecurrentPPO
     import stable_baselines3
 
     return getattr(stable_baselines3, algo.upper())

@@ -286,11 +286,14 @@ def evaluate_run(run_dir: str | os.PathLike, episodes: int, seed: int) -> dict[s
         env.training, env.norm_reward = False, False
     model = algorithm_class(config["algo"]).load(str(run_dir / MODEL_FILE), device="cpu")
     returns, errors, total = [], [], 0.0
+    memory, starts = None, np.ones(1, dtype=bool)  # a recurrent agent's state (ppo_lstm)
     try:
         observation = env.reset()
         while len(returns) < episodes:
-            action, _ = model.predict(observation, deterministic=True)
+            action, memory = model.predict(observation, state=memory, episode_start=starts,
+                                           deterministic=True)
             observation, reward, done, infos = env.step(action)
+            starts = done
             total += float(reward[0])
             errors.append(float(infos[0]["error_mm"]))
             if done[0]:

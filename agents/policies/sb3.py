@@ -197,8 +197,25 @@ def _trained_with_normalization(model_path: Path, config: dict, data: dict) -> b
     return any(any(directory.glob("*vecnormalize*.pkl")) for directory in directories)
 
 
-SB3_ALGORITHMS = ("A2C", "DDPG", "PPO", "SAC", "TD3")
-"""The stable-baselines3 algorithms an ``sb3:`` model may be (``python -m train``'s)."""
+SB3_ALGORITHMS = ("A2C", "DDPG", "PPO", "SAC", "TD3", "RecurrentPPO")
+"""Model classes this loader knows: stable-baselines3's, and sb3-contrib's ``RecurrentPPO``
+(``python -m train --algo ppo_lstm``)."""
+
+_ALGO_CLASS_NAMES = {**{name.lower(): name for name in SB3_ALGORITHMS},
+                     "ppo_lstm": "RecurrentPPO"}
+"""A run config's ``algo`` -> its model class name."""
+
+
+def _model_class(algorithm: str):
+    """The class named ``algorithm`` (one of :data:`SB3_ALGORITHMS`)."""
+    # lazy: stable-baselines3 costs 1.2 s (-X importtime) that the baselines never need
+    if algorithm == "RecurrentPPO":
+        import sb3_contrib
+
+        return sb3_contrib.RecurrentPPO
+    import stable_baselines3
+
+    return getattr(stable_baselines3, algorithm)
 
 
 def _space_shapes(space: Any) -> Any:
@@ -278,10 +295,10 @@ def _algorithm(model_path: Path, config: dict, data: dict) -> str:
     algorithm = config.get("algo")
     if algorithm is None:
         return _guess_algorithm(model_path, data)
-    if not isinstance(algorithm, str) or algorithm.upper() not in SB3_ALGORITHMS:
+    if not isinstance(algorithm, str) or algorithm.lower() not in _ALGO_CLASS_NAMES:
         raise ValueError(f"sb3 model file {str(model_path)!r}: its run config names the algo "
-                         f"{algorithm!r}, not one of {[a.lower() for a in SB3_ALGORITHMS]}")
-    return algorithm.upper()
+                         f"{algorithm!r}, not one of {list(_ALGO_CLASS_NAMES)}")
+    return _ALGO_CLASS_NAMES[algorithm.lower()]
 
 
 def _load_normalization(path: Path, model) -> Any:
@@ -347,6 +364,19 @@ class SB3Policy(BaselinePolicy):
         self.normalization = normalization
         self.config = dict(config or {})
         self.model_path = None if model_path is None else Path(model_path)
+        self._memory: Any = None        # a recurrent policy's LSTM state in this episode
+        self._episode_start = True
+
+    @property
+    def recurrent(self) -> bool:
+        """Whether the agent carries a memory through the episode (sb3-contrib's
+        ``RecurrentPPO``): :meth:`predict` then keeps its LSTM state between calls, and
+        :meth:`reset` clears it."""
+        return type(self.model).__name__ == "RecurrentPPO"
+
+    def reset(self) -> None:
+        """Start of an episode: a recurrent agent forgets its memory."""
+        self._memory, self._episode_start = None, True
 
     @property
     def env_interface(self) -> dict:
@@ -360,9 +390,20 @@ class SB3Policy(BaselinePolicy):
         return check_observation(self.model.observation_space, observation, name, batch=True)
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        """The action for ``observation`` (and SB3's ``state``). A recurrent agent called
+        without ``state`` continues its own memory from the last call of the episode (cleared by
+        :meth:`reset`), as it ran in training; given ``state``, it uses that instead."""
         observation = self.check_observation(observation)
         if self.normalization is not None:
             observation = self.normalization.normalize_obs(observation)
+        if self.recurrent and state is None:
+            starts = np.full(np.asarray(observation).shape[0] if np.ndim(observation) > 1 else 1,
+                             self._episode_start)
+            action, self._memory = self.model.predict(observation, state=self._memory,
+                                                      episode_start=starts,
+                                                      deterministic=deterministic)
+            self._episode_start = False
+            return action, self._memory
         return self.model.predict(observation, state=state, episode_start=episode_start,
                                   deterministic=deterministic)
 
@@ -402,11 +443,8 @@ class SB3Policy(BaselinePolicy):
                 f"its VecNormalize statistics {str(normalization_path)!r} are missing: copy them "
                 f"beside {model_path.name} (without them it would act on raw observations)")
         algorithm = _algorithm(model_path, config, data)
-        # lazy: stable-baselines3 costs 1.2 s (-X importtime) that the baselines never need
-        import stable_baselines3
-
         try:
-            model = getattr(stable_baselines3, algorithm).load(model_path, device="cpu")
+            model = _model_class(algorithm).load(model_path, device="cpu")
         except Exception as error:  # SB3 and torch raise many kinds on a damaged model
             raise ValueError(f"sb3 model file {str(model_path)!r} does not load as a "
                              f"stable-baselines3 {algorithm} model "
@@ -449,7 +487,7 @@ def _guess_algorithm(model_path: Path, data: dict | None = None) -> str:
     if data is None:
         data = _check_model_archive(model_path)
     if "n_epochs" in data:
-        return "PPO"
+        return "RecurrentPPO" if "Lstm" in str(data.get("policy_class", "")) else "PPO"
     if "target_entropy" in data:
         return "SAC"
     if "policy_delay" in data:

@@ -87,9 +87,14 @@ def test_hyperparameters_are_checked_by_key_and_value():
     check_hyperparameters("sac", {"learning_rate": "lin_3e-4", "ent_coef": "auto_0.1",
                                   "train_freq": [1, "episode"], "gradient_steps": -1,
                                   "normalize": "dict(norm_obs=True)", "n_timesteps": 2e5})
-    for algo in ALGORITHMS:
+    with pytest.raises(ValueError, match="policy must be 'MlpLstmPolicy' .* for ppo_lstm"):
+        check_hyperparameters("ppo_lstm", {"policy": "MlpPolicy"})
+    with pytest.raises(ValueError, match="policy must be 'MlpPolicy' .* for ppo, got 'MlpLstm"):
+        check_hyperparameters("ppo", {"policy": "MlpLstmPolicy"})
+    for algo in ALGORITHMS:  # sac_ho2018_small_rectangle.yml is SAC's; ppo_lstm.yml is not PPO's
         for path in [ROOT / "train" / "configs" / f"{algo}.yml",
-                     *sorted((ROOT / "train" / "configs").glob(f"{algo}_*.yml"))]:
+                     *sorted(path for path in (ROOT / "train" / "configs").glob(f"{algo}_*.yml")
+                             if path.stem not in ALGORITHMS)]:
             for entry in yaml.safe_load(path.read_text()).values():
                 split_hyperparameters(algo, entry)
 
@@ -105,16 +110,16 @@ def test_resume_without_a_model_is_refused(tmp_path):
         train(TrainRequest(resume=str(tmp_path), timesteps=10, progress=False))
 
 
-SLOW_SMOKE = ("td3", "ddpg")
-"""Smoke trainings run only with ``-m slow`` (13-16 s each on one core): SAC's takes the same
-off-policy path in the default suite."""
+SLOW_SMOKE = ("td3", "ddpg", "ppo_lstm")
+"""Smoke trainings run only with ``-m slow`` (13-24 s each on one core): SAC's takes the same
+off-policy path in the default suite, and the recurrent test below ppo_lstm's."""
 
 
 @pytest.mark.parametrize("algo", [pytest.param(algo, marks=pytest.mark.slow)
                                   if algo in SLOW_SMOKE else algo for algo in ALGORITHMS])
 def test_smoke_training_saves_a_model_that_loads_back_identically(tmp_path, algo):
     hyperparameters = {"learning_starts": 200} if algo in ("sac", "td3", "ddpg") else {}
-    if algo == "ppo":
+    if algo in ("ppo", "ppo_lstm"):
         hyperparameters = {"n_steps": 256, "batch_size": 64, "n_epochs": 2}
     run_dir = train(TrainRequest(
         algo=algo, env_id="SoftArmTrackWang2023-v0", env_kwargs=FAST_ENV, n_envs=1,
@@ -285,3 +290,36 @@ def test_shipped_agent_tracks_the_circle(name):
                            env_kwargs={"path": "circle", "cycles": 2, "feedback": "em"}))
     last = record["cycle"] == record["cycle"].max()
     assert np.mean(record["error_mm"][last]) < 1.5
+
+
+def test_a_recurrent_agent_carries_its_memory_through_an_episode_and_forgets_it_on_reset(
+        tmp_path):
+    """ppo_lstm (sb3-contrib's RecurrentPPO): called step by step without a state, the loaded
+    policy passes its LSTM state from one call to the next (the actions equal those of SB3's own
+    state passing) and a reset starts the memory afresh (the same observations give the same
+    actions again)."""
+    run_dir = train(TrainRequest(
+        algo="ppo_lstm", env_id="SoftArmTrackWang2023-v0", env_kwargs=FAST_ENV, n_envs=1,
+        hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1}, timesteps=128,
+        out_dir=str(tmp_path), eval_freq=0, checkpoint_freq=0, progress=False))
+    env = gym.make("SoftArmTrackWang2023-v0", **FAST_ENV)
+    policy = make_policy(f"sb3:{run_dir}", env=env)
+    assert policy.recurrent
+    observations = [env.reset(seed=0)[0]] + [env.step(env.action_space.sample())[0]
+                                             for _ in range(6)]
+    env.close()
+    policy.reset()
+    carried = [policy.predict(o)[0] for o in observations]
+    memory, expected = None, []
+    for k, observation in enumerate(observations):
+        normalized = policy.normalization.normalize_obs(observation)
+        action, memory = policy.model.predict(normalized, state=memory,
+                                              episode_start=np.array([k == 0]),
+                                              deterministic=True)
+        expected.append(action)
+    assert all(np.array_equal(a, b) for a, b in zip(carried, expected))
+    policy.reset()
+    assert all(np.array_equal(a, policy.predict(o)[0]) for a, o in zip(carried, observations))
+    policy.reset()
+    hidden = [policy.predict(o)[1][0].copy() for o in observations[:2]]
+    assert not np.array_equal(hidden[0], hidden[1])  # the memory moves with what it sees
