@@ -13,7 +13,12 @@ A run directory holds:
   ``eval/evaluations.npz``, and ``learning_curve.png``;
 * with ``curve_freq`` (:mod:`train.tracking_curve`): ``eval/tracking_curve.csv``,
   ``tracking_curve.png`` and ``best_tracking_model.zip`` (with
-  ``best_tracking_vecnormalize.pkl``).
+  ``best_tracking_vecnormalize.pkl``);
+* ``training.yaml``: one entry per training (a resumed run adds one): steps, wall time, env
+  steps/s, envs, and the curve's evaluations, best error and whether it stopped at a plateau.
+
+Ctrl-C (``KeyboardInterrupt``) stops training and keeps the run: the model so far is saved and
+summarised as above, its ``training.yaml`` entry marked ``interrupted``.
 """
 
 from __future__ import annotations
@@ -282,8 +287,13 @@ def train(request: TrainRequest) -> Path:
             save_path=str(run_dir / "checkpoints"), name_prefix=request.algo,
             save_vecnormalize=settings.normalize is not None))
     started = time.perf_counter()
-    model.learn(total_timesteps=settings.n_timesteps, callback=CallbackList(callbacks),
-                progress_bar=request.progress, reset_num_timesteps=request.resume is None)
+    interrupted = False
+    try:
+        model.learn(total_timesteps=settings.n_timesteps, callback=CallbackList(callbacks),
+                    progress_bar=request.progress, reset_num_timesteps=request.resume is None)
+    except KeyboardInterrupt:  # Ctrl-C: keep the run so far (saved and summarised below)
+        interrupted = True
+        print(f"\ninterrupted at {model.num_timesteps} steps: saving the run", flush=True)
     elapsed = time.perf_counter() - started
     model.save(str(run_dir / MODEL_FILE))
     if settings.normalize is not None:
@@ -293,6 +303,8 @@ def train(request: TrainRequest) -> Path:
     summary = {"timesteps": int(model.num_timesteps), "wall_s": round(elapsed, 1),
                "env_steps_per_s": round(callbacks[0].steps / max(elapsed, 1e-9), 1),
                "n_envs": settings.n_envs, **(demo_report or {})}
+    if interrupted:
+        summary["interrupted"] = True
     if curve is not None and curve.errors_mm:
         summary.update({"curve_evaluations": len(curve.errors_mm),
                         "best_tracking_mm": round(min(curve.errors_mm), 4),

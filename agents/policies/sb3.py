@@ -52,8 +52,9 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
     ``timesteps`` (env steps, all segments of a resumed run), ``wall_s`` (s, demonstrations
     included), ``n_envs``, ``engine`` (the training env's, ``pybullet`` where unset),
     ``feedback`` (the training env's), ``plateau`` (whether the last segment stopped at the
-    tracking curve's plateau, :mod:`train.tracking_curve`) and ``demonstrations`` (whether it
-    started from a baseline's episodes).
+    tracking curve's plateau, :mod:`train.tracking_curve`), ``interrupted`` (whether it was
+    stopped by hand, Ctrl-C) and ``demonstrations`` (whether it started from a baseline's
+    episodes).
     """
     resolved = resolve_sb3_path(path)
     directory = resolved if resolved.is_dir() else resolved.parent
@@ -80,6 +81,7 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
             "engine": str(env_kwargs.get("engine", "pybullet")),
             "feedback": env_kwargs.get("feedback"),
             "plateau": bool(segments[-1].get("stopped_at_plateau", False)),
+            "interrupted": bool(segments[-1].get("interrupted", False)),
             "demonstrations": any("demonstrations" in segment for segment in segments)}
 
 

@@ -246,7 +246,8 @@ def budget_text(budget: Mapping[str, Any] | None) -> str:
              f"{budget['engine']} x{budget['n_envs']}"]
     if budget.get("feedback"):
         parts.append(str(budget["feedback"]))
-    parts.append("plateau" if budget["plateau"] else "no plateau")
+    parts.append("plateau" if budget["plateau"] else
+                 "stopped by hand, no plateau" if budget.get("interrupted") else "no plateau")
     if budget.get("demonstrations"):
         parts.append("from demonstrations")
     return ", ".join(parts)

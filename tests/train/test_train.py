@@ -323,3 +323,24 @@ def test_a_recurrent_agent_carries_its_memory_through_an_episode_and_forgets_it_
     policy.reset()
     hidden = [policy.predict(o)[1][0].copy() for o in observations[:2]]
     assert not np.array_equal(hidden[0], hidden[1])  # the memory moves with what it sees
+
+
+def test_an_interrupted_training_keeps_its_run(tmp_path, monkeypatch):
+    """Ctrl-C mid-training (a KeyboardInterrupt from inside learn) saves the model so far and its
+    training.yaml entry, marked interrupted, with the steps it took."""
+    import train.trainer as trainer
+
+    def interrupt(self):
+        if self.num_timesteps >= 250:
+            raise KeyboardInterrupt
+        return True
+
+    monkeypatch.setattr(trainer.ThroughputCallback, "_on_step", interrupt)
+    run_dir = train(TrainRequest(algo="sac", env_kwargs=FAST_ENV, timesteps=1000,
+                                 hyperparameters={"learning_starts": 100}, out_dir=str(tmp_path),
+                                 eval_freq=0, checkpoint_freq=0, progress=False))
+    from stable_baselines3 import SAC
+
+    assert SAC.load(run_dir / "model.zip").num_timesteps == 250
+    (entry,) = yaml.safe_load((run_dir / "training.yaml").read_text())
+    assert entry["interrupted"] is True and entry["timesteps"] == 250
