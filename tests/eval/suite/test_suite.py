@@ -119,7 +119,7 @@ def test_bundled_suites_pass_their_checks(name):
     """The README's main job, the default suite and the demonstrations' comparison pass the
     check a run starts with (an arm whose path needs the arm's waypoints: the check judges
     keyword arguments that only work together as a whole before it blames one)."""
-    assert len(suite.check_suite(suite.load_suite(name))) == {"small": 30, "default": 426,
+    assert len(suite.check_suite(suite.load_suite(name))) == {"small": 30, "default": 441,
                                                               "demos": 63}[name]
 
 
