@@ -164,6 +164,7 @@ def test_estimation_video_flag(tmp_path, monkeypatch):
     assert [call.get("video", False) for call in calls] == [True, False]
 
 
+@pytest.mark.slow  # about 16 s; the wang2023 video runs by default
 def test_stereo_run_records_and_films(tmp_path):
     """A zou2022 stereo-feedback run keeps its numeric estimates (the SOM nodes and the reasons
     are left out of the record) and films the stereo pair beside the scene."""

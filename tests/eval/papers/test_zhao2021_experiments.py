@@ -20,6 +20,7 @@ SMALL = ReconstructionConfig(n_free=240, n_loaded=120, max_iterations=80)
 per test process)."""
 
 
+@pytest.mark.slow  # about 22 s, mostly the drive to the start
 def test_the_papers_start_and_goal_are_run():
     """zhao2021 Section VI-C: from (40, 20, 300) to (-50, 70, 210) mm, a 137 mm move, the
     start reached by the env's drive, the goal within reach with 100 g."""

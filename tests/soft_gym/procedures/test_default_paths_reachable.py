@@ -50,6 +50,7 @@ def test_the_ho2018_track_env_default_path_is_reachable() -> None:
     assert distances_mm.max() < REACHED_MM, float(distances_mm.max())
 
 
+@pytest.mark.slow  # about 14 s; the ho2018 path's reach is checked by default
 def test_the_search_reports_a_point_under_the_dome_as_off_the_upright_workspace() -> None:
     """The measure tells off-workspace points apart: the upright ho2018 arm's tips lie on a dome
     (it bends, it barely shortens), so a point on its axis 100 mm above the base, well within

@@ -96,6 +96,7 @@ def test_partial_occlusion_and_glare_raise_the_error(clean, fault, factor):
         f"{fault['name']}: {np.mean(errors):.2f} mm vs clean {np.mean(clean_errors[:300]):.2f} mm")
 
 
+@pytest.mark.slow  # about 14 s; the other faults run by default
 def test_motion_blur_raises_the_error_of_fast_motion():
     """A fast spiral (one turn a second, the tip at 15 mm/s, 2.7 px of blur per frame) with the
     exposure as long as the 20 Hz frame interval. Measured: 1.26 mm blurred vs 0.41 mm sharp
