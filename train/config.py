@@ -37,11 +37,13 @@ from typing import Any
 import numpy as np
 import yaml
 
+from agents.policies.sb3 import ALGORITHM_CLASSES, model_class
+
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
-ALGORITHMS = ("sac", "td3", "ppo", "a2c", "ddpg", "ppo_lstm")
+ALGORITHMS = tuple(ALGORITHM_CLASSES)
 """``--algo`` names, as rl-baselines3-zoo spells them: ``ppo_lstm`` is sb3-contrib's
 ``RecurrentPPO`` (an LSTM policy that carries a memory through the episode), the others
-stable-baselines3's classes of the same name."""
+stable-baselines3's classes of the same name (:data:`agents.policies.sb3.ALGORITHM_CLASSES`)."""
 OFF_POLICY = ("sac", "td3", "ddpg")
 VEC_KINDS = ("subprocess", "batched")
 """How ``n_envs`` envs run (:func:`train.trainer.make_vec_env`)."""
@@ -209,18 +211,10 @@ def check_hyperparameters(algo: str, hyperparameters: dict) -> None:
 
 
 def algorithm_class(algo: str):
-    """The stable-baselines3 class of ``algo`` (``sac``, ``td3``, ``ppo``, ``a2c``, ``ddpg``),
-    or sb3-contrib's ``RecurrentPPO`` for ``ppo_lstm``."""
+    """The model class of ``algo`` (:data:`ALGORITHMS`; imported on first use)."""
     if algo not in ALGORITHMS:
         raise ValueError(f"algo must be one of {list(ALGORITHMS)}, got {algo!r}")
-    # lazy: stable-baselines3 costs 1.2 s (-X importtime) that python -m train --help skips
-    if algo == "ppo_lstm":
-        import sb3_contrib
-
-        return sb3_contrib.RecurrentPPO
-    import stable_baselines3
-
-    return getattr(stable_baselines3, algo.upper())
+    return model_class(ALGORITHM_CLASSES[algo])
 
 
 def read_hyperparameters(algo: str, env_id: str, config_file: str | Path | None = None) -> dict:

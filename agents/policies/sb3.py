@@ -199,17 +199,17 @@ def _trained_with_normalization(model_path: Path, config: dict, data: dict) -> b
     return any(any(directory.glob("*vecnormalize*.pkl")) for directory in directories)
 
 
-SB3_ALGORITHMS = ("A2C", "DDPG", "PPO", "SAC", "TD3", "RecurrentPPO")
-"""Model classes this loader knows: stable-baselines3's, and sb3-contrib's ``RecurrentPPO``
-(``python -m train --algo ppo_lstm``)."""
-
-_ALGO_CLASS_NAMES = {**{name.lower(): name for name in SB3_ALGORITHMS},
+ALGORITHM_CLASSES = {"sac": "SAC", "td3": "TD3", "ppo": "PPO", "a2c": "A2C", "ddpg": "DDPG",
                      "ppo_lstm": "RecurrentPPO"}
-"""A run config's ``algo`` -> its model class name."""
+"""``python -m train --algo`` name (rl-baselines3-zoo's spelling, as a run config's ``algo``) ->
+the model class: stable-baselines3's, and sb3-contrib's ``RecurrentPPO`` for ``ppo_lstm``."""
+
+SB3_ALGORITHMS = tuple(dict.fromkeys(ALGORITHM_CLASSES.values()))
+"""Model classes this loader knows."""
 
 
-def _model_class(algorithm: str):
-    """The class named ``algorithm`` (one of :data:`SB3_ALGORITHMS`)."""
+def model_class(algorithm: str):
+    """The model class named ``algorithm`` (one of :data:`SB3_ALGORITHMS`)."""
     # lazy: stable-baselines3 costs 1.2 s (-X importtime) that the baselines never need
     if algorithm == "RecurrentPPO":
         import sb3_contrib
@@ -297,10 +297,10 @@ def _algorithm(model_path: Path, config: dict, data: dict) -> str:
     algorithm = config.get("algo")
     if algorithm is None:
         return _guess_algorithm(model_path, data)
-    if not isinstance(algorithm, str) or algorithm.lower() not in _ALGO_CLASS_NAMES:
+    if not isinstance(algorithm, str) or algorithm.lower() not in ALGORITHM_CLASSES:
         raise ValueError(f"sb3 model file {str(model_path)!r}: its run config names the algo "
-                         f"{algorithm!r}, not one of {list(_ALGO_CLASS_NAMES)}")
-    return _ALGO_CLASS_NAMES[algorithm.lower()]
+                         f"{algorithm!r}, not one of {list(ALGORITHM_CLASSES)}")
+    return ALGORITHM_CLASSES[algorithm.lower()]
 
 
 def _load_normalization(path: Path, model) -> Any:
@@ -446,7 +446,7 @@ class SB3Policy(BaselinePolicy):
                 f"beside {model_path.name} (without them it would act on raw observations)")
         algorithm = _algorithm(model_path, config, data)
         try:
-            model = _model_class(algorithm).load(model_path, device="cpu")
+            model = model_class(algorithm).load(model_path, device="cpu")
         except Exception as error:  # SB3 and torch raise many kinds on a damaged model
             raise ValueError(f"sb3 model file {str(model_path)!r} does not load as a "
                              f"stable-baselines3 {algorithm} model "

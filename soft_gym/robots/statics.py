@@ -234,16 +234,12 @@ class StaticArm:
         n = len(q)
         index = np.arange(n)
         pivot = np.maximum(index[:, None], index[None, :])                 # m = max(i, j)
-        S, F, o = outer_past[pivot], force_past[pivot], origins[pivot]      # (n, n, ...)
-        a_i, a_j = axes[:, None, :], axes[None, :, :]
-        axes_dot = axes @ axes.T
         trace = np.trace(outer_past, axis1=1, axis2=2) - np.einsum("ni,ni->n", origins,
                                                                    force_past)
-        revolute_pair = (np.einsum("ijk,ijkl,ijl->ij", np.broadcast_to(a_i, S.shape[:3]), S,
-                                   np.broadcast_to(a_j, S.shape[:3]))
-                         - np.einsum("ijk,ijk->ij", np.broadcast_to(a_i, o.shape), o)
-                         * np.einsum("ijk,ijk->ij", np.broadcast_to(a_j, F.shape), F)
-                         - axes_dot * trace[pivot])
+        revolute_pair = (np.einsum("ik,ijkl,jl->ij", axes, outer_past[pivot], axes)
+                         - np.einsum("ik,ijk->ij", axes, origins[pivot])
+                         * np.einsum("jk,ijk->ij", axes, force_past[pivot])
+                         - (axes @ axes.T) * trace[pivot])
         # (a_j x a_i) . R_i for j < i: the axis of i turning with j
         turned_axis = np.einsum("jk,ik->ij", axes, np.cross(axes, moment_past))
         revolute_pair += np.tril(turned_axis, -1)
@@ -251,9 +247,9 @@ class StaticArm:
         shifted = np.einsum("ik,jk->ij", axes, np.cross(axes, force_past))
         prismatic = self._kinds == AXIAL
         jacobian = np.where(prismatic[None, :], np.triu(shifted, 1), revolute_pair)
-        # a prismatic i: tau_i = a_i . F_i, turned by a revolute j before it
-        turned_force = np.einsum("jk,ik->ij", axes, np.cross(axes, force_past))
-        prismatic_row = np.where(prismatic[None, :], 0.0, np.tril(turned_force, -1))
+        # a prismatic i: tau_i = a_i . F_i, turned by a revolute j before it: (a_j x a_i) . F_i,
+        # which is shifted[j, i]
+        prismatic_row = np.where(prismatic[None, :], 0.0, np.tril(shifted.T, -1))
         return np.where(prismatic[:, None], prismatic_row, jacobian)
 
     def _state(self, q: np.ndarray, residual: np.ndarray) -> StaticState:
