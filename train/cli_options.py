@@ -97,7 +97,9 @@ def check_env_kwargs(parser: argparse.ArgumentParser, env_id: str, env_kwargs: d
         return
     except Exception as error:  # noqa: BLE001  (any refusal is the user's input)
         message = " ".join(str(error).split())
-    # which option: the first keyword argument (config entry's first) whose addition fails
+    # which option: the first keyword argument (config entry's first) whose addition fails the
+    # way the whole set does; a subset can fail for another reason that a later keyword lifts
+    # (engine=mujoco alone meets the preset's camera feedback, which feedback=em replaces)
     ordered = [k for k in env_kwargs if k not in overrides] + [k for k in env_kwargs
                                                                if k in overrides]
     partial: dict[str, Any] = {}
@@ -106,7 +108,8 @@ def check_env_kwargs(parser: argparse.ArgumentParser, env_id: str, env_kwargs: d
         try:
             make_uncalibrated_env(env_id, partial).close()
         except Exception as error:  # noqa: BLE001
-            option = overrides.get(key, "--conf-file")
-            fail(parser, option, f"env keyword {key}={env_kwargs[key]!r} refused by {env_id}: "
-                                 f"{' '.join(str(error).split())}")
+            if " ".join(str(error).split()) == message:
+                option = overrides.get(key, "--conf-file")
+                fail(parser, option, f"env keyword {key}={env_kwargs[key]!r} refused by "
+                                     f"{env_id}: {message}")
     fail(parser, "--env", f"{env_id} refused {env_kwargs}: {message}")

@@ -223,6 +223,23 @@ def test_cli_help_and_bad_input(capsys):
         train_main(["--resume", "somewhere"])
 
 
+def test_a_refused_env_keyword_is_the_one_that_fails_the_whole_set(tmp_path, capsys):
+    """engine=mujoco alone fails on ho2018's camera feedback, which feedback=em lifts; what the
+    whole set fails on is the randomisation's swaying mass, so that is the keyword named."""
+    config = tmp_path / "ppo.yml"
+    config.write_text(yaml.safe_dump({"SoftArmTrackHo2018-v0": {
+        "n_timesteps": 1000, "policy": "MlpPolicy", "env_kwargs": {
+            "engine": "mujoco", "feedback": "em",
+            "randomization": {"tip_mass_kg": [0.0, 0.02]}}}}))
+    with pytest.raises(SystemExit) as exit_info:
+        train_main(["--algo", "ppo", "--env", "SoftArmTrackHo2018-v0", "--conf-file",
+                    str(config), "--out", str(tmp_path)])
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "--conf-file" in error and "env keyword randomization=" in error, error
+    assert "swaying" in error and "camera" not in error, error
+
+
 @pytest.fixture(scope="module")
 def small_ppo_run(tmp_path_factory) -> Path:
     """A 256-step PPO run on FAST_ENV (its directory is only read by the tests that use it)."""
