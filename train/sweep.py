@@ -16,17 +16,28 @@ training's, scored by ``--metric``:
   is better), the benchmark's figure of merit;
 * ``reward``: the mean episode return (higher is better).
 
-Search space (:data:`SEARCH_SPACE`):
+Search space (:data:`SEARCH_SPACE`; where each value goes: :data:`PLACES`):
 
-================ ============================== ===============================================
-hyperparameter   values                         meaning
-================ ============================== ===============================================
-``learning_rate`` log-uniform in [1e-4, 1e-3]   Adam step size of actor, critics and entropy
-``gamma``         0.8, 0.9, 0.95, 0.98          discount per control step (0.05 s)
-``tau``           0.002, 0.005, 0.01, 0.02      Polyak averaging of the target critics, per
-                                                gradient step
-``batch_size``    64, 128, 256                  transitions per gradient step
-================ ============================== ===============================================
+====================== ============================ ==========================================
+hyperparameter         values                       meaning
+====================== ============================ ==========================================
+``learning_rate``      log-uniform in [1e-4, 1e-3]  Adam step size of actor, critics, entropy
+``gamma``              0.8, 0.9, 0.95, 0.98         discount per control step (0.05 s)
+``tau``                0.002, 0.005, 0.01, 0.02     Polyak averaging of the target critics,
+                                                    per gradient step
+``batch_size``         64, 128, 256                 transitions per gradient step
+``train_freq``         1, 2, 4                      vector env steps between updates
+``gradient_steps``     1, 2, 4                      gradient steps per update
+``hidden_units``       64, 128, 256                 units of each of the actor's and critics'
+                                                    two hidden layers (``policy_kwargs``'
+                                                    ``net_arch=[n, n]``)
+``action_rate_weight`` 0, 1e-4, 1e-3, 1e-2          the reward's action-rate penalty (an env
+                                                    keyword argument; the score does not
+                                                    include it)
+====================== ============================ ==========================================
+
+A trial trains on the entry's ``n_envs`` arms of one MuJoCo batch when the entry's env runs on
+the ``mujoco`` engine (``python -m train --vec batched``), else on one env.
 
 The first trial evaluates the config entry's own values when they lie in the space, so the best
 is never worse than the current config on this budget. ``--search random`` (default) samples
@@ -62,6 +73,7 @@ import inspect
 import json
 import math
 import os
+import re
 import sys
 import tempfile
 import time
@@ -93,9 +105,19 @@ SEARCH_SPACE: dict[str, tuple] = {
     "gamma": ("choice", [0.8, 0.9, 0.95, 0.98]),
     "tau": ("choice", [0.002, 0.005, 0.01, 0.02]),
     "batch_size": ("choice", [64, 128, 256]),
+    "train_freq": ("choice", [1, 2, 4]),
+    "gradient_steps": ("choice", [1, 2, 4]),
+    "hidden_units": ("choice", [64, 128, 256]),
+    "action_rate_weight": ("choice", [0.0, 1e-4, 1e-3, 1e-2]),
 }
 """Hyperparameter -> ``("loguniform", low, high)`` or ``("choice", values)`` (see the module
 docstring for units)."""
+
+PLACES: dict[str, str] = {"hidden_units": "policy_kwargs", "action_rate_weight": "env_kwargs"}
+"""Where a searched value goes in a config entry when not a top-level hyperparameter of SAC:
+inside ``policy_kwargs`` or the env's keyword arguments."""
+ENV_DEFAULTS = {"action_rate_weight": 0.0}
+"""The env's own values of searched env keyword arguments (:class:`soft_gym.envs.config`)."""
 
 METRICS = {"error_mm": "min", "reward": "max"}
 """Score -> Tune's mode (``min``: lower is better)."""
@@ -205,7 +227,13 @@ def base_entry(request: SweepRequest) -> dict[str, Any]:
     for key in ("n_timesteps", "n_envs"):
         if key in request.hyperparameters:
             raise ValueError(f"hyperparameters may not set {key!r}: steps sets the trial budget "
-                             f"and trials run one env each")
+                             f"and the config entry the arms (one env, or its n_envs on the "
+                             f"mujoco engine)")
+    searched_env = sorted(set(request.env_kwargs) & {k for k, v in PLACES.items()
+                                                      if v == "env_kwargs"})
+    if searched_env:
+        raise ValueError(f"env_kwargs {searched_env} are searched (space: "
+                         f"{sorted(SEARCH_SPACE)}); fix only others")
     if request.env_id not in gymnasium.registry:
         ids = sorted(name for name in gymnasium.registry if name.startswith("SoftArm"))
         raise ValueError(f"env_id must be a registered id (e.g. {ids[:4]}), got "
@@ -233,18 +261,84 @@ def _in_space(name: str, value: Any) -> bool:
             and spec[0] <= value <= spec[1])
 
 
-def baseline_point(entry: Mapping[str, Any]) -> dict[str, Any] | None:
-    """The entry's own values of the searched hyperparameters, or ``None`` when one is missing
-    or outside the space."""
+def _policy_kwargs(entry: Mapping[str, Any]) -> dict[str, Any]:
+    value = entry.get("policy_kwargs") or {}
+    return dict(parse_python_value(value) if isinstance(value, str) else value)
+
+
+def entry_values(entry: Mapping[str, Any]) -> dict[str, Any]:
+    """The entry's own values of the searched hyperparameters (SAC's and the env's defaults
+    where the entry has none)."""
     # lazy: stable-baselines3 costs 1.2 s (-X importtime) that python -m train --help skips
     from stable_baselines3 import SAC
+    from stable_baselines3.sac.policies import SACPolicy
 
     defaults = {name: parameter.default for name, parameter
                 in inspect.signature(SAC.__init__).parameters.items()}
-    point = {name: entry.get(name, defaults.get(name)) for name in SEARCH_SPACE}
+    policy_kwargs = _policy_kwargs(entry)
+    env_kwargs = entry.get("env_kwargs") or {}
+    values = {}
+    for name in SEARCH_SPACE:
+        place = PLACES.get(name)
+        if place == "policy_kwargs":
+            default = inspect.signature(SACPolicy.__init__).parameters["net_arch"].default
+            net_arch = policy_kwargs.get("net_arch", default or [256, 256])  # SB3's SAC network
+            two_equal = isinstance(net_arch, list) and len(net_arch) == 2 \
+                and net_arch[0] == net_arch[1]
+            values[name] = net_arch[0] if two_equal else net_arch  # else outside the space
+        elif place == "env_kwargs":
+            values[name] = env_kwargs.get(name, ENV_DEFAULTS[name])
+        else:
+            values[name] = entry.get(name, defaults.get(name))
+    return values
+
+
+def baseline_point(entry: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The entry's own values of the searched hyperparameters, or ``None`` when one is outside
+    the space."""
+    point = entry_values(entry)
     if all(_in_space(name, value) for name, value in point.items()):
         return point
     return None
+
+
+def _with_net_arch(policy_kwargs: Any, net_arch: list[int]) -> Any:
+    """``policy_kwargs`` (a mapping or rl-zoo3's ``"dict(...)"`` string, kept in its form)
+    with ``net_arch`` set."""
+    if isinstance(policy_kwargs, str):
+        text = policy_kwargs.strip()
+        if re.search(r"\bnet_arch\s*=", text):
+            text = re.sub(r"\bnet_arch\s*=\s*\[[^\]]*\]", f"net_arch={net_arch}", text, count=1)
+        else:
+            inner = text[len("dict("):-1].strip()
+            text = f"dict(net_arch={net_arch}" + (f", {inner})" if inner else ")")
+        if parse_python_value(text).get("net_arch") != net_arch:  # a nested or odd net_arch
+            raise ValueError(f"policy_kwargs {policy_kwargs!r}: cannot set net_arch={net_arch}")
+        return text
+    return {**(policy_kwargs or {}), "net_arch": list(net_arch)}
+
+
+def apply_values(entry: Mapping[str, Any], values: Mapping[str, Any]) -> dict[str, Any]:
+    """``entry`` with the searched ``values`` put where they belong (:data:`PLACES`)."""
+    entry = dict(entry)
+    for name, value in values.items():
+        place = PLACES.get(name)
+        if place == "policy_kwargs":
+            entry["policy_kwargs"] = _with_net_arch(entry.get("policy_kwargs"),
+                                                    [int(value), int(value)])
+        elif place == "env_kwargs":
+            entry["env_kwargs"] = {**(entry.get("env_kwargs") or {}), name: value}
+        else:
+            entry[name] = value
+    return entry
+
+
+def trial_arms(entry: Mapping[str, Any]) -> tuple[int, str]:
+    """``(n_envs, vec)`` of a trial: the entry's arms in one MuJoCo batch when its env runs on
+    the mujoco engine, else one env."""
+    if (entry.get("env_kwargs") or {}).get("engine") == "mujoco":
+        return int(entry.get("n_envs", 1)), "batched"
+    return 1, "subprocess"
 
 
 def tune_space(tune) -> dict[str, Any]:
@@ -322,14 +416,16 @@ def run_trial(values: Mapping[str, Any], context: Mapping[str, Any]) -> dict[str
 
     start = time.perf_counter()
     values = {name: _plain(value) for name, value in values.items()}
-    entry = {**context["entry"], **values}
+    entry = apply_values(context["entry"], values)
+    n_envs, vec = trial_arms(entry)
     with tempfile.TemporaryDirectory(prefix="sweep_trial_") as work:
         config_file = Path(work) / CONFIG_NAME
         config_file.write_text(yaml.safe_dump({context["env_id"]: entry}, sort_keys=False))
         run_dir = train(TrainRequest(
             algo=ALGO, env_id=context["env_id"], timesteps=int(context["steps"]),
-            seed=int(context["seed"]), n_envs=1, config_file=str(config_file), out_dir=work,
-            run_name="run", eval_freq=0, checkpoint_freq=0, threads=1, progress=False))
+            seed=int(context["seed"]), n_envs=n_envs, vec=vec, config_file=str(config_file),
+            out_dir=work, run_name="run", eval_freq=0, checkpoint_freq=0, threads=1,
+            progress=False))
         trained = time.perf_counter()
         scores = evaluate_run(run_dir, int(context["eval_episodes"]),
                               int(context["seed"]) + EVAL_SEED_OFFSET)
@@ -490,7 +586,7 @@ def run_sweep(request: SweepRequest) -> SweepResult:
     best = pick(finished, key=lambda t: t["score"])
     summary["best"] = best
     trials_path.write_text(json.dumps(summary, indent=2, default=str) + "\n")
-    best_entry = {**entry, **best["hyperparameters"]}
+    best_entry = apply_values(entry, best["hyperparameters"])
     unit = "mm, lower is better" if request.metric == "error_mm" else "higher is better"
     header = (f"Best of {len(trials)} SAC trials ({len(finished)} finished) of "
               f"`python -m train sweep` on {request.env_id}:\n"
@@ -559,7 +655,8 @@ def main(argv: list[str] | None = None) -> None:
         progress=not args.no_progress)
     options = {"trials": "--trials", "steps": "--steps", "eval_episodes": "--eval-episodes",
                "workers": "--workers", "seed": "--seed", "address": "--address",
-               "hyperparameters": "--hyperparams", "env_id": "--env", "config": "--conf-file"}
+               "hyperparameters": "--hyperparams", "env_kwargs": "--env-kwargs", "env_id": "--env",
+               "config": "--conf-file"}
     try:
         base_entry(request)  # the request's own fields first: they name their option
     except ValueError as error:
@@ -593,6 +690,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"trials: {result.trials_path}")
 
 
-__all__ = ["METRICS", "SEARCHES", "SEARCH_SPACE", "SweepRequest", "SweepResult", "base_entry",
-           "baseline_point", "evaluate_run", "main", "require_tune", "run_sweep", "run_trial",
-           "tune_space", "write_best_config"]
+__all__ = ["METRICS", "PLACES", "SEARCHES", "SEARCH_SPACE", "SweepRequest", "SweepResult",
+           "apply_values", "base_entry", "baseline_point", "entry_values", "evaluate_run", "main",
+           "require_tune", "run_sweep", "run_trial", "trial_arms", "tune_space",
+           "write_best_config"]

@@ -43,8 +43,9 @@ def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, lo
         assert trial["score"] == trial["error_mm"] > 0 and trial["reward"] < 0
         assert trial["episodes"] == 2 and trial["eval_steps"] == 52
     # the first trial is the config entry's own values (they lie in the space)
-    assert trials[0]["hyperparameters"] == {"learning_rate": 3e-4, "gamma": 0.9, "tau": 0.005,
-                                            "batch_size": 256}
+    assert trials[0]["hyperparameters"] == {
+        "learning_rate": 3e-4, "gamma": 0.9, "tau": 0.005, "batch_size": 256, "train_freq": 1,
+        "gradient_steps": 1, "hidden_units": 128, "action_rate_weight": 0.0}
     best = min(trials, key=lambda t: t["score"])
     assert summary["best"] == best and summary["mode"] == "min"
 
@@ -54,14 +55,16 @@ def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, lo
     table = yaml.safe_load(text)
     assert list(table) == [ENV_ID]
     entry = read_hyperparameters("sac", ENV_ID, out / "sac.yml")
-    for name, value in best["hyperparameters"].items():
-        assert entry[name] == value, name
+    assert sweep.entry_values(entry) == best["hyperparameters"]
     assert entry["learning_starts"] == 100 and entry["buffer_size"] == 10000
     assert entry["env_kwargs"] == {"feedback": "ground_truth", "path": "circle",
-                                   "speed_m_s": 0.05, "randomization": False}
+                                   "speed_m_s": 0.05, "randomization": False,
+                                   "action_rate_weight": best["hyperparameters"][
+                                       "action_rate_weight"]}
     reference = read_hyperparameters("sac", ENV_ID)
     assert entry["n_timesteps"] == reference["n_timesteps"]  # the full budget, not the trials'
-    assert entry["policy_kwargs"] == reference["policy_kwargs"]
+    units = best["hyperparameters"]["hidden_units"]
+    assert entry["policy_kwargs"] == f"dict(net_arch=[{units}, {units}])"
     settings, _ = resolve(TrainRequest(algo="sac", env_id=ENV_ID,
                                        config_file=str(out / "sac.yml")))
     assert settings.algo_kwargs["batch_size"] == best["hyperparameters"]["batch_size"]
@@ -107,6 +110,33 @@ def test_an_optuna_search_runs_and_keeps_the_baseline_trial(tmp_path, local_ray)
     assert yaml.safe_load(result.config_path.read_text())[ENV_ID]["batch_size"] in (64, 128, 256)
 
 
+def test_searched_values_land_where_sac_and_the_env_read_them():
+    """Top-level SAC keys, ``hidden_units`` as ``net_arch`` inside ``policy_kwargs`` (a rl-zoo3 string stays a
+    string with its other keys) and the action-rate weight among the env's keyword arguments;
+    the entry's own values read back, SAC's and the env's defaults where it has none."""
+    entry = {"n_timesteps": 1000, "policy": "MlpPolicy", "gamma": 0.9,
+             "policy_kwargs": "dict(log_std_init=-1.0, net_arch=[128, 128])",
+             "env_kwargs": {"feedback": "em"}}
+    point = {"learning_rate": 5e-4, "gamma": 0.95, "tau": 0.01, "batch_size": 64,
+             "train_freq": 4, "gradient_steps": 2, "hidden_units": 64,
+             "action_rate_weight": 1e-3}
+    applied = sweep.apply_values(entry, point)
+    assert sweep.entry_values(applied) == point
+    assert applied["policy_kwargs"] == "dict(log_std_init=-1.0, net_arch=[64, 64])"
+    assert applied["env_kwargs"] == {"feedback": "em", "action_rate_weight": 1e-3}
+    assert entry["env_kwargs"] == {"feedback": "em"}  # the entry itself is left as it was
+    settings = split_hyperparameters("sac", applied)
+    assert settings.algo_kwargs["policy_kwargs"] == {"log_std_init": -1.0, "net_arch": [64, 64]}
+    assert (settings.algo_kwargs["train_freq"], settings.algo_kwargs["gradient_steps"]) == (4, 2)
+    defaults = sweep.entry_values({"n_timesteps": 1000})
+    assert defaults["hidden_units"] == 256 and defaults["action_rate_weight"] == 0.0
+    assert defaults["train_freq"] == 1 and defaults["batch_size"] == 256
+    assert sweep.baseline_point({"n_timesteps": 1000, "gamma": 0.5}) is None  # outside
+    assert sweep.baseline_point({"policy_kwargs": {"net_arch": [64, 32]}}) is None
+    assert sweep.trial_arms({"n_envs": 4, "env_kwargs": {"engine": "mujoco"}}) == (4, "batched")
+    assert sweep.trial_arms({"n_envs": 4, "env_kwargs": {}}) == (1, "subprocess")
+
+
 # ----------------------------------------------------------------------- command line
 @pytest.mark.parametrize("argv, option", [
     (["--trials", "0"], "--trials"),
@@ -125,6 +155,8 @@ def test_an_optuna_search_runs_and_keeps_the_baseline_trial(tmp_path, local_ray)
     (["-hp", "nonsense=1"], "--hyperparams"),
     (["-hp", "tau=2"], "--hyperparams"),
     (["--env-kwargs", "feedback=gps"], "--env-kwargs"),
+    (["--env-kwargs", "action_rate_weight=0.1"], "--env-kwargs"),
+    (["-hp", "hidden_units=8"], "--hyperparams"),
     (["--preset", "nope"], "--preset"),
     (["--conf-file", "/nonexistent/sac.yml"], "--conf-file"),
 ])
