@@ -52,7 +52,7 @@ Outputs in ``--out``:
   ``python -m rl_zoo3.train --algo sac --env <env id> --gym-packages soft_gym --conf-file
   <out>/sac.yml``;
 * ``trials.json``: the settings, the search space, every trial (values, scores, wall time,
-  status) and the best one;
+  status) and the best one; ``trials.md``: the trials as a Markdown table, best first;
 * ``tune/``: Ray Tune's experiment directory.
 
 Where the trials run: a local Ray with ``--workers`` CPUs (one trial per CPU), or with
@@ -127,6 +127,7 @@ EVAL_SEED_OFFSET = 20_000
 uses +10,000)."""
 CONFIG_NAME = f"{ALGO}.yml"
 TRIALS_NAME = "trials.json"
+TABLE_NAME = "trials.md"
 
 
 @dataclass
@@ -504,6 +505,33 @@ def _error_text(error: BaseException) -> str:
     return f"{type(error).__name__}: {lines[-1] if lines else ''}"[:500]
 
 
+def trials_table(trials: list[Mapping[str, Any]], metric: str) -> str:
+    """A Markdown table of ``trials`` (best first; failed ones last with their error): each
+    searched value, the score and the wall time."""
+    mode = METRICS[metric]
+    names = list(SEARCH_SPACE)
+
+    def order(trial: Mapping[str, Any]) -> tuple:
+        score = trial.get("score", math.nan)
+        done = trial["status"] == "done" and math.isfinite(score)
+        return (False, score if mode == "min" else -score) if done else (True, 0.0)
+
+    def cell(value: Any) -> str:
+        return f"{value:.3g}" if isinstance(value, float) else str(value)
+
+    lines = ["| " + " | ".join(["trial", *names, metric, "wall (s)"]) + " |",
+             "|" + "---|" * (len(names) + 3)]
+    for trial in sorted(trials, key=order):
+        values = trial["hyperparameters"]
+        score = (f"{trial['score']:.4g}" if trial["status"] == "done"
+                 else f"failed: {trial.get('error', '')}")
+        wall = f"{trial['wall_s']:.0f}" if "wall_s" in trial else ""
+        lines.append("| " + " | ".join([str(trial["trial_id"]),
+                                        *(cell(values.get(n)) for n in names), score, wall])
+                     + " |")
+    return "\n".join(lines) + "\n"
+
+
 def write_best_config(path: str | os.PathLike, env_id: str, entry: Mapping[str, Any],
                       header: str) -> Path:
     """Write ``{env_id: entry}`` in rl-baselines3-zoo's format, ``header`` as comment lines."""
@@ -586,6 +614,7 @@ def run_sweep(request: SweepRequest) -> SweepResult:
     best = pick(finished, key=lambda t: t["score"])
     summary["best"] = best
     trials_path.write_text(json.dumps(summary, indent=2, default=str) + "\n")
+    (out / TABLE_NAME).write_text(trials_table(trials, request.metric))
     best_entry = apply_values(entry, best["hyperparameters"])
     unit = "mm, lower is better" if request.metric == "error_mm" else "higher is better"
     header = (f"Best of {len(trials)} SAC trials ({len(finished)} finished) of "
@@ -692,5 +721,5 @@ def main(argv: list[str] | None = None) -> None:
 
 __all__ = ["METRICS", "PLACES", "SEARCHES", "SEARCH_SPACE", "SweepRequest", "SweepResult",
            "apply_values", "base_entry", "baseline_point", "entry_values", "evaluate_run", "main",
-           "require_tune", "run_sweep", "run_trial", "trial_arms", "tune_space",
+           "require_tune", "run_sweep", "run_trial", "trial_arms", "trials_table", "tune_space",
            "write_best_config"]

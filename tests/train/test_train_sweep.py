@@ -33,6 +33,7 @@ def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, lo
                 "--no-progress"])
     lines = capsys.readouterr().out.strip().splitlines()
     assert lines[-2:] == [f"best config: {out / 'sac.yml'}", f"trials: {out / 'trials.json'}"]
+    assert (out / "trials.md").read_text().count("\n") == 2 + 2  # header, rule, two trials
     assert local_ray.is_initialized()  # a Ray the sweep did not start is left running
 
     summary = json.loads((out / "trials.json").read_text())
@@ -135,6 +136,23 @@ def test_searched_values_land_where_sac_and_the_env_read_them():
     assert sweep.baseline_point({"policy_kwargs": {"net_arch": [64, 32]}}) is None
     assert sweep.trial_arms({"n_envs": 4, "env_kwargs": {"engine": "mujoco"}}) == (4, "batched")
     assert sweep.trial_arms({"n_envs": 4, "env_kwargs": {}}) == (1, "subprocess")
+
+
+def test_the_trials_table_lists_the_best_first_and_failures_last():
+    values = {name: (spec[1] if spec[0] == "loguniform" else spec[1][0])
+              for name, spec in sweep.SEARCH_SPACE.items()}
+    trials = [{"trial_id": "a", "hyperparameters": values, "status": "done", "score": 4.0,
+               "wall_s": 10.0},
+              {"trial_id": "b", "hyperparameters": values, "status": "error",
+               "error": "ValueError: x"},
+              {"trial_id": "c", "hyperparameters": values, "status": "done", "score": 2.5,
+               "wall_s": 12.0}]
+    lines = sweep.trials_table(trials, "error_mm").splitlines()
+    assert lines[0].split(" | ")[1:3] == list(sweep.SEARCH_SPACE)[:2]
+    assert [line.split(" | ")[0] for line in lines[2:]] == ["| c", "| a", "| b"]
+    assert "failed: ValueError: x" in lines[-1]
+    by_reward = sweep.trials_table(trials, "reward").splitlines()  # higher is better
+    assert [line.split(" | ")[0] for line in by_reward[2:]] == ["| a", "| c", "| b"]
 
 
 # ----------------------------------------------------------------------- command line
