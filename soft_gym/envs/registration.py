@@ -81,7 +81,8 @@ def _with_alias_preset(alias_preset: str, kwargs: dict[str, Any]) -> dict[str, A
 
 
 def make_vector_env(num_envs: int, alias_preset: str | None = None, *, threads: int = 1,
-                    autoreset_mode: Any = "NextStep", **kwargs: Any) -> SoftArmVectorEnv:
+                    autoreset_mode: Any = "NextStep", per_env_kwargs: Any = None,
+                    **kwargs: Any) -> SoftArmVectorEnv:
     """The vector entry point of every id (``gym.make_vec(id, num_envs=N,
     vectorization_mode="vector_entry_point", engine="mujoco", ...)``): a
     :class:`~soft_gym.envs.vector.SoftArmVectorEnv` of ``num_envs`` arms.
@@ -89,13 +90,18 @@ def make_vector_env(num_envs: int, alias_preset: str | None = None, *, threads: 
     Args:
         num_envs: arms in the batch.
         alias_preset: the preset an alias id names (set at registration), or ``None``.
-        threads, autoreset_mode: see :class:`~soft_gym.envs.vector.SoftArmVectorEnv`.
+        threads, autoreset_mode, per_env_kwargs: see
+            :class:`~soft_gym.envs.vector.SoftArmVectorEnv`.
         **kwargs: the env's keyword arguments.
     """
     check_arguments(kwargs)
     if alias_preset is not None:
         kwargs = _with_alias_preset(alias_preset, kwargs)
-    return SoftArmVectorEnv(num_envs, threads=threads, autoreset_mode=autoreset_mode, **kwargs)
+        for own in per_env_kwargs if isinstance(per_env_kwargs, (list, tuple)) else []:
+            if isinstance(own, dict) and "preset" in own:  # an arm of another preset: refused
+                _with_alias_preset(alias_preset, own)
+    return SoftArmVectorEnv(num_envs, threads=threads, autoreset_mode=autoreset_mode,
+                            per_env_kwargs=per_env_kwargs, **kwargs)
 
 
 def register_envs() -> None:

@@ -18,7 +18,7 @@ arm). :class:`train.batched.Sb3VectorEnv` adapts it to stable-baselines3.
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import gymnasium as gym
 import numpy as np
@@ -49,6 +49,40 @@ def _autoreset_mode(value: Any) -> AutoresetMode:
     return mode
 
 
+def _per_env_kwargs(value: Any, num_envs: int) -> list[dict[str, Any]]:
+    """``per_env_kwargs`` checked: ``None`` (every arm alike) or ``num_envs`` mappings."""
+    if value is None:
+        return [{}] * num_envs
+    if (not isinstance(value, (list, tuple)) or len(value) != num_envs
+            or not all(isinstance(own, Mapping) for own in value)):
+        raise ValueError(f"per_env_kwargs must be None or a list of num_envs ({num_envs}) dicts "
+                         f"of env keyword arguments, one per arm, got {value!r}")
+    return [dict(own) for own in value]
+
+
+def _check_alike(envs: list[SoftArmEnv]) -> None:
+    """Every arm with the first's observation and action spaces and control period (what one
+    batch's arrays and lockstep clock need)."""
+    first = envs[0]
+    for i, env in enumerate(envs[1:], start=1):
+        for name, mine, theirs in (
+                ("observation space", env.observation_space, first.observation_space),
+                ("action space", env.action_space, first.action_space),
+                ("control period (s)", env.arm.control_period_s, first.arm.control_period_s)):
+            if mine != theirs:
+                _close_all(envs)
+                raise ValueError(f"per_env_kwargs[{i}] gives arm {i} the {name} {mine}, arm 0 "
+                                 f"has {theirs}: the arms of one batch must share it (another "
+                                 f"preset, feedback source or observation parts needs a batch "
+                                 f"of its own)")
+
+
+def _close_all(envs: list[SoftArmEnv]) -> None:
+    """Close every env of ``envs`` (an arm refused after others were built)."""
+    for env in envs:
+        env.close()
+
+
 class SoftArmVectorEnv(gym.vector.VectorEnv):
     """``num_envs`` soft-arm envs on the MuJoCo engine, stepped as one batch.
 
@@ -57,6 +91,11 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         threads: threads the arms' physics runs on, in [1, ``MAX_THREADS``] (MuJoCo releases
             the GIL while it steps; more threads than cores only adds switching).
         autoreset_mode: ``"NextStep"`` or ``"SameStep"`` (see the module).
+        per_env_kwargs: ``None``, or one mapping per arm of keyword arguments over
+            ``env_kwargs`` for that arm alone (e.g. its own path, scenario, feedback noise or
+            stiffness); every arm must keep the first's observation and action spaces, engine
+            and control period. Arms whose actuation differs are stepped one after another
+            instead of in lockstep, with the same result.
         **env_kwargs: the keyword arguments of every arm's
             :class:`~soft_gym.envs.soft_arm_env.SoftArmEnv`; ``engine`` must be ``"mujoco"``.
 
@@ -70,20 +109,35 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
 
     def __init__(self, num_envs: int, *, threads: int = 1,
                  autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+                 per_env_kwargs: Sequence[Mapping[str, Any]] | None = None,
                  **env_kwargs: Any) -> None:
         self.num_envs = require_integer("num_envs", num_envs, 1, MAX_NUM_ENVS)
         self.threads = require_integer("threads", threads, 1, MAX_THREADS)
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
-        engine = env_kwargs.get("engine", "pybullet")
-        if engine != "mujoco":
-            raise ValueError(f"engine must be 'mujoco' for a batched vector env (its arms are "
-                             f"stepped together in MuJoCo), got {engine!r}; for PyBullet arms "
-                             "use gym.make_vec(..., vectorization_mode='sync' or 'async')")
-        self.envs = [SoftArmEnv(**env_kwargs)]
-        for _ in range(self.num_envs - 1):  # each arm its own copy of the arguments
-            config = self.envs[0].config.copied()
-            self.envs.append(SoftArmEnv(**env_kwargs) if config is None
-                             else SoftArmEnv(config=config))
+        arm_kwargs = _per_env_kwargs(per_env_kwargs, self.num_envs)
+        for i, own in enumerate(arm_kwargs):
+            engine = {**env_kwargs, **own}.get("engine", "pybullet")
+            if engine != "mujoco":
+                where = f" (per_env_kwargs[{i}])" if "engine" in own else ""
+                raise ValueError(f"engine must be 'mujoco' for a batched vector env (its arms "
+                                 f"are stepped together in MuJoCo), got {engine!r}{where}; for "
+                                 "PyBullet arms use gym.make_vec(..., vectorization_mode='sync' "
+                                 "or 'async')")
+        if per_env_kwargs is None:
+            self.envs = [SoftArmEnv(**env_kwargs)]
+            for _ in range(self.num_envs - 1):  # each arm its own copy of the arguments
+                config = self.envs[0].config.copied()
+                self.envs.append(SoftArmEnv(**env_kwargs) if config is None
+                                 else SoftArmEnv(config=config))
+        else:
+            self.envs = []
+            for i, own in enumerate(arm_kwargs):
+                try:
+                    self.envs.append(SoftArmEnv(**{**env_kwargs, **own}))
+                except ValueError as error:
+                    _close_all(self.envs)
+                    raise ValueError(f"per_env_kwargs[{i}]: {error}") from error
+            _check_alike(self.envs)
         first = self.envs[0]
         self.metadata = {**first.metadata, "autoreset_mode": self.autoreset_mode}
         self.render_mode = None

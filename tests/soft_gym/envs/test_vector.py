@@ -81,6 +81,42 @@ def test_same_step_autoreset_returns_the_final_observation_in_info():
     assert not np.array_equal(info["final_obs"][0], observation[0])
 
 
+def test_per_env_kwargs_give_each_arm_its_own_and_it_moves_as_it_does_alone():
+    """Two arms of one batch on their own paths, one carrying a tip mass: each moves bit for
+    bit as that env alone."""
+    shared = {"preset": "zou2022", "engine": "mujoco", "feedback": "ground_truth",
+              "episode_steps": 5}
+    own = [{"path": "circle"}, {"path": "star", "scenario": {"name": "tip_mass",
+                                                              "mass_kg": 0.02}}]
+    env = gym.make_vec("SoftArmTrack-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                       per_env_kwargs=own, **shared)
+    actions = np.random.default_rng(1).uniform(-1, 1, (4, *env.action_space.shape))
+    batch = [env.reset(seed=3)[0]] + [env.step(a.astype(np.float32))[0] for a in actions]
+    env.close()
+    for arm in range(2):
+        alone = SoftArmEnv(task="track", **shared, **own[arm])
+        rows = [alone.reset(seed=3 + arm)[0]] + [alone.step(a[arm].astype(np.float32))[0]
+                                                 for a in actions]
+        alone.close()
+        assert np.array_equal(np.array(batch)[:, arm], np.array(rows))
+    assert not np.array_equal(np.array(batch)[1:, 0], np.array(batch)[1:, 1])
+
+
+@pytest.mark.parametrize("per_env_kwargs, named", [
+    ({"path": "circle"}, r"per_env_kwargs must be None or a list of num_envs \(2\)"),
+    ([{"path": "circle"}], r"list of num_envs \(2\)"),
+    ([{}, "circle"], "per_env_kwargs must be"),
+    ([{}, {"engine": "pybullet"}], r"engine must be 'mujoco'.*per_env_kwargs\[1\]"),
+    ([{}, {"path": "nowhere"}], r"per_env_kwargs\[1\]: .*path"),
+    ([{}, {"preset": "zhao2021"}], r"per_env_kwargs\[1\] gives arm 1 the observation space"),
+    ([{}, {"obs": ("pose", "target")}], r"per_env_kwargs\[1\] gives arm 1 the observation"),
+])
+def test_mismatched_per_env_kwargs_are_refused_by_name(per_env_kwargs, named):
+    with pytest.raises(ValueError, match=named):
+        SoftArmVectorEnv(2, engine="mujoco", feedback="ground_truth", preset="zou2022",
+                         per_env_kwargs=per_env_kwargs)
+
+
 @pytest.mark.parametrize("kwargs, named", [
     ({"num_envs": 0}, "num_envs"), ({"num_envs": MAX_NUM_ENVS + 1}, "num_envs"),
     ({"num_envs": 2.0}, "num_envs"), ({"num_envs": True}, "num_envs"),
