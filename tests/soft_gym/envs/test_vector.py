@@ -117,6 +117,13 @@ def test_mismatched_per_env_kwargs_are_refused_by_name(per_env_kwargs, named):
                          per_env_kwargs=per_env_kwargs)
 
 
+def test_an_arm_of_another_preset_is_refused_on_a_preset_id():
+    with pytest.raises(ValueError, match="preset must be 'zou2022' on SoftArmTrackZou2022-v0"):
+        gym.make_vec("SoftArmTrackZou2022-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                     engine="mujoco", feedback="ground_truth",
+                     per_env_kwargs=[{}, {"preset": "zhao2021"}])
+
+
 @pytest.mark.parametrize("kwargs, named", [
     ({"num_envs": 0}, "num_envs"), ({"num_envs": MAX_NUM_ENVS + 1}, "num_envs"),
     ({"num_envs": 2.0}, "num_envs"), ({"num_envs": True}, "num_envs"),
