@@ -99,7 +99,7 @@ def make_vector_env(num_envs: int, alias_preset: str | None = None, *, threads: 
         kwargs = _with_alias_preset(alias_preset, kwargs)
         for own in per_env_kwargs if isinstance(per_env_kwargs, (list, tuple)) else []:
             if isinstance(own, dict) and "preset" in own:  # an arm of another preset: refused
-                _with_alias_preset(alias_preset, own)
+                _with_alias_preset(alias_preset, {**kwargs, **own})
     return SoftArmVectorEnv(num_envs, threads=threads, autoreset_mode=autoreset_mode,
                             per_env_kwargs=per_env_kwargs, **kwargs)
 
