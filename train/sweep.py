@@ -78,7 +78,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Iterator, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -90,6 +90,7 @@ from tqdm import tqdm
 import soft_gym  # noqa: F401  (registers the env ids)
 from soft_gym._cli import HelpFormatter, check_environment, check_output_dir, seed_int
 from soft_gym._validation import SEED_MAX
+from soft_gym.envs.config import EnvConfig
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
@@ -116,8 +117,8 @@ docstring for units)."""
 PLACES: dict[str, str] = {"hidden_units": "policy_kwargs", "action_rate_weight": "env_kwargs"}
 """Where a searched value goes in a config entry when not a top-level hyperparameter of SAC:
 inside ``policy_kwargs`` or the env's keyword arguments."""
-ENV_DEFAULTS = {"action_rate_weight": 0.0}
-"""The env's own values of searched env keyword arguments (:class:`soft_gym.envs.config`)."""
+SB3_SAC_NET_ARCH = [256, 256]
+"""SB3's SAC network when ``policy_kwargs`` gives no ``net_arch`` (``SACPolicy``'s default)."""
 
 METRICS = {"error_mm": "min", "reward": "max"}
 """Score -> Tune's mode (``min``: lower is better)."""
@@ -272,23 +273,21 @@ def entry_values(entry: Mapping[str, Any]) -> dict[str, Any]:
     where the entry has none)."""
     # lazy: stable-baselines3 costs 1.2 s (-X importtime) that python -m train --help skips
     from stable_baselines3 import SAC
-    from stable_baselines3.sac.policies import SACPolicy
 
     defaults = {name: parameter.default for name, parameter
                 in inspect.signature(SAC.__init__).parameters.items()}
-    policy_kwargs = _policy_kwargs(entry)
+    env_defaults = {f.name: f.default for f in fields(EnvConfig)}
     env_kwargs = entry.get("env_kwargs") or {}
     values = {}
     for name in SEARCH_SPACE:
         place = PLACES.get(name)
         if place == "policy_kwargs":
-            default = inspect.signature(SACPolicy.__init__).parameters["net_arch"].default
-            net_arch = policy_kwargs.get("net_arch", default or [256, 256])  # SB3's SAC network
+            net_arch = _policy_kwargs(entry).get("net_arch", SB3_SAC_NET_ARCH)
             two_equal = isinstance(net_arch, list) and len(net_arch) == 2 \
                 and net_arch[0] == net_arch[1]
             values[name] = net_arch[0] if two_equal else net_arch  # else outside the space
         elif place == "env_kwargs":
-            values[name] = env_kwargs.get(name, ENV_DEFAULTS[name])
+            values[name] = env_kwargs.get(name, env_defaults[name])
         else:
             values[name] = entry.get(name, defaults.get(name))
     return values

@@ -92,9 +92,9 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
             the GIL while it steps; more threads than cores only adds switching).
         autoreset_mode: ``"NextStep"`` or ``"SameStep"`` (see the module).
         per_env_kwargs: ``None``, or one mapping per arm of keyword arguments over
-            ``env_kwargs`` for that arm alone (e.g. its own path, scenario, feedback noise or
-            stiffness); every arm must keep the first's observation and action spaces, engine
-            and control period. Arms whose actuation differs are stepped one after another
+            ``env_kwargs`` for that arm alone (e.g. its own path, scenario, faults or
+            randomisation); every arm must keep the first's observation and action spaces,
+            engine and control period. Arms whose actuation differs are stepped one after another
             instead of in lockstep, with the same result.
         **env_kwargs: the keyword arguments of every arm's
             :class:`~soft_gym.envs.soft_arm_env.SoftArmEnv`; ``engine`` must be ``"mujoco"``.

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import sys
 
+import gymnasium
 import pytest
 import yaml
 
@@ -46,7 +47,7 @@ def test_a_two_trial_sweep_writes_the_best_config_in_the_zoo_format(tmp_path, lo
     # the first trial is the config entry's own values (they lie in the space)
     assert trials[0]["hyperparameters"] == {
         "learning_rate": 3e-4, "gamma": 0.9, "tau": 0.005, "batch_size": 256, "train_freq": 1,
-        "gradient_steps": 1, "hidden_units": 128, "action_rate_weight": 0.0}
+        "gradient_steps": 1, "hidden_units": 128, "action_rate_weight": 1e-3}
     best = min(trials, key=lambda t: t["score"])
     assert summary["best"] == best and summary["mode"] == "min"
 
@@ -130,7 +131,10 @@ def test_searched_values_land_where_sac_and_the_env_read_them():
     assert settings.algo_kwargs["policy_kwargs"] == {"log_std_init": -1.0, "net_arch": [64, 64]}
     assert (settings.algo_kwargs["train_freq"], settings.algo_kwargs["gradient_steps"]) == (4, 2)
     defaults = sweep.entry_values({"n_timesteps": 1000})
-    assert defaults["hidden_units"] == 256 and defaults["action_rate_weight"] == 0.0
+    env = gymnasium.make(ENV_ID, feedback="ground_truth")
+    assert defaults["action_rate_weight"] == env.unwrapped.action_rate_weight  # the env's own
+    env.close()
+    assert defaults["hidden_units"] == 256
     assert defaults["train_freq"] == 1 and defaults["batch_size"] == 256
     assert sweep.baseline_point({"n_timesteps": 1000, "gamma": 0.5}) is None  # outside
     assert sweep.baseline_point({"policy_kwargs": {"net_arch": [64, 32]}}) is None
