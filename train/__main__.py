@@ -32,7 +32,8 @@ import yaml
 
 from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_output_dir, fail,
                            finite_float, non_negative_int, positive_int, seed_int)
-from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
+from train.cli_options import (add_env_options, check_arm_env_kwargs, check_conf_file,
+                               check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                resolve_env_id)
 from train.config import ALGORITHMS, OFF_POLICY, VEC_KINDS, parse_key_values
@@ -225,6 +226,8 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         parser.error(f"--vec batched steps MuJoCo arms as one batch: add --env-kwargs "
                      f"engine=mujoco (got engine={settings.env_kwargs.get('engine', 'pybullet')!r})")
     check_env_kwargs(parser, env_id, settings.env_kwargs, overrides)
+    check_arm_env_kwargs(parser, env_id, settings, args.vec,
+                         "--conf-file" if args.conf_file else "--algo")
     name = args.name or f"{args.algo}_{env_id}_seed{args.seed}"
     if name.strip() in ("", ".", ".."):
         parser.error(f"--name must name a run directory, got {name!r}")

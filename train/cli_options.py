@@ -18,7 +18,7 @@ from eval.runner import make_uncalibrated_env
 from soft_gym._cli import check_file, fail
 from soft_gym.envs.registration import preset_env_id
 from soft_gym.robots.presets import PRESETS
-from train.config import check_hyperparameters, parse_key_values
+from train.config import TrainSettings, check_hyperparameters, parse_key_values
 
 
 def add_env_options(parser: argparse.ArgumentParser) -> None:
@@ -113,3 +113,22 @@ def check_env_kwargs(parser: argparse.ArgumentParser, env_id: str, env_kwargs: d
                 fail(parser, option, f"env keyword {key}={env_kwargs[key]!r} refused by "
                                      f"{env_id}: {message}")
     fail(parser, "--env", f"{env_id} refused {env_kwargs}: {message}")
+
+
+def check_arm_env_kwargs(parser: argparse.ArgumentParser, env_id: str, settings: TrainSettings,
+                         vec: str, option: str) -> None:
+    """A recipe's ``arm_env_kwargs`` (:class:`~train.config.TrainSettings`): only with
+    ``--vec batched``, and every arm's keyword arguments over the recipe's build the env
+    (without calibrating); a refusal is one line naming ``option`` (the option that gave the
+    recipe) and the entry."""
+    if settings.arm_env_kwargs is None:
+        return
+    if vec != "batched":
+        parser.error(f"{option}: the recipe's arm_env_kwargs give the arms of one batch their "
+                     f"own env keyword arguments: add --vec batched")
+    for arm in settings.arm_variants():
+        try:
+            make_uncalibrated_env(env_id, {**settings.env_kwargs, **arm}).close()
+        except Exception as error:  # noqa: BLE001  (any refusal is the recipe's input)
+            fail(parser, option, f"arm_env_kwargs entry {arm!r} refused by {env_id}: "
+                                 f"{' '.join(str(error).split())}")

@@ -15,8 +15,10 @@
       gamma: 0.9
 
 ``n_timesteps``, ``n_envs``, ``normalize``, ``env_kwargs``, ``noise_type`` / ``noise_std``
-(off-policy action noise) are the zoo's special keys; everything else goes to the algorithm's
-constructor. Strings such as ``"dict(net_arch=[64, 64], activation_fn=nn.ReLU)"`` are parsed
+(off-policy action noise) are the zoo's special keys; this project adds ``arm_env_kwargs``, a
+list of mappings over ``env_kwargs`` that the arms of a batch (``--vec batched``) take in turn
+(arm ``i`` the entry ``i`` modulo its length), e.g. one agent trained on several feedback
+sources at once; everything else goes to the algorithm's constructor. Strings such as ``"dict(net_arch=[64, 64], activation_fn=nn.ReLU)"`` are parsed
 without ``eval``: only literals and ``nn.<Activation>`` names are allowed.
 
 :func:`check_hyperparameters` refuses, before anything is built, a key the algorithm does not
@@ -48,8 +50,8 @@ OFF_POLICY = ("sac", "td3", "ddpg")
 VEC_KINDS = ("subprocess", "batched")
 """How ``n_envs`` envs run (:func:`train.trainer.make_vec_env`)."""
 
-_SPECIAL = ("n_timesteps", "n_envs", "normalize", "env_kwargs", "noise_type", "noise_std",
-            "policy")
+_SPECIAL = ("n_timesteps", "n_envs", "normalize", "env_kwargs", "arm_env_kwargs", "noise_type",
+            "noise_std", "policy")
 
 
 def _is_int(value: Any) -> bool:
@@ -139,6 +141,10 @@ VALUE_RULES: dict[str, tuple] = {
     "normalize": ((lambda v: isinstance(v, (bool, dict)) or _literal_or_text(dict)(v)),
                   "true, false, a mapping or a 'dict(...)' string of VecNormalize arguments"),
     "env_kwargs": (_literal_or_text(dict), "a mapping or a 'dict(...)' string"),
+    "arm_env_kwargs": ((lambda v: isinstance(v, list) and len(v) >= 1
+                        and all(isinstance(item, dict) for item in v)),
+                       "a list of one or more mappings (each arm's env keyword arguments over "
+                       "env_kwargs, taken in turn)"),
     "policy_kwargs": (_literal_or_text(dict), "a mapping or a 'dict(...)' string"),
     "replay_buffer_kwargs": (_literal_or_text(dict), "a mapping or a 'dict(...)' string"),
     "noise_type": ((lambda v: v in ("normal", "ornstein-uhlenbeck")),
@@ -275,6 +281,24 @@ class TrainSettings:
     normalize: dict | None = None
     env_kwargs: dict = field(default_factory=dict)
     algo_kwargs: dict = field(default_factory=dict)
+    arm_env_kwargs: list[dict] | None = None
+
+    def per_arm_env_kwargs(self) -> list[dict] | None:
+        """Each of the ``n_envs`` arms' keyword arguments over :attr:`env_kwargs` (arm ``i``
+        takes entry ``i`` modulo the length of :attr:`arm_env_kwargs`); ``None`` without."""
+        if not self.arm_env_kwargs:
+            return None
+        return [dict(self.arm_env_kwargs[i % len(self.arm_env_kwargs)])
+                for i in range(self.n_envs)]
+
+    def arm_variants(self) -> list[dict]:
+        """The distinct entries of :attr:`arm_env_kwargs` in order (``[{}]`` without): each
+        env the arms train on differs from :attr:`env_kwargs` by one of these."""
+        variants: list[dict] = []
+        for entry in self.arm_env_kwargs or [{}]:
+            if entry not in variants:
+                variants.append(dict(entry))
+        return variants
 
 
 def split_hyperparameters(algo: str, hyperparameters: dict) -> TrainSettings:
@@ -317,8 +341,11 @@ def split_hyperparameters(algo: str, hyperparameters: dict) -> TrainSettings:
         if algo not in OFF_POLICY:
             raise ValueError(f"noise_type applies to {list(OFF_POLICY)} only, not {algo!r}")
         algo_kwargs["action_noise"] = (noise_type, float(hp.get("noise_std", 0.1)))
+    arm_env_kwargs = hp.get("arm_env_kwargs")
     return TrainSettings(n_timesteps=n_timesteps, n_envs=n_envs, policy=hp.get("policy", "MlpPolicy"),
-                         normalize=normalize, env_kwargs=dict(env_kwargs), algo_kwargs=algo_kwargs)
+                         normalize=normalize, env_kwargs=dict(env_kwargs), algo_kwargs=algo_kwargs,
+                         arm_env_kwargs=(None if arm_env_kwargs is None
+                                         else [dict(entry) for entry in arm_env_kwargs]))
 
 
 def _linear_schedule(key: str, text: str):

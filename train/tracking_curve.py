@@ -70,21 +70,41 @@ def _middle_tip_mass_kg(randomization: Any) -> float | None:
     return middle if middle > 0 else None
 
 
-def evaluation_cases(env_kwargs: dict) -> list[EvaluationCase]:
+def evaluation_cases(env_kwargs: dict, arm_variants: list[dict] | None = None
+                     ) -> list[EvaluationCase]:
     """The fixed evaluation set of a recipe's env keyword arguments: each of its paths (one
     drawn per training episode), nominal and, where training randomises loads, with a tip mass
-    at the middle of the randomised range (a load seen in training, not a held-out one)."""
-    mass = _middle_tip_mass_kg(env_kwargs.get("randomization"))
+    at the middle of the randomised range (a load seen in training, not a held-out one).
+
+    :param env_kwargs: the recipe's env keyword arguments.
+    :param arm_variants: where the arms of the batch differ (the recipe's ``arm_env_kwargs``,
+        :meth:`train.config.TrainSettings.arm_variants`), the set for each distinct arm's
+        keyword arguments over ``env_kwargs``, its labels led by the arm's (``feedback=...``).
+    """
+    variants = arm_variants or [{}]
     cases = []
-    for path in _paths(env_kwargs):
-        base = {} if path is None else {"path": path}
-        name = path or "default"
-        cases.append(EvaluationCase(f"{name} nominal", base))
-        if mass is not None:
-            cases.append(EvaluationCase(
-                f"{name} {mass * 1000:g} g",
-                {**base, "scenario": {"name": "tip_mass", "mass_kg": mass}}))
+    for variant in variants:
+        merged = {**env_kwargs, **variant}
+        mass = _middle_tip_mass_kg(merged.get("randomization"))
+        prefix = f"{variant_label(variant)} " if len(variants) > 1 else ""
+        for path in _paths(merged):
+            base = {key: value for key, value in variant.items() if key != "randomization"}
+            base.update({} if path is None else {"path": path})
+            name = prefix + (path or "default")
+            cases.append(EvaluationCase(f"{name} nominal", base))
+            if mass is not None:
+                cases.append(EvaluationCase(
+                    f"{name} {mass * 1000:g} g",
+                    {**base, "scenario": {"name": "tip_mass", "mass_kg": mass}}))
     return cases
+
+
+def variant_label(variant: dict) -> str:
+    """A short label of an arm's keyword arguments: its plain values as ``key=value`` (e.g.
+    ``feedback=encoder_dnn``), the keys of the others."""
+    parts = [f"{key}={value}" if isinstance(value, (str, int, float)) else key
+             for key, value in variant.items()]
+    return " ".join(parts) or "base"
 
 
 def has_plateaued(timesteps: np.ndarray, errors_mm: np.ndarray,

@@ -177,16 +177,23 @@ def versions() -> dict[str, str]:
 
 
 def make_vec_env(env_id: str, env_kwargs: dict, n_envs: int, seed: int,
-                 monitor_dir: str | None = None, vec: str = "subprocess"):
+                 monitor_dir: str | None = None, vec: str = "subprocess",
+                 per_arm: list[dict] | None = None):
     """``n_envs`` monitored envs: in subprocesses when there are several (``vec="subprocess"``),
-    or the arms of one MuJoCo batch (``vec="batched"``)."""
+    or the arms of one MuJoCo batch (``vec="batched"``), each arm with its own keyword
+    arguments over ``env_kwargs`` where ``per_arm`` gives them (a batch's ``per_env_kwargs``;
+    the recipe's ``arm_env_kwargs``)."""
+    if vec not in VEC_KINDS:
+        raise ValueError(f"vec must be one of {list(VEC_KINDS)}, got {vec!r}")
+    if per_arm is not None and vec != "batched":
+        raise ValueError("arm_env_kwargs gives the arms of one batch their own env keyword "
+                         "arguments: train with --vec batched (and engine=mujoco), got "
+                         f"vec={vec!r}")
     if vec == "batched":
         batched = Sb3VectorEnv(env_id.split(":")[-1], n_envs, monitor_dir=monitor_dir,
-                               **env_kwargs)
+                               per_env_kwargs=per_arm, **env_kwargs)
         batched.seed(seed)
         return batched
-    if vec != "subprocess":
-        raise ValueError(f"vec must be one of {list(VEC_KINDS)}, got {vec!r}")
     if env_kwargs.get("engine") == "mujoco":  # SB3 asks for rgb_array frames, which it lacks
         env_kwargs = {"render_mode": None, **env_kwargs}
     vec_cls = SubprocVecEnv if n_envs > 1 else DummyVecEnv
@@ -232,8 +239,10 @@ def train(request: TrainRequest) -> Path:
     algo_cls = algorithm_class(request.algo)
 
     env = make_vec_env(request.env_id, settings.env_kwargs, settings.n_envs, request.seed,
-                       monitor_dir=str(run_dir / "monitor"), vec=request.vec)
-    eval_env = make_vec_env(request.env_id, settings.env_kwargs, 1, request.seed + 10_000)
+                       monitor_dir=str(run_dir / "monitor"), vec=request.vec,
+                       per_arm=settings.per_arm_env_kwargs())
+    eval_env = make_vec_env(request.env_id, {**settings.env_kwargs, **settings.arm_variants()[0]},
+                            1, request.seed + 10_000)
     if settings.normalize is not None:
         if request.resume is not None and (run_dir / NORMALIZATION_FILE).exists():
             env = VecNormalize.load(str(run_dir / NORMALIZATION_FILE), env)
@@ -270,7 +279,8 @@ def train(request: TrainRequest) -> Path:
     curve = None
     if request.curve_freq > 0:
         curve = TrackingCurveCallback(
-            request.env_id, settings.env_kwargs, evaluation_cases(settings.env_kwargs),
+            request.env_id, settings.env_kwargs,
+            evaluation_cases(settings.env_kwargs, settings.arm_variants()),
             request.curve_freq, run_dir, until_plateau=request.until_plateau,
             fraction=request.plateau_fraction, min_improvement=request.plateau_improvement,
             min_timesteps=request.min_timesteps)

@@ -67,3 +67,66 @@ def test_batched_without_mujoco_is_one_cli_line(capsys):
         train_main(["--vec", "batched", "--timesteps", "10"])
     assert stop.value.code == 2
     assert "--vec batched" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------- arm_env_kwargs
+def _write_recipe(tmp_path, arms: str, n_envs: int = 4) -> str:
+    path = tmp_path / "recipe.yml"
+    path.write_text(f"""SoftArmTrackWang2023-v0:
+  n_timesteps: 256
+  policy: MlpPolicy
+  n_envs: {n_envs}
+  env_kwargs: {{engine: mujoco, feedback: em, path: circle, speed_m_s: 0.02,
+               randomization: null}}
+  arm_env_kwargs: {arms}
+  n_steps: 32
+  batch_size: 32
+""")
+    return str(path)
+
+
+def test_arm_env_kwargs_give_each_arm_of_the_batch_its_own_feedback(tmp_path):
+    """A recipe's arm_env_kwargs, taken in turn by the arms: arm i builds the env of entry
+    i mod 2 over env_kwargs (its feedback source and sensors), the batch trains, and the
+    tracking curve evaluates the agent on each entry's env, labelled by it."""
+    recipe = _write_recipe(tmp_path, "[{feedback: em}, {feedback: ground_truth}]", n_envs=3)
+    from train.config import read_hyperparameters, split_hyperparameters
+    settings = split_hyperparameters("ppo", read_hyperparameters("ppo", "SoftArmTrackWang2023-v0",
+                                                                 recipe))
+    assert settings.per_arm_env_kwargs() == [{"feedback": "em"}, {"feedback": "ground_truth"},
+                                             {"feedback": "em"}]
+    assert settings.arm_variants() == [{"feedback": "em"}, {"feedback": "ground_truth"}]
+    batched = Sb3VectorEnv("SoftArmTrackWang2023-v0", 3, per_env_kwargs=settings.per_arm_env_kwargs(),
+                           **settings.env_kwargs)
+    assert [env.unwrapped.feedback for env in batched.envs] == ["em", "ground_truth", "em"]
+    batched.close()
+    train_main(["--algo", "ppo", "--env", "SoftArmTrackWang2023-v0", "--conf-file", recipe,
+                "--vec", "batched", "--curve-freq", "96", "--eval-freq", "0",
+                "--checkpoint-freq", "0", "--out", str(tmp_path), "--name", "arms",
+                "--no-progress"])
+    header = (tmp_path / "arms" / "eval" / "tracking_curve.csv").read_text().splitlines()[0]
+    assert header.split(",")[3:] == ["feedback=em circle nominal (mm)",
+                                     "feedback=ground_truth circle nominal (mm)"]
+
+
+@pytest.mark.parametrize("arms, vec, words", [
+    ("[{feedback: em}]", "subprocess", ["--conf-file", "--vec batched"]),
+    ("[{feedback: nope}]", "batched", ["--conf-file", "arm_env_kwargs entry", "nope"]),
+    ("[]", "batched", ["arm_env_kwargs must be a list of one or more mappings"]),
+])
+def test_bad_arm_env_kwargs_are_one_cli_line(tmp_path, capsys, arms, vec, words):
+    recipe = _write_recipe(tmp_path, arms)
+    with pytest.raises(SystemExit) as stop:
+        train_main(["--algo", "ppo", "--env", "SoftArmTrackWang2023-v0", "--conf-file", recipe,
+                    "--vec", vec, "--out", str(tmp_path), "--no-progress"])
+    assert stop.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert all(word in error for word in words), error
+    assert not list(tmp_path.glob("*/config.yaml"))  # refused before any work
+
+
+def test_arm_env_kwargs_outside_a_batch_is_refused_by_the_trainer():
+    from train.trainer import make_vec_env
+    with pytest.raises(ValueError, match="arm_env_kwargs .* --vec batched"):
+        make_vec_env("SoftArmTrackWang2023-v0", {"feedback": "em"}, 2, 0,
+                     per_arm=[{}, {"feedback": "ground_truth"}])

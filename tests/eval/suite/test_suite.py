@@ -114,14 +114,16 @@ def test_bundled_suites_load_and_expand():
     assert set(suite.bundled_suites()) >= {"default", "small"}
 
 
-@pytest.mark.parametrize("name", ["small", "default", "demos", "wang2023_feedback"])
+@pytest.mark.parametrize("name", ["small", "default", "demos", "wang2023_feedback",
+                                  "feedback_check"])
 def test_bundled_suites_pass_their_checks(name):
-    """The README's main job, the default suite, the demonstrations' comparison and wang2023's
-    feedback comparison pass the check a run starts with (an arm whose path needs the arm's
+    """The README's main job, the default suite, the demonstrations' comparison, wang2023's
+    feedback comparison and the ho2018/zhao2021 feedback check pass the check a run starts with (an arm whose path needs the arm's
     waypoints: the check judges keyword arguments that only work together as a whole before it
     blames one)."""
     assert len(suite.check_suite(suite.load_suite(name))) == {
-        "small": 30, "default": 468, "demos": 63, "wang2023_feedback": 24}[name]
+        "small": 30, "default": 468, "demos": 63, "wang2023_feedback": 24,
+        "feedback_check": 28}[name]
 
 
 def test_a_refusal_is_blamed_on_the_key_that_causes_it_not_on_a_partial_set(tmp_path):
