@@ -48,7 +48,9 @@ class HybridGPRController(CCModelController):
         learning_horizon: control steps over which motions are summed for one sample.
         max_effective_gain: cap on ``K_p (1 + e)``, the gain of eq. (26) once eq. (29) has scaled
             the command by ``1 + e``: the learned compensation may raise the loop gain only this
-            far, which keeps the closed loop stable.
+            far, which keeps the closed loop stable. The default (0.3) suits wang2023's arm; on an
+            arm whose pneumatic lag is longer keep it within the largest ``K_p`` at which
+            ``cc_model`` tracks (zhao2021: 0.12; docs/architecture.md, "Baselines").
         min_relative_error: floor of the predicted error along the desired motion (> -1): the
             compensation may shrink a command but never reverse it, however noisy the samples.
         max_turn_deg: largest angle by which the compensation may turn the command away from

@@ -1,5 +1,6 @@
 """Every shipped SB3 agent (``agents/trained/<name>``): it loads on its arm's env, it was trained
-by the recipe its config file names (``train/configs/sac.yml``), and it tracks its path: over
+by the recipe its config file names (``train/configs/<algo>.yml``, or the ``--conf-file`` it
+was trained with), and it tracks its path: over
 one clean episode with its recipe's feedback its mean tip error is well below the path's own
 size, far below holding the arm at its pre-pressure, and within 20 % of its recorded
 evaluation."""
@@ -47,10 +48,14 @@ def test_a_shipped_agent_follows_its_recipe_and_tracks_its_path(name):
     tracks well below a quarter of holding the pre-pressure and below 10 mm, and within 20 % of
     the error recorded when it was shipped (``evaluation.yaml``)."""
     config = yaml.safe_load((SHIPPED_DIR / name / "config.yaml").read_text())
-    recipes = yaml.safe_load((SHIPPED_DIR.parents[1] / "train" / "configs" /
-                              f"{config['algo']}.yml").read_text())
-    assert config["env_id"] in recipes, f"no recipe for {config['env_id']}"
-    assert config["env_kwargs"] == recipes[config["env_id"]]["env_kwargs"]
+    # the recipe file it was trained by: --conf-file's where one was given, else the algo's
+    recipe_file = (config.get("request") or {}).get("config_file") or \
+        f"train/configs/{config['algo']}.yml"
+    recipes = yaml.safe_load((SHIPPED_DIR.parents[1] / recipe_file).read_text())
+    assert config["env_id"] in recipes, f"no recipe for {config['env_id']} in {recipe_file}"
+    recipe = recipes[config["env_id"]]
+    assert config["env_kwargs"] == recipe["env_kwargs"]
+    assert config["hyperparameters"].get("arm_env_kwargs") == recipe.get("arm_env_kwargs")
     evaluation = nominal_evaluation(name)
     settled, resting = evaluation["settled_error_mm"], evaluation["resting_error_mm"]
     assert settled < 0.25 * resting, (settled, resting)
