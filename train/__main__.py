@@ -33,9 +33,8 @@ import yaml
 from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_output_dir, fail,
                            finite_float, non_negative_int, positive_int, seed_int)
 from train.cli_options import (add_env_options, check_arm_env_kwargs, check_conf_file,
-                               check_env_kwargs,
-                               check_hyperparameter_overrides, parse_env_and_hyperparameters,
-                               resolve_env_id)
+                               check_env_kwargs, check_hyperparameter_overrides,
+                               parse_env_and_hyperparameters, resolve_env_id)
 from train.config import ALGORITHMS, OFF_POLICY, VEC_KINDS, parse_key_values
 from train.sweep import main as sweep_main
 

@@ -18,8 +18,9 @@
 (off-policy action noise) are the zoo's special keys; this project adds ``arm_env_kwargs``, a
 list of mappings over ``env_kwargs`` that the arms of a batch (``--vec batched``) take in turn
 (arm ``i`` the entry ``i`` modulo its length), e.g. one agent trained on several feedback
-sources at once; everything else goes to the algorithm's constructor. Strings such as ``"dict(net_arch=[64, 64], activation_fn=nn.ReLU)"`` are parsed
-without ``eval``: only literals and ``nn.<Activation>`` names are allowed.
+sources at once; everything else goes to the algorithm's constructor. Strings such as
+``"dict(net_arch=[64, 64], activation_fn=nn.ReLU)"`` are parsed without ``eval``: only literals
+and ``nn.<Activation>`` names are allowed.
 
 :func:`check_hyperparameters` refuses, before anything is built, a key the algorithm does not
 take (naming the keys it does) and a value out of range (``gamma`` in (0, 1], ``learning_rate``

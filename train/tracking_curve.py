@@ -87,9 +87,9 @@ def evaluation_cases(env_kwargs: dict, arm_variants: list[dict] | None = None
         merged = {**env_kwargs, **variant}
         mass = _middle_tip_mass_kg(merged.get("randomization"))
         prefix = f"{variant_label(variant)} " if len(variants) > 1 else ""
+        arm = {key: value for key, value in variant.items() if key != "randomization"}
         for path in _paths(merged):
-            base = {key: value for key, value in variant.items() if key != "randomization"}
-            base.update({} if path is None else {"path": path})
+            base = arm if path is None else {**arm, "path": path}
             name = prefix + (path or "default")
             cases.append(EvaluationCase(f"{name} nominal", base))
             if mass is not None:

@@ -85,10 +85,11 @@ def _write_recipe(tmp_path, arms: str, n_envs: int = 4) -> str:
     return str(path)
 
 
-def test_arm_env_kwargs_give_each_arm_of_the_batch_its_own_feedback(tmp_path):
+def test_arm_env_kwargs_give_each_arm_of_the_batch_its_own_feedback(tmp_path, monkeypatch):
     """A recipe's arm_env_kwargs, taken in turn by the arms: arm i builds the env of entry
-    i mod 2 over env_kwargs (its feedback source and sensors), the batch trains, and the
-    tracking curve evaluates the agent on each entry's env, labelled by it."""
+    i mod 2 over env_kwargs (its feedback source and sensors), the batch python -m train trains
+    on is built so, and the tracking curve evaluates the agent on each entry's env, labelled by
+    it."""
     recipe = _write_recipe(tmp_path, "[{feedback: em}, {feedback: ground_truth}]", n_envs=3)
     from train.config import read_hyperparameters, split_hyperparameters
     settings = split_hyperparameters("ppo", read_hyperparameters("ppo", "SoftArmTrackWang2023-v0",
@@ -100,10 +101,20 @@ def test_arm_env_kwargs_give_each_arm_of_the_batch_its_own_feedback(tmp_path):
                            **settings.env_kwargs)
     assert [env.unwrapped.feedback for env in batched.envs] == ["em", "ground_truth", "em"]
     batched.close()
+    import train.trainer
+    trained_on = []
+
+    class Recorded(Sb3VectorEnv):  # the batch the trainer builds, its arms' feedback recorded
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            trained_on.append([env.unwrapped.feedback for env in self.envs])
+
+    monkeypatch.setattr(train.trainer, "Sb3VectorEnv", Recorded)
     train_main(["--algo", "ppo", "--env", "SoftArmTrackWang2023-v0", "--conf-file", recipe,
                 "--vec", "batched", "--curve-freq", "96", "--eval-freq", "0",
                 "--checkpoint-freq", "0", "--out", str(tmp_path), "--name", "arms",
                 "--no-progress"])
+    assert trained_on == [["em", "ground_truth", "em"]]
     header = (tmp_path / "arms" / "eval" / "tracking_curve.csv").read_text().splitlines()[0]
     assert header.split(",")[3:] == ["feedback=em circle nominal (mm)",
                                      "feedback=ground_truth circle nominal (mm)"]
