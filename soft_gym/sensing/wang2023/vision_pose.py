@@ -51,14 +51,6 @@ MATCH_STAGES = ("prediction", "image_motion", "wide_window", "whole_map")
 cv2.setNumThreads(1)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of two (n, 3) arrays: ``np.cross(a, b)``'s arithmetic, term for
-    term (the same results), without its axis handling, which dominates at a few hundred rows."""
-    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
-    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
-
-
 @dataclass
 class VisionEstimate:
     """One frame's result.
@@ -274,6 +266,8 @@ class VisionPoseEstimator:
         self._misses: list[bool] = []
         # frames each matching stage decided, tracked or lost (see update)
         self.match_stages: dict[str, int] = dict.fromkeys(MATCH_STAGES, 0)
+        # (the keyframes' arrays, their stacks) of the last local map (see _local_map)
+        self._local_map_cache: tuple | None = None
 
     def __deepcopy__(self, memo: dict) -> "VisionPoseEstimator":
         """A copy with its own map (OpenCV's ORB and matcher objects are rebuilt, not copied)."""
@@ -294,7 +288,7 @@ class VisionPoseEstimator:
     def __getstate__(self) -> dict:
         """Pickled state: the settings and the map (OpenCV's objects are rebuilt on load)."""
         return {name: value for name, value in self.__dict__.items()
-                if name not in ("_orb", "_matcher")}
+                if name not in ("_orb", "_matcher", "_local_map_cache")}
 
     def __setstate__(self, state: dict) -> None:
         settings = {f.name: state[f.name] for f in dataclasses.fields(self) if f.init}
@@ -366,11 +360,22 @@ class VisionPoseEstimator:
         # the calibration keyframe (known pose, metric depth) always anchors the local map
         indices = [0] + [i for i in nearest if i != 0][: self.match_keyframes]
         chosen = [self.keyframes[i] for i in indices]
-        self._local_uncertainty = np.concatenate(
-            [np.full(len(k.points_world_m), k.uncertainty) for k in chosen])
-        return (np.vstack([k.descriptors for k in chosen]),
-                np.vstack([k.points_world_m for k in chosen]), self.keyframes[int(order[0])],
-                np.concatenate([k.octaves for k in chosen]))
+        # the stacked arrays are reused while the same keyframes, with the same arrays and
+        # uncertainties, make up the local map (most frames: keyframes are added and re-posed
+        # rarely)
+        parts = [(k.descriptors, k.points_world_m, k.octaves, k.uncertainty) for k in chosen]
+        cached = self._local_map_cache
+        if (cached is None or len(cached[0]) != len(parts)
+                or any(a[0] is not b[0] or a[1] is not b[1] or a[2] is not b[2] or a[3] != b[3]
+                       for a, b in zip(cached[0], parts))):
+            stacked = (np.vstack([k.descriptors for k in chosen]),
+                       np.vstack([k.points_world_m for k in chosen]),
+                       np.concatenate([k.octaves for k in chosen]),
+                       np.concatenate([np.full(len(k.points_world_m), k.uncertainty)
+                                       for k in chosen]))
+            cached = self._local_map_cache = (parts, stacked)
+        descriptors, points, octaves, self._local_uncertainty = cached[1]
+        return descriptors, points, self.keyframes[int(order[0])], octaves
 
     # ------------------------------------------------------------------ tracking
     def update(self, image: np.ndarray, depth_m: np.ndarray | None = None,
@@ -618,7 +623,7 @@ class VisionPoseEstimator:
             cKDTree(projected[inside], **build), radius, output_type="ndarray")
         if len(pairs) == 0:
             return empty, empty
-        query = pairs["i"].astype(np.int64)
+        query = pairs["i"].astype(np.intp)
         train = candidates[pairs["j"]]
         # 32-byte ORB descriptors as four 64-bit words: Hamming distance = popcount of the XOR
         # (the XOR in place, and the four words' counts added column by column: a row-wise sum
@@ -628,18 +633,23 @@ class VisionPoseEstimator:
         counts = np.bitwise_count(words)
         distance = ((counts[:, 0] + counts[:, 1].astype(np.int64))
                     + (counts[:, 2] + counts[:, 3].astype(np.int64)))
-        # sort by feature, then distance, then map index: one unique integer key (distances are
-        # at most 256), so the order does not depend on the sorting algorithm
-        n_map = len(map_points)
-        order = np.argsort((query * 257 + distance) * n_map + train)
-        query, train, distance = query[order], train[order], distance[order]
-        first = np.flatnonzero(np.r_[True, query[1:] != query[:-1]])
-        following = np.minimum(first + 1, len(query) - 1)
-        has_second = (first + 1 < len(query)) & (query[following] == query[first])
-        best = distance[first]
-        second = np.where(has_second, distance[following], np.inf)
-        accepted = (best <= self.max_descriptor_distance) & (best < self.ratio * second)
-        query, train, best = query[first][accepted], train[first][accepted], best[accepted]
+        # per feature: the nearest descriptor (the lowest map index among equal distances) and
+        # the nearest among the rest, by three scatter-minima over the pairs (no sort: the
+        # pairs are tens of thousands, the features hundreds)
+        n_features = len(pixels)
+        unset = np.iinfo(np.int64).max
+        best = np.full(n_features, unset, dtype=np.int64)
+        np.minimum.at(best, query, distance)
+        at_best = distance == best[query]
+        best_train = np.full(n_features, unset, dtype=np.int64)
+        np.minimum.at(best_train, query[at_best], train[at_best])
+        others = train != best_train[query]
+        second = np.full(n_features, unset, dtype=np.int64)
+        np.minimum.at(second, query[others], distance[others])
+        accepted = ((best <= self.max_descriptor_distance)
+                    & (best < self.ratio * np.where(second < unset, second, np.inf)))
+        query = np.flatnonzero(accepted)
+        train, best = best_train[query], best[query]
         if len(query) == 0:
             return empty, empty
         order = np.argsort((train * 257 + best) * len(pixels) + query)
@@ -710,13 +720,21 @@ class VisionPoseEstimator:
         inv_z = 1.0 / z
         residual = np.concatenate([fx * x * inv_z + cx - image_points[:, 0],
                                    fy * y * inv_z + cy - image_points[:, 1]])
-        zero = np.zeros_like(z)
-        # d(u)/d(p) and d(v)/d(p) (pinhole); d(p)/d(w) = -[p]x, d(p)/d(dt) = I
-        du = np.stack([fx * inv_z, zero, -fx * x * inv_z**2], axis=1)
-        dv = np.stack([zero, fy * inv_z, -fy * y * inv_z**2], axis=1)
-        ju = np.concatenate([_cross(p, du), du], axis=1)
-        jv = np.concatenate([_cross(p, dv), dv], axis=1)
-        return residual, np.concatenate([ju, jv])
+        # d(u)/d(p) = (fx/z, 0, -fx x/z^2) and d(v)/d(p) = (0, fy/z, -fy y/z^2) (pinhole);
+        # d(p)/d(w) = -[p]x, d(p)/d(dt) = I: rows (p x d(u)/d(p), d(u)/d(p)), then the same
+        # for v, written in place (the arithmetic of np.cross and np.stack, term for term)
+        n = len(p)
+        jacobian = np.zeros((2 * n, 6))
+        du, dv = jacobian[:n, 3:], jacobian[n:, 3:]
+        du[:, 0] = fx * inv_z
+        du[:, 2] = -fx * x * inv_z**2
+        dv[:, 1] = fy * inv_z
+        dv[:, 2] = -fy * y * inv_z**2
+        for rows, d in ((jacobian[:n], du), (jacobian[n:], dv)):
+            rows[:, 0] = y * d[:, 2] - z * d[:, 1]
+            rows[:, 1] = z * d[:, 0] - x * d[:, 2]
+            rows[:, 2] = x * d[:, 1] - y * d[:, 0]
+        return residual, jacobian
 
     def _refine_weighted(self, object_points: np.ndarray, image_points: np.ndarray,
                          weights: np.ndarray, rvec: np.ndarray, tvec: np.ndarray,

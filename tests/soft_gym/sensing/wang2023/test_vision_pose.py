@@ -15,8 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from soft_gym.robots import get_preset
 from soft_gym.sensing.wang2023.exploration import spiral_fractions
-from soft_gym.sensing.wang2023.vision_pose import (MATCH_STAGES, VisionPoseEstimator, _cross,
-                                                  _Keyframe)
+from soft_gym.sensing.wang2023.vision_pose import MATCH_STAGES, VisionPoseEstimator, _Keyframe
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.engines.pybullet.simulator import ArmSimulator
 
@@ -420,10 +419,18 @@ def _residual_vector(world, pixels, rotation, translation) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ geometry
-def test_cross_is_the_row_wise_cross_product() -> None:
+def test_jacobian_rotation_columns_are_the_point_cross_the_translation_columns() -> None:
+    """d(p)/d(w) = -[p]x: each row's rotation part is ``p x`` its translation part, with p the
+    point in the camera frame (numpy's cross product as the reference, to rounding)."""
     rng = np.random.default_rng(0)
-    a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
-    np.testing.assert_allclose(_cross(a, b), np.cross(a, b), rtol=1e-14, atol=1e-15)
+    world = rng.uniform(-0.05, 0.05, size=(40, 3)) + [0.0, 0.0, 0.3]
+    rotation = Rotation.from_rotvec([0.05, -0.1, 0.02]).as_matrix()
+    translation = np.array([0.01, -0.02, 0.03])
+    _, jacobian = _estimator()._residuals(world, np.zeros((40, 2)), rotation, translation)
+    p = world @ rotation.T + translation
+    points = np.vstack([p, p])
+    np.testing.assert_allclose(jacobian[:, :3], np.cross(points, jacobian[:, 3:]), rtol=1e-14,
+                               atol=1e-12)
 
 
 def test_residuals_and_their_jacobian() -> None:
@@ -788,6 +795,25 @@ def test_local_map_is_the_calibration_keyframe_and_the_nearest_ones() -> None:
     np.testing.assert_array_equal(descriptors, np.vstack([estimator.keyframes[i].descriptors
                                                           for i in (0, 2)]))
 
+
+
+def test_local_map_follows_re_posed_keyframes_and_changed_uncertainties() -> None:
+    """The local map's stacks are reused between frames only while nothing in them changed: a
+    keyframe re-posed (its points replaced) or given a new uncertainty shows at once."""
+    estimator = _estimator(match_keyframes=2)
+    depth = np.full((240, 320), 0.2)
+    for k, x in enumerate([0.0, 0.004, 0.006]):
+        estimator.add_keyframe(None, depth, _pose([0, 0, 0], [x, 0, 0]), _features(5, k))
+    pose = _pose([0, 0, 0], [0.005, 0, 0])
+    _, points_before, _, _ = estimator._local_map(pose)
+    keyframe = estimator.keyframes[1]
+    keyframe.points_world_m = keyframe.points_world_m + [0.0, 0.0, 0.001]
+    keyframe.uncertainty = 4.0
+    _, points_after, _, _ = estimator._local_map(pose)
+    np.testing.assert_array_equal(points_after,
+                                  np.vstack([k.points_world_m for k in estimator.keyframes]))
+    assert not np.array_equal(points_after, points_before)
+    np.testing.assert_array_equal(estimator._local_uncertainty, np.repeat([0.0, 4.0, 0.0], 5))
 
 def test_match_all_is_the_ratio_test_with_each_map_point_used_once() -> None:
     """Each feature's nearest map descriptor (Hamming) is kept if closer than ``ratio`` times
