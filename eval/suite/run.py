@@ -4,7 +4,6 @@ finished yet and writes each record as its run ends (:mod:`eval.suite`, "Running
 
 from __future__ import annotations
 
-import contextlib
 import copy
 import multiprocessing
 import os
@@ -17,7 +16,6 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import Any
 
-from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
 from agents.policies import PolicyRefusal
@@ -29,6 +27,7 @@ from eval.suite.grid import Cell, expand, label_text
 from eval.suite.spec import SuiteSpec, load_suite
 from eval.suite.store import (cell_metrics, check_records_dir, git_revision, is_finished,
                               library_versions, record_problem, records_dir, write_record)
+from soft_gym._threads import one_compute_thread
 from soft_gym.sensing.calibration_cache import disk_cache_enabled
 
 
@@ -42,26 +41,6 @@ class SuiteRunError(RuntimeError):
         more = f" and {len(failures) - 5} more" if len(failures) > 5 else ""
         super().__init__(f"{len(failures)} run(s) failed: {names}{more}; tracebacks in "
                          f"errors/<key>.txt; run again with resume to retry them")
-
-
-@contextlib.contextmanager
-def one_compute_thread() -> Iterator[None]:
-    """Run the block with BLAS, OpenMP and torch on one thread each, restoring them after.
-
-    A cell's numbers must not depend on where it runs: a Ray task starts with
-    ``OMP_NUM_THREADS=1``, a pool worker with every core, and a sum split over threads rounds
-    differently (lwpr_rwr and hybrid_gpr records differed in the tenth digit). On one thread a
-    record is the same on every backend, worker count and machine.
-    """
-    import torch  # not at the top: +1.6 s for every python -m eval command (-X importtime)
-
-    torch_threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with threadpool_limits(limits=1):
-            yield
-    finally:
-        torch.set_num_threads(torch_threads)
 
 
 def run_cell(task: Mapping[str, Any]) -> dict[str, Any]:

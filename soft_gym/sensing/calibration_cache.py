@@ -28,6 +28,8 @@ import cv2
 import numpy
 import platformdirs
 
+from soft_gym._threads import one_compute_thread
+
 CACHE_ENV_VARIABLE = "SOFT_GYM_CACHE"
 _FORMAT = 1
 _memory: dict[str, Any] = {}
@@ -95,10 +97,14 @@ def cached(parts: dict[str, Any], compute: Callable[[], Any], use_cache: bool = 
     pickle: a missing key, a wrong type) is ignored with a warning and rebuilt, like a file
     whose header does not match. Each call works on a deep copy, so callers may change what
     they get.
+
+    ``compute()`` runs with one thread per numerical library
+    (:func:`soft_gym._threads.one_compute_thread`): a value is a function of its key, the same
+    whether a test, a suite worker or a multi-threaded training process computed it first.
     """
     use = (lambda value: value) if use is None else use
     if not use_cache:
-        return use(compute())
+        return use(_compute_on_one_thread(compute))
     digest, description = cache_key(parts)
     if digest in _memory:
         return use(copy.deepcopy(_memory[digest]))
@@ -113,11 +119,16 @@ def cached(parts: dict[str, Any], compute: Callable[[], Any], use_cache: bool = 
         else:
             _memory[digest] = value
             return result
-    value = compute()
+    value = _compute_on_one_thread(compute)
     if disk_cache_enabled():
         _store(digest, description, value)
     _memory[digest] = copy.deepcopy(value)
     return use(value)
+
+
+def _compute_on_one_thread(compute: Callable[[], Any]) -> Any:
+    with one_compute_thread():
+        return compute()
 
 
 def clear_memory() -> None:

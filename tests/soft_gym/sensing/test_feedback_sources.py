@@ -60,6 +60,35 @@ def test_calibration_does_not_depend_on_what_was_built_before(cache_dir, monkeyp
     assert np.array_equal(alone, after_loaded)
 
 
+def test_a_value_is_computed_on_one_thread_whatever_threads_the_caller_runs(cache_dir):
+    """A cached calibration is a function of its key: computed with one BLAS, OpenMP and torch
+    thread even where the caller (a training process, say) runs several, which it gets back."""
+    import torch
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    def threads() -> tuple[int, int]:
+        return torch.get_num_threads(), max(pool["num_threads"] for pool in threadpool_info())
+
+    seen = []
+
+    def compute() -> int:
+        seen.append(threads())
+        return 1
+
+    torch_threads = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        with threadpool_limits(limits=2):
+            assert threads() == (2, 2)
+            calibration_cache.cached({"test": "threads"}, compute)
+            calibration_cache.cached({"test": "threads"}, compute, use_cache=False)
+            after = threads()
+    finally:
+        torch.set_num_threads(torch_threads)
+    assert seen == [(1, 1), (1, 1)]
+    assert after == (2, 2)
+
+
 _SECOND_PROCESS = """
 import numpy as np, gymnasium as gym, soft_gym
 from soft_gym.sensing.wang2023.pipeline import SensingPipeline
