@@ -161,13 +161,22 @@ def test_the_readme_training_times_are_the_shipped_agents_measured_ones():
     assert f"{round(sac['env_steps_per_s'])} env steps/s for the SAC, " \
            f"{round(td3['env_steps_per_s'])} for the TD3" in " ".join(readme.split())
     text = " ".join(readme.split())
-    (zhao,) = re.findall(r"`sac_zhao2021_track` \(zhao2021's circle, tip loads up to 150 g; "
-                         r"100,000 steps, (\d+) minutes", text)
-    (ho,) = re.findall(r"`sac_ho2018_track` \((\d+) minutes\)", text)
+    plateaus = {
+        "ho2018": r"`sac_ho2018_track` \(the sweep's chosen config on 4 batched MuJoCo arms, "
+                  r"plateau at ([\d,]+) steps, (\d+) minutes, (\d+) training env steps/s",
+        "zhao2021": r"`sac_zhao2021_track` trained on `strain_sr` too, with the sweep's chosen "
+                    r"config \(4 batched MuJoCo arms, plateau at ([\d,]+) steps, (\d+) minutes, "
+                    r"(\d+) training env steps/s"}
+    for agent, pattern in plateaus.items():
+        ((steps, minutes, rate),) = re.findall(pattern, text)
+        training = _training(f"sac_{agent}_track")
+        assert training["stopped_at_plateau"], agent
+        assert training["timesteps"] == int(steps.replace(",", "")), agent
+        assert int(minutes) == round(training["wall_s"] / 60), agent
+        assert int(rate) == round(training["training_env_steps_per_s"]), agent
     (steps, zou, rate) = re.findall(r"tracking curve flattened \(([\d,]+) steps, (\d+) minutes, "
                                     r"(\d+) env steps/s", text)[0]
-    for agent, minutes in (("zhao2021", zhao), ("ho2018", ho), ("zou2022", zou)):
-        assert int(minutes) == round(_training(f"sac_{agent}_track")["wall_s"] / 60), agent
+    assert int(zou) == round(_training("sac_zou2022_track")["wall_s"] / 60)
     zou2022 = _training("sac_zou2022_track")
     assert zou2022["timesteps"] == int(steps.replace(",", ""))
     assert round(zou2022["training_env_steps_per_s"]) == int(rate)
