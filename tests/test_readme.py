@@ -152,15 +152,17 @@ def test_the_readme_training_times_are_the_shipped_agents_measured_ones():
     """The minutes the README gives for training come from the shipped agents' own
     ``training.yaml`` (wall time, and steps over the measured env steps/s)."""
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    text = " ".join(readme.split())
     sac = _training("sac_wang2023_track")
-    (minutes,) = re.findall(r"the shipped SAC's recipe: 300,000 steps, ~(\d+) min", readme)
-    assert sac["timesteps"] == 300_000 and int(minutes) == round(sac["wall_s"] / 60)
+    ((steps, minutes),) = re.findall(r"# the shipped SAC: ([\d,]+) steps to its plateau, ~(\d+) min",
+                                     readme)
+    assert sac["stopped_at_plateau"] and sac["timesteps"] == int(steps.replace(",", ""))
+    assert int(minutes) == round(sac["wall_s"] / 60)
     td3 = _training("td3_wang2023_track")
     (minutes,) = re.findall(r"--randomize  # 300,000 steps, ~(\d+) min", readme)
     assert int(minutes) == round(300_000 / td3["env_steps_per_s"] / 60)
-    assert f"{round(sac['env_steps_per_s'])} env steps/s for the SAC, " \
-           f"{round(td3['env_steps_per_s'])} for the TD3" in " ".join(readme.split())
-    text = " ".join(readme.split())
+    assert f"{round(td3['env_steps_per_s'])} env steps/s for the TD3 on PyBullet with one env, " \
+           f"{round(sac['training_env_steps_per_s'])} training env steps/s for the SAC" in text
     plateaus = {
         "ho2018": r"`sac_ho2018_track` \(the sweep's chosen config on 4 batched MuJoCo arms, "
                   r"plateau at ([\d,]+) steps, (\d+) minutes, (\d+) training env steps/s",
