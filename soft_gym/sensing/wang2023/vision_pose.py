@@ -266,7 +266,8 @@ class VisionPoseEstimator:
         self._misses: list[bool] = []
         # frames each matching stage decided, tracked or lost (see update)
         self.match_stages: dict[str, int] = dict.fromkeys(MATCH_STAGES, 0)
-        # (the keyframes' arrays, their stacks) of the last local map (see _local_map)
+        # (the keyframes' arrays, their uncertainties, their stacks) of the last local map
+        # (see _local_map)
         self._local_map_cache: tuple | None = None
 
     def __deepcopy__(self, memo: dict) -> "VisionPoseEstimator":
@@ -363,18 +364,18 @@ class VisionPoseEstimator:
         # the stacked arrays are reused while the same keyframes, with the same arrays and
         # uncertainties, make up the local map (most frames: keyframes are added and re-posed
         # rarely)
-        parts = [(k.descriptors, k.points_world_m, k.octaves, k.uncertainty) for k in chosen]
+        arrays = [array for k in chosen for array in (k.descriptors, k.points_world_m, k.octaves)]
+        uncertainties = [k.uncertainty for k in chosen]
         cached = self._local_map_cache
-        if (cached is None or len(cached[0]) != len(parts)
-                or any(a[0] is not b[0] or a[1] is not b[1] or a[2] is not b[2] or a[3] != b[3]
-                       for a, b in zip(cached[0], parts))):
+        if (cached is None or cached[1] != uncertainties or len(cached[0]) != len(arrays)
+                or any(old is not new for old, new in zip(cached[0], arrays))):
             stacked = (np.vstack([k.descriptors for k in chosen]),
                        np.vstack([k.points_world_m for k in chosen]),
                        np.concatenate([k.octaves for k in chosen]),
                        np.concatenate([np.full(len(k.points_world_m), k.uncertainty)
                                        for k in chosen]))
-            cached = self._local_map_cache = (parts, stacked)
-        descriptors, points, octaves, self._local_uncertainty = cached[1]
+            cached = self._local_map_cache = (arrays, uncertainties, stacked)
+        descriptors, points, octaves, self._local_uncertainty = cached[2]
         return descriptors, points, self.keyframes[int(order[0])], octaves
 
     # ------------------------------------------------------------------ tracking
