@@ -9,26 +9,37 @@ action per step, with the vision tracker on its own (the default), with F-emp's 
 prior (``sensing={"femp_prior": True}``) and with the tracker's matching as it was before the
 image-motion stage (``image_motion_prediction=False``: a frame the motion model mispredicts is
 matched against the whole local map); for each random-action run, the share of frames each
-matching stage decided (``VisionPoseEstimator.match_stages``). Last, the time to make a fused
+matching stage decided (``VisionPoseEstimator.match_stages``). Then the time to make a fused
 env in a new process with the calibration taken from the disk cache
 (:mod:`soft_gym.sensing.calibration_cache`), beside the calibration itself.
 
+With ``--against REVISION`` it last times the random-action fused env of this tree and of that
+git revision side by side (fresh processes taking turns, as ``bench/revision_speed.py`` does:
+uniform random actions from a seeded generator, ``--rounds`` each) and prints the ratio. The
+tracker before the image-motion stage and the compiled descriptor searches is ``49c7f69^``: the
+matching ``image_motion_prediction=False`` gives today runs the same stages, but with today's
+searches, so it is no longer that tracker's speed.
+
     python bench/sensor_speed.py [--steps 300] [--json out.json]
+    python bench/sensor_speed.py --against 49c7f69^ --rounds 3
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
 import soft_gym  # noqa: F401
-from soft_gym._cli import HelpFormatter
+from soft_gym._cli import HelpFormatter, positive_int
 from soft_gym.robots import get_preset
 from soft_gym.sensing.wang2023.elm import OSELM
 from soft_gym.sensing.wang2023.exploration import spiral_fractions
@@ -36,6 +47,10 @@ from soft_gym.sensing.wang2023.vision_pose import VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber
 from soft_gym.engines.pybullet.simulator import ArmSimulator
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from revision_speed import ROOT, extract_commit, resolve_commit, steps_per_second  # noqa: E402
 
 
 def stats(samples_s: list[float]) -> dict:
@@ -47,9 +62,21 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--steps", type=int, default=300, help="timed steps per measurement")
     parser.add_argument("--json", default=None, help="also write the results to this file")
+    parser.add_argument("--against", metavar="REVISION", default=None,
+                        help="also time the random-action fused env of this git revision side "
+                             "by side with this tree's (e.g. 49c7f69^, the tracker before the "
+                             "image-motion stage)")
+    parser.add_argument("--rounds", type=positive_int, default=3,
+                        help="processes per tree taking turns, with --against")
     args = parser.parse_args(argv)
     if args.steps < 10:
         parser.error(f"--steps must be >= 10, got {args.steps}")
+    commit = None
+    if args.against is not None:
+        commit = resolve_commit(args.against)
+        if commit is None:
+            parser.error(f"--against {args.against!r} names no commit of this repository: "
+                         "give a commit, tag or branch")
     spec = get_preset("wang2023")
     sim = ArmSimulator(spec)
     sim.reset(settle_s=0.5)
@@ -151,9 +178,30 @@ def main(argv: list[str] | None = None) -> None:
                                              for stage, share in shares.items()))
     print(f"make a fused env in a new process: {results['make_fused_env_calibrating_s']:.2f} s "
           f"calibrating, {results['make_fused_env_from_disk_cache_s']:.2f} s from the disk cache")
+    if commit is not None:
+        results["against"] = _against_revision(args.against, commit, args.steps, args.rounds)
     if args.json:
         with open(args.json, "w") as handle:
             json.dump(results, handle, indent=2)
+
+
+def _against_revision(revision: str, commit: str, steps: int, rounds: int) -> dict:
+    """Random-action fused env steps/s of this tree and of ``commit``, fresh processes taking
+    turns (``bench/revision_speed.py``'s measurement); prints and returns the figures."""
+    ours, theirs = [], []
+    with tempfile.TemporaryDirectory(prefix="sensor_speed_") as scratch:
+        revision_tree = extract_commit(commit, Path(scratch))
+        for round_index in range(rounds):
+            pair = [(ROOT, ours), (revision_tree, theirs)]
+            for tree, figures in pair if round_index % 2 == 0 else pair[::-1]:
+                figures.append(steps_per_second(tree, "wang2023", "fused", steps, seed=0)[0])
+    ratios = [a / b for a, b in zip(ours, theirs)]
+    print(f"random-action fused env steps/s, side by side over {rounds} rounds: this tree "
+          f"{statistics.median(ours):.0f}, {revision} ({commit[:12]}) "
+          f"{statistics.median(theirs):.0f}; ratio {statistics.median(ratios):.2f} "
+          f"(rounds {min(ratios):.2f}-{max(ratios):.2f})")
+    return {"revision": revision, "commit": commit, "this_tree_steps_per_s": ours,
+            "revision_steps_per_s": theirs, "ratios": ratios}
 
 
 _MAKE = """

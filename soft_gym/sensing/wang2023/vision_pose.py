@@ -36,10 +36,11 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
-from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from soft_gym._validation import as_finite_array, require_positive
+from soft_gym.sensing.wang2023.descriptor_search import (UNSET, as_words, nearest_two,
+                                                         nearest_two_in_window)
 
 # frames over which the motion model's misses are counted (image_motion_min_misses)
 MISS_WINDOW = 10
@@ -254,7 +255,6 @@ class VisionPoseEstimator:
         self._camera_from_tip = np.linalg.inv(self.tip_from_camera)
         self._orb = cv2.ORB_create(nfeatures=int(self.n_features), edgeThreshold=15,
                                    patchSize=15, fastThreshold=10)
-        self._matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
         self._scale_factor = float(self._orb.getScaleFactor())
         self._history: list = []   # (frame, world_from_camera) of the last tracked frames
         # (frame, keyframe, its own estimated pose) of keyframes waiting for the frames after them
@@ -271,7 +271,7 @@ class VisionPoseEstimator:
         self._local_map_cache: tuple | None = None
 
     def __deepcopy__(self, memo: dict) -> "VisionPoseEstimator":
-        """A copy with its own map (OpenCV's ORB and matcher objects are rebuilt, not copied)."""
+        """A copy with its own map (OpenCV's ORB is rebuilt, not copied)."""
         settings = {f.name: copy.deepcopy(getattr(self, f.name), memo)
                     for f in dataclasses.fields(self) if f.init}
         twin = VisionPoseEstimator(**settings)
@@ -287,9 +287,9 @@ class VisionPoseEstimator:
         return twin
 
     def __getstate__(self) -> dict:
-        """Pickled state: the settings and the map (OpenCV's objects are rebuilt on load)."""
+        """Pickled state: the settings and the map (OpenCV's ORB is rebuilt on load)."""
         return {name: value for name, value in self.__dict__.items()
-                if name not in ("_orb", "_matcher", "_local_map_cache")}
+                if name not in ("_orb", "_local_map_cache")}
 
     def __setstate__(self, state: dict) -> None:
         settings = {f.name: state[f.name] for f in dataclasses.fields(self) if f.init}
@@ -529,17 +529,15 @@ class VisionPoseEstimator:
     def _match_all(self, descriptors: np.ndarray,
                    map_descriptors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Brute-force matching with Lowe's ratio test; each map point used once (query order)."""
-        matches = self._matcher.knnMatch(descriptors, map_descriptors, k=2)
-        query, train, used = [], [], set()
-        for pair in matches:
-            if len(pair) < 2:
-                continue
-            best, second = pair
-            if best.distance < self.ratio * second.distance and best.trainIdx not in used:
-                used.add(best.trainIdx)
-                query.append(best.queryIdx)
-                train.append(best.trainIdx)
-        return np.asarray(query, dtype=np.int64), np.asarray(train, dtype=np.int64)
+        empty = np.empty(0, dtype=np.int64)
+        if len(map_descriptors) < 2:
+            return empty, empty
+        best, best_train, second = nearest_two(as_words(descriptors), as_words(map_descriptors))
+        query = np.flatnonzero(best < self.ratio * second)
+        # the first feature (in feature order) to take a map point keeps it
+        _, first = np.unique(best_train[query], return_index=True)
+        query = query[np.sort(first)]
+        return query, best_train[query]
 
     def _search_by_projection(self, frame: tuple, local_map: tuple,
                               centre_world_from_camera: np.ndarray,
@@ -617,38 +615,11 @@ class VisionPoseEstimator:
         candidates = front[inside]
         if len(candidates) == 0:
             return empty, empty
-        # the pairs within the radius do not depend on how the trees are built: the quickest
-        # build for a few thousand points (no median splits, no node shrinking, larger leaves)
-        build = {"leafsize": 32, "balanced_tree": False, "compact_nodes": False}
-        pairs = cKDTree(pixels, **build).sparse_distance_matrix(
-            cKDTree(projected[inside], **build), radius, output_type="ndarray")
-        if len(pairs) == 0:
-            return empty, empty
-        query = pairs["i"].astype(np.intp)
-        train = candidates[pairs["j"]]
-        # 32-byte ORB descriptors as four 64-bit words: Hamming distance = popcount of the XOR
-        # (the XOR in place, and the four words' counts added column by column: a row-wise sum
-        # over four elements is numpy's slow case)
-        words = np.take(descriptors.view(np.uint64), query, axis=0)
-        np.bitwise_xor(words, np.take(map_descriptors.view(np.uint64), train, axis=0), out=words)
-        counts = np.bitwise_count(words)
-        distance = ((counts[:, 0] + counts[:, 1].astype(np.int64))
-                    + (counts[:, 2] + counts[:, 3].astype(np.int64)))
-        # per feature: the nearest descriptor (the lowest map index among equal distances) and
-        # the nearest among the rest, by three scatter-minima over the pairs (no sort: the
-        # pairs are tens of thousands, the features hundreds)
-        n_features = len(pixels)
-        unset = np.iinfo(np.int64).max
-        best = np.full(n_features, unset, dtype=np.int64)
-        np.minimum.at(best, query, distance)
-        at_best = distance == best[query]
-        best_train = np.full(n_features, unset, dtype=np.int64)
-        np.minimum.at(best_train, query[at_best], train[at_best])
-        others = train != best_train[query]
-        second = np.full(n_features, unset, dtype=np.int64)
-        np.minimum.at(second, query[others], distance[others])
+        best, best_train, second = nearest_two_in_window(
+            pixels, as_words(descriptors), np.ascontiguousarray(projected[inside]), candidates,
+            as_words(map_descriptors), radius)
         accepted = ((best <= self.max_descriptor_distance)
-                    & (best < self.ratio * np.where(second < unset, second, np.inf)))
+                    & (best < self.ratio * np.where(second < UNSET, second, np.inf)))
         query = np.flatnonzero(accepted)
         train, best = best_train[query], best[query]
         if len(query) == 0:
