@@ -6,8 +6,9 @@ a commit, tag or branch) into a temporary directory with ``git archive``, then, 
 ``--presets`` entry, runs the same measurement in fresh processes taking turns, this tree and
 the revision (A B A B ... over ``--rounds`` rounds, so both see the same machine load):
 
-    make the env (``feedback=--feedback``, one long episode), reset it with ``--seed``, draw
-    ``--steps`` seeded random actions, and time ``env.step`` over all of them.
+    make the env (``feedback=--feedback``, ``engine=--engine``, one long episode), reset it
+    with ``--seed``, draw ``--steps`` seeded random actions, and time ``env.step`` over all of
+    them.
 
 Each process imports ``soft_gym`` from its own tree; making the env (and, for the camera
 feedbacks, a calibration the revision's cache lacks) is not timed; who goes first alternates
@@ -19,6 +20,7 @@ steadier of the two). ``--json PATH`` writes every round's figures.
     python bench/revision_speed.py --against v0.2.0
     python bench/revision_speed.py --against HEAD~3 --presets wang2023 ho2018 --rounds 5
     python bench/revision_speed.py --against main --feedback fused --steps 300
+    python bench/revision_speed.py --against HEAD~1 --engine mujoco --steps 4000
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import tempfile
 from pathlib import Path
 
 from soft_gym._cli import HelpFormatter, check_output_dir, positive_int
+from soft_gym.engines import ENGINES
 from soft_gym.robots.presets import PRESETS
 from soft_gym.sensing import FEEDBACK_SOURCES
 
@@ -45,7 +48,8 @@ sys.path.insert(0, sys.argv[1])
 import numpy as np, gymnasium as gym
 import soft_gym  # noqa: F401  (registers the ids)
 preset, feedback, steps, seed = sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
-env = gym.make("SoftArmReach-v0", preset=preset, feedback=feedback, episode_steps=10**6)
+engine = {"engine": sys.argv[6]} if len(sys.argv) > 6 else {}
+env = gym.make("SoftArmReach-v0", preset=preset, feedback=feedback, episode_steps=10**6, **engine)
 env.reset(seed=seed)
 rng = np.random.default_rng(seed)
 actions = rng.uniform(-1.0, 1.0, (steps,) + env.action_space.shape).astype(np.float32)
@@ -81,12 +85,14 @@ def extract_commit(commit: str, directory: Path) -> Path:
 
 
 def steps_per_second(tree: Path, preset: str, feedback: str, steps: int,
-                     seed: int) -> tuple[float, float]:
+                     seed: int, engine: str | None = None) -> tuple[float, float]:
     """One measurement in a fresh process importing ``soft_gym`` from ``tree``: env steps per
-    second of wall time and per second of the process's CPU time."""
+    second of wall time and per second of the process's CPU time (``engine``: the env's
+    ``engine=``, else the default)."""
     env = dict(os.environ, PYTHONPATH=str(tree))
-    done = subprocess.run([sys.executable, "-c", CHILD, str(tree), preset, feedback, str(steps),
-                           str(seed)], capture_output=True, text=True, env=env, cwd=str(tree))
+    command = [sys.executable, "-c", CHILD, str(tree), preset, feedback, str(steps), str(seed)]
+    done = subprocess.run(command + ([engine] if engine else []), capture_output=True,
+                          text=True, env=env, cwd=str(tree))
     if done.returncode != 0:
         raise RuntimeError(f"the measurement in {tree} failed for {preset}:\n{done.stderr}")
     wall, cpu = done.stdout.strip().splitlines()[-1].split()
@@ -103,6 +109,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         metavar="SOURCE",
                         help=f"feedback source of the env, from {sorted(FEEDBACK_SOURCES)} "
                              "('fused': camera + vision + F-emp)")
+    parser.add_argument("--engine", choices=sorted(ENGINES), default=None,
+                        help=f"physics engine of the env, from {sorted(ENGINES)}; not given: "
+                             "the env's default (passed to neither tree, so that revisions "
+                             "older than engine= run too)")
     parser.add_argument("--steps", type=positive_int, default=2000,
                         help="timed env steps per process")
     parser.add_argument("--rounds", type=positive_int, default=3,
@@ -135,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
                 pair = [(ROOT, ours), (revision_tree, theirs)]
                 for tree, figures in pair if round_index % 2 == 0 else pair[::-1]:
                     figures.append(steps_per_second(tree, preset, args.feedback, args.steps,
-                                                    args.seed))
+                                                    args.seed, args.engine))
             rows.append({
                 "preset": preset,
                 "this_tree_steps_per_wall_s": [wall for wall, _ in ours],
@@ -146,9 +156,9 @@ def main(argv: list[str] | None = None) -> int:
                 "cpu_ratios": [a[1] / b[1] for a, b in zip(ours, theirs)]})
     header = (f"{'preset':<10} {'this tree st/s':>14} {'revision st/s':>14} {'wall ratio':>10} "
               f"{'cpu ratio':>9}  cpu ratio range")
-    print(f"env steps/s (wall), feedback {args.feedback}, {args.steps} steps, {args.rounds} "
-          f"rounds taking turns; revision {args.against} = {commit[:12]}; ratios: this tree "
-          "over the revision, median of the rounds")
+    print(f"env steps/s (wall), feedback {args.feedback}, engine {args.engine or 'default'}, "
+          f"{args.steps} steps, {args.rounds} rounds taking turns; revision {args.against} = "
+          f"{commit[:12]}; ratios: this tree over the revision, median of the rounds")
     print(header)
     print("-" * len(header))
     median = statistics.median
@@ -161,6 +171,7 @@ def main(argv: list[str] | None = None) -> int:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(
             {"against": args.against, "commit": commit, "feedback": args.feedback,
+             "engine": args.engine,
              "steps": args.steps, "rounds": args.rounds, "seed": args.seed, "rows": rows},
             indent=2) + "\n")
     return 0

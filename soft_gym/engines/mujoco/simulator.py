@@ -288,6 +288,22 @@ class MujocoArmSimulator(CommonArm):
         reach += np.abs(self.data.qvel) * self.stop_lookahead_s
         return False, bool((reach >= self._free_half_width).any())
 
+    def in_stop_band(self, positions: np.ndarray) -> bool:
+        """Whether any of ``positions`` (joint positions, (..., n_joints)) puts a joint in the
+        band where a stop acts (as :meth:`stop_proximity`'s ``now``)."""
+        return bool((np.abs(positions - self._free_centre) >= self._free_half_width).any())
+
+    @property
+    def forces_known_ahead(self) -> bool:
+        """Whether every applied force until the next change of command is known before the
+        substeps run: pressure actuation (no gas law on the chambers' lengths), no loads to
+        update, no held forces (their moments depend on the pose) now or at the last update,
+        and the arm on the model without the stops' tendons
+        (:func:`~soft_gym.engines.mujoco.stepping.step_arms` then runs them open loop)."""
+        return (self.spec.cylinders is None and not self.loads and not self.with_stops
+                and self.wrench is None and self.wrench_previous is None
+                and not self._held.forces)
+
     def note_stops_ahead(self, ahead: bool) -> None:
         """Remember :meth:`stop_proximity`'s ``ahead`` for the present state, for the next
         :meth:`choose_model` with ``lookahead=True`` (the block of substeps that just ended

@@ -9,6 +9,13 @@ then each arm's substeps until the next update run in C (``mj_step`` with ``nste
 with the mean of the old and the new applied forces (see :func:`write_forces`). With an
 ``executor`` (a thread pool), the arms' substeps run on its threads: ``mj_step`` releases the
 GIL (docs/architecture.md, "The MuJoCo engine").
+
+An arm whose forces are known before its substeps run (``forces_known_ahead``: pressure
+actuation, no loads, no held forces, far from its stops) is stepped open loop instead: the lag
+and the moments of every update of the call are formed first, and all its substeps run in one
+call of MuJoCo's ``rollout`` with the applied forces of each substep (:func:`_step_open_loop`);
+the same arithmetic in the same order, so the same trajectory bit for bit. Should a joint enter
+a stop's band on the way, the arm is put back and stepped the ordinary way.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from typing import Protocol, Sequence
 
 import mujoco
 import numpy as np
+from mujoco import rollout
 
 from soft_gym.robots.pneumatics import BoreGrowth, PneumaticSupply, VolumeSupply
 from soft_gym.robots.spec import ArmSpec
@@ -46,6 +54,9 @@ class MujocoArm(Protocol):
     forces_started: bool
     with_stops: bool
     lockstep_key: tuple     # equal keys: one actuation update serves the arms
+    forces_known_ahead: bool  # the open-loop stepping applies
+
+    def in_stop_band(self, positions: np.ndarray) -> bool: ...
 
     def choose_model(self, lookahead: bool = False, force_stops: bool = False) -> None: ...
 
@@ -177,6 +188,90 @@ def _advance_actuation(sims: Sequence[MujocoArm]) -> None:
         sim.wrench_previous, sim.wrench = sim.wrench, sim.held_wrench()
 
 
+_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+"""The state ``rollout`` starts each arm from and returns after every substep (time first, then
+the joint positions)."""
+_APPLIED = int(mujoco.mjtState.mjSTATE_QFRC_APPLIED)
+"""What ``rollout``'s control rows set before each substep: the applied joint forces."""
+_ROLLOUTS: dict[int, rollout.Rollout] = {}
+"""One MuJoCo rollout pool per thread count (0: on the calling thread), kept for the process."""
+
+
+def _blocks(substep: int, per_actuation: int, total: int) -> list[tuple[int, bool]]:
+    """The runs of substeps between actuation updates that ``total`` substeps from ``substep``
+    make: (substeps, whether an update starts it)."""
+    blocks, phase, done = [], substep % per_actuation, 0
+    while done < total:
+        block = min(total - done, per_actuation - phase)
+        blocks.append((block, phase == 0))
+        done, phase = done + block, 0
+    return blocks
+
+
+def _step_open_loop(sims: Sequence[MujocoArm], total: int, n_threads: int) -> list[MujocoArm]:
+    """Run ``total`` substeps of lockstep arms whose forces are known ahead in one ``rollout``
+    call: every update's lag and moments first (as :func:`_advance_actuation`), then each
+    substep's applied forces (as :func:`write_forces`: the mean of the old and the new forces on
+    the first substep after an update). Returns the arms in which a joint entered a stop's band,
+    put back as they were, for the ordinary stepping."""
+    first = sims[0]
+    blocks = _blocks(first.substep, first.per_actuation, total)
+    kept = [(sim.save_state(), sim.data.qfrc_applied.copy(), sim.supply.pressure_pa,
+             sim.joint_force, sim.joint_force_previous, sim.forces_started) for sim in sims]
+    updates = sum(at_update for _, at_update in blocks)
+    if updates:
+        interval_s = first.actuation_interval_s
+        pressure = np.array([[sim.supply.advance(interval_s) for sim in sims]
+                             for _ in range(updates)])
+        effective = first.bore.effective(pressure) if first.bore.grows else pressure
+        joint = pressure_moments(first.moments, effective)   # (updates, arms, dofs)
+    forces = np.empty((len(sims), total, first.model.nv))
+    for i, sim in enumerate(sims):
+        applied, row, update = sim.data.qfrc_applied.copy(), 0, 0
+        for pieces, at_update in blocks:
+            if at_update:
+                sim.joint_force_previous, sim.joint_force = sim.joint_force, joint[update, i]
+                update += 1
+                applied = sim.joint_force
+                forces[i, row:row + pieces] = applied
+                if sim.forces_started:
+                    forces[i, row] = 0.5 * (sim.joint_force_previous + sim.joint_force)
+                sim.forces_started = True
+            else:
+                forces[i, row:row + pieces] = applied
+            row += pieces
+    start = np.empty((len(sims), mujoco.mj_stateSize(first.model, _STATE)))
+    for i, sim in enumerate(sims):
+        mujoco.mj_getState(sim.model, sim.data, start[i], _STATE)
+    states = np.empty((len(sims), total, start.shape[1]))
+    threads = min(n_threads, len(sims)) if n_threads > 1 and len(sims) > 1 else 0
+    pool = _ROLLOUTS.get(threads)
+    if pool is None:
+        pool = _ROLLOUTS[threads] = rollout.Rollout(nthread=threads)
+    # the arms' own data serve as the pool's scratch (one per thread); each arm is given its
+    # last state afterwards (alone, its data ends there already)
+    pool.rollout([sim.model for sim in sims], [sim.data for sim in sims[:max(threads, 1)]],
+                 start, forces, control_spec=_APPLIED, skip_checks=True, nstep=total,
+                 state=states, sensordata=np.empty((len(sims), total, 0)))
+    nq = first.model.nq
+    back = []
+    for i, sim in enumerate(sims):
+        if len(sims) > 1:
+            mujoco.mj_setState(sim.model, sim.data, states[i, -1], _STATE)
+        sim.data.qfrc_applied[:] = forces[i, -1]
+        if sim.in_stop_band(states[i, :, 1:1 + nq]):
+            state, applied, pressure_pa, force, force_previous, started = kept[i]
+            sim.restore_state(state)
+            sim.data.qfrc_applied[:] = applied
+            sim.supply.pressure_pa = pressure_pa
+            sim.joint_force, sim.joint_force_previous = force, force_previous
+            sim.forces_started = started
+            back.append(sim)
+        else:
+            sim.substep += total
+    return back
+
+
 def _compatible(sims: Sequence[MujocoArm]) -> bool:
     """Whether the arms can be stepped in lockstep: the same actuation (physics step, pressure
     moments, bore growth, pressure limits: ``lockstep_key``), their clocks at the same phase of
@@ -214,8 +309,28 @@ def step_arms(sims: Sequence[MujocoArm], seconds: float,
         for sim in sims:
             step_arms([sim], seconds)
         return
+    total = int(round(seconds / sims[0].physics_dt_s))
+    if total and any(sim.forces_known_ahead for sim in sims):
+        ahead = [sim for sim in sims if sim.forces_known_ahead]
+        back = _step_open_loop(ahead, total, n_threads if executor is not None else 1)
+        stepped = {id(sim) for sim in ahead} - {id(sim) for sim in back}
+        _step_blocks([sim for sim in sims if id(sim) not in stepped], total, executor,
+                     n_threads)
+    else:
+        _step_blocks(sims, total, executor, n_threads)
+    for sim in sims:
+        sim.time_s = sim.substep * sim.physics_dt_s
+        sim.forget_reads()
+        sim.check_within_stops()
+
+
+def _step_blocks(sims: Sequence[MujocoArm], total: int, executor: Executor | None,
+                 n_threads: int) -> None:
+    """Run ``total`` substeps of lockstep arms block by block, an actuation update (in Python)
+    before each block that starts at one."""
+    if not sims:
+        return
     first = sims[0]
-    total = int(round(seconds / first.physics_dt_s))
     shares = ([sims] if executor is None or n_threads < 2 or len(sims) < 2
               else [sims[k::n_threads] for k in range(n_threads)])
     done = 0
@@ -233,7 +348,3 @@ def step_arms(sims: Sequence[MujocoArm], seconds: float,
         for sim in sims:
             sim.substep += block
         done += block
-    for sim in sims:
-        sim.time_s = sim.substep * sim.physics_dt_s
-        sim.forget_reads()
-        sim.check_within_stops()

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import pickle
+from concurrent.futures import ThreadPoolExecutor
 
 import gymnasium as gym
 import numpy as np
@@ -19,7 +20,9 @@ from gymnasium.utils.env_checker import check_env
 import soft_gym  # noqa: F401  (registers the ids)
 from soft_gym.engines import ENGINES, make_simulator
 from soft_gym.engines.chain_readout import PhysicsDivergedError
-from soft_gym.engines.mujoco import MujocoWorld
+from soft_gym.engines.mujoco import MujocoWorld, stepping
+from soft_gym.engines.mujoco.simulator import MujocoArmSimulator
+from soft_gym.engines.mujoco.stepping import step_arms
 from soft_gym.robots import get_preset
 from soft_gym.scenarios.loads import TipMass
 
@@ -202,3 +205,87 @@ def test_leaving_the_stop_tendons_out_far_from_the_stops_changes_no_motion(tip_m
     full, _ = tips(False)
     assert 0 < free_steps < len(commands)  # both models carried the arm
     assert np.array_equal(switched, full)
+
+
+def _ordinary_stepping(monkeypatch) -> None:
+    """Step every MuJoCo arm update by update in Python (never open loop)."""
+    monkeypatch.setattr(MujocoArmSimulator, "forces_known_ahead", property(lambda self: False))
+
+
+def _open_loop_spy(monkeypatch) -> list[tuple[int, int]]:
+    """Record (arms given, arms handed back) of every open-loop call."""
+    calls: list[tuple[int, int]] = []
+    original = stepping._step_open_loop
+
+    def spy(sims, total, n_threads):
+        back = original(sims, total, n_threads)
+        calls.append((len(sims), len(back)))
+        return back
+
+    monkeypatch.setattr(stepping, "_step_open_loop", spy)
+    return calls
+
+
+@pytest.mark.parametrize("preset", ["wang2023", "zhao2021", "zou2022", "ho2018"])
+def test_open_loop_stepping_moves_arms_bit_for_bit_as_update_by_update(preset, monkeypatch):
+    """One arm, and a batch of three on two threads, under random and bang-bang pressures, whole
+    and half control periods (a call may start and end between updates), and a tip payload put
+    on and taken off one arm of the batch (that arm is then stepped update by update): the same
+    states bit for bit as stepping every arm update by update."""
+    spec = get_preset(preset)
+
+    def run() -> np.ndarray:
+        rng = np.random.default_rng(5)
+        sims = [MujocoArmSimulator(spec) for _ in range(4)]
+        states = []
+        with ThreadPoolExecutor(2) as executor:
+            for k in range(24):
+                for sim in sims:
+                    fraction = (rng.uniform(0, 1, spec.n_chambers) if k % 8 < 5
+                                else rng.integers(0, 2, spec.n_chambers).astype(float))
+                    sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
+                seconds = spec.control_period_s * (0.5 if k % 5 == 2 else 1.0)
+                sims[0].step_physics(seconds)
+                step_arms(sims[1:], seconds, executor, 2)
+                sims[3].set_tip_payload("cup", 0.01 if 8 <= k < 14 else 0.0)
+                states.append([np.r_[sim.data.time, sim.data.qpos, sim.data.qvel]
+                               for sim in sims])
+        return np.array(states)
+
+    calls = _open_loop_spy(monkeypatch)
+    open_loop = run()
+    assert calls and {arms for arms, _ in calls} >= {1, 2, 3}  # alone, and batches with and
+    monkeypatch.undo()                                       # without the payload arm
+    _ordinary_stepping(monkeypatch)
+    assert np.array_equal(open_loop, run())
+
+
+def test_an_arm_entering_a_stop_band_open_loop_is_stepped_again_update_by_update(monkeypatch):
+    """A joint thrown towards its stop enters the band where the stop acts within the control
+    period: the open-loop run is dropped, the arm put back and stepped update by update (on the
+    model with the stops), and it ends exactly where that stepping alone takes it."""
+    spec = get_preset("wang2023")
+
+    def run() -> np.ndarray:
+        sim = MujocoArmSimulator(spec)
+        stops = sim.chain.end_stops()
+        start = stops.free_centre.copy()
+        start[0] += 0.9 * stops.free_half_width[0]
+        sim.set_joint_positions(start)
+        sim.data.qvel[0] = 3.0 * stops.free_half_width[0] / spec.control_period_s
+        sim.set_pressures(spec.p_max_pa)
+        sim.step_physics(spec.control_period_s)
+        return np.r_[sim.data.time, sim.data.qpos, sim.data.qvel]
+
+    calls = _open_loop_spy(monkeypatch)
+    open_loop = run()
+    assert calls == [(1, 1)]
+    monkeypatch.undo()
+    _ordinary_stepping(monkeypatch)
+    ordinary = run()
+    assert np.array_equal(open_loop, ordinary)
+    # the stop acted: on the model without the stops all along the arm ends elsewhere
+    monkeypatch.undo()
+    monkeypatch.setattr(MujocoArmSimulator, "in_stop_band", lambda self, positions: False)
+    monkeypatch.setattr(MujocoArmSimulator, "stop_proximity", lambda self: (False, False))
+    assert not np.array_equal(run(), ordinary)
