@@ -197,52 +197,62 @@ _ROLLOUTS: dict[int, rollout.Rollout] = {}
 """One MuJoCo rollout pool per thread count (0: on the calling thread), kept for the process."""
 
 
-def _blocks(substep: int, per_actuation: int, total: int) -> list[tuple[int, bool]]:
-    """The runs of substeps between actuation updates that ``total`` substeps from ``substep``
-    make: (substeps, whether an update starts it)."""
-    blocks, phase, done = [], substep % per_actuation, 0
-    while done < total:
-        block = min(total - done, per_actuation - phase)
-        blocks.append((block, phase == 0))
-        done, phase = done + block, 0
-    return blocks
+_SCHEDULES: dict[tuple[int, int, int], tuple[int, np.ndarray, np.ndarray, np.ndarray]] = {}
+""":func:`_schedule` by (phase of the actuation update, substeps per update, substeps)."""
+
+
+def _schedule(phase: int, per_actuation: int, total: int
+              ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """How ``total`` substeps starting ``phase`` substeps after an actuation update meet the
+    updates: (updates, each substep's row of the force table, the substeps that start an
+    update, the updates they start). Row 0 of the force table is the force applied before the
+    first update, row ``k + 1`` the force of update ``k``."""
+    key = (phase, per_actuation, total)
+    if key not in _SCHEDULES:
+        since_start = np.arange(total) + phase
+        rows = since_start // per_actuation + (1 if phase == 0 else 0)
+        starts = np.flatnonzero(since_start % per_actuation == 0)
+        _SCHEDULES[key] = (len(starts), rows, starts, rows[starts] - 1)
+    return _SCHEDULES[key]
 
 
 def _step_open_loop(sims: Sequence[MujocoArm], total: int, n_threads: int) -> list[MujocoArm]:
     """Run ``total`` substeps of lockstep arms whose forces are known ahead in one ``rollout``
     call: every update's lag and moments first (as :func:`_advance_actuation`), then each
     substep's applied forces (as :func:`write_forces`: the mean of the old and the new forces on
-    the first substep after an update). Returns the arms in which a joint entered a stop's band,
-    put back as they were, for the ordinary stepping."""
+    the first substep after an update, once forces have been applied since the reset). Returns
+    the arms in which a joint entered a stop's band, put back as they were, for the ordinary
+    stepping."""
     first = sims[0]
-    blocks = _blocks(first.substep, first.per_actuation, total)
-    kept = [(sim.save_state(), sim.data.qfrc_applied.copy(), sim.supply.pressure_pa,
-             sim.joint_force, sim.joint_force_previous, sim.forces_started) for sim in sims]
-    updates = sum(at_update for _, at_update in blocks)
-    if updates:
-        interval_s = first.actuation_interval_s
-        pressure = np.array([[sim.supply.advance(interval_s) for sim in sims]
-                             for _ in range(updates)])
-        effective = first.bore.effective(pressure) if first.bore.grows else pressure
-        joint = pressure_moments(first.moments, effective)   # (updates, arms, dofs)
-    forces = np.empty((len(sims), total, first.model.nv))
-    for i, sim in enumerate(sims):
-        applied, row, update = sim.data.qfrc_applied.copy(), 0, 0
-        for pieces, at_update in blocks:
-            if at_update:
-                sim.joint_force_previous, sim.joint_force = sim.joint_force, joint[update, i]
-                update += 1
-                applied = sim.joint_force
-                forces[i, row:row + pieces] = applied
-                if sim.forces_started:
-                    forces[i, row] = 0.5 * (sim.joint_force_previous + sim.joint_force)
-                sim.forces_started = True
-            else:
-                forces[i, row:row + pieces] = applied
-            row += pieces
-    start = np.empty((len(sims), mujoco.mj_stateSize(first.model, _STATE)))
+    updates, rows, starts, started_updates = _schedule(first.substep % first.per_actuation,
+                                                       first.per_actuation, total)
+    model = first.model
+    start = np.empty((len(sims), mujoco.mj_stateSize(model, _STATE)))
     for i, sim in enumerate(sims):
         mujoco.mj_getState(sim.model, sim.data, start[i], _STATE)
+    kept = [(sim.data.qfrc_applied.copy(), sim.supply.pressure_pa, sim.joint_force,
+             sim.joint_force_previous, sim.forces_started) for sim in sims]
+    # the force table (arms, 1 + updates, dofs): what is applied now, then each update's moments
+    table = np.empty((len(sims), 1 + updates, model.nv))
+    for i, sim in enumerate(sims):
+        table[i, 0] = sim.data.qfrc_applied
+    if updates:
+        pressure = np.stack([sim.supply.advance_many(first.actuation_interval_s, updates)
+                             for sim in sims], axis=1)        # (updates, arms, chambers)
+        effective = first.bore.effective(pressure) if first.bore.grows else pressure
+        table[:, 1:] = np.swapaxes(pressure_moments(first.moments, effective), 0, 1)
+    forces = table[:, rows]
+    if updates:
+        # the first substep of each update: the mean of the forces before and after it (the
+        # forces before the first update of the call: the arm's last update's)
+        before = table[:, started_updates]
+        before[:, 0] = [sim.joint_force for sim in sims]
+        midpoint = 0.5 * (before + table[:, started_updates + 1])
+        for i, sim in enumerate(sims):
+            mean_from = 0 if sim.forces_started else 1
+            forces[i, starts[mean_from:]] = midpoint[i, mean_from:]
+            sim.joint_force_previous = before[i, -1]
+            sim.joint_force, sim.forces_started = table[i, -1], True
     states = np.empty((len(sims), total, start.shape[1]))
     threads = min(n_threads, len(sims)) if n_threads > 1 and len(sims) > 1 else 0
     pool = _ROLLOUTS.get(threads)
@@ -253,15 +263,16 @@ def _step_open_loop(sims: Sequence[MujocoArm], total: int, n_threads: int) -> li
     pool.rollout([sim.model for sim in sims], [sim.data for sim in sims[:max(threads, 1)]],
                  start, forces, control_spec=_APPLIED, skip_checks=True, nstep=total,
                  state=states, sensordata=np.empty((len(sims), total, 0)))
-    nq = first.model.nq
+    nq, nv = model.nq, model.nv
     back = []
     for i, sim in enumerate(sims):
         if len(sims) > 1:
             mujoco.mj_setState(sim.model, sim.data, states[i, -1], _STATE)
-        sim.data.qfrc_applied[:] = forces[i, -1]
+        # as after update by update: the latest update's force (not a first substep's mean)
+        sim.data.qfrc_applied[:] = table[i, rows[-1]]
         if sim.in_stop_band(states[i, :, 1:1 + nq]):
-            state, applied, pressure_pa, force, force_previous, started = kept[i]
-            sim.restore_state(state)
+            applied, pressure_pa, force, force_previous, started = kept[i]
+            sim.restore_state((start[i, 0], start[i, 1:1 + nq], start[i, 1 + nq:1 + nq + nv]))
             sim.data.qfrc_applied[:] = applied
             sim.supply.pressure_pa = pressure_pa
             sim.joint_force, sim.joint_force_previous = force, force_previous
@@ -310,8 +321,8 @@ def step_arms(sims: Sequence[MujocoArm], seconds: float,
             step_arms([sim], seconds)
         return
     total = int(round(seconds / sims[0].physics_dt_s))
-    if total and any(sim.forces_known_ahead for sim in sims):
-        ahead = [sim for sim in sims if sim.forces_known_ahead]
+    ahead = [sim for sim in sims if sim.forces_known_ahead] if total else []
+    if ahead:
         back = _step_open_loop(ahead, total, n_threads if executor is not None else 1)
         stepped = {id(sim) for sim in ahead} - {id(sim) for sim in back}
         _step_blocks([sim for sim in sims if id(sim) not in stepped], total, executor,

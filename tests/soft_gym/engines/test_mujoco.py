@@ -229,9 +229,10 @@ def _open_loop_spy(monkeypatch) -> list[tuple[int, int]]:
 @pytest.mark.parametrize("preset", ["wang2023", "zhao2021", "zou2022", "ho2018"])
 def test_open_loop_stepping_moves_arms_bit_for_bit_as_update_by_update(preset, monkeypatch):
     """One arm, and a batch of three on two threads, under random and bang-bang pressures, whole
-    and half control periods (a call may start and end between updates), and a tip payload put
-    on and taken off one arm of the batch (that arm is then stepped update by update): the same
-    states bit for bit as stepping every arm update by update."""
+    and half control periods and one update's interval and a substep (a call may start and end
+    between updates, or on the first substep after one), and a tip payload put on and taken off
+    one arm of the batch (that arm is then stepped update by update): the same states and
+    applied forces bit for bit as stepping every arm update by update."""
     spec = get_preset(preset)
 
     def run() -> np.ndarray:
@@ -244,12 +245,16 @@ def test_open_loop_stepping_moves_arms_bit_for_bit_as_update_by_update(preset, m
                     fraction = (rng.uniform(0, 1, spec.n_chambers) if k % 8 < 5
                                 else rng.integers(0, 2, spec.n_chambers).astype(float))
                     sim.set_pressures(spec.p_pre_pa + fraction * (spec.p_max_pa - spec.p_pre_pa))
-                seconds = spec.control_period_s * (0.5 if k % 5 == 2 else 1.0)
+                # whole and half control periods, and a call ending on the first substep after
+                # an update (one substep more than an update's interval)
+                seconds = {2: 0.5 * spec.control_period_s,
+                           4: (sims[0].per_actuation + 1) * sims[0].physics_dt_s}.get(
+                    k % 5, spec.control_period_s)
                 sims[0].step_physics(seconds)
                 step_arms(sims[1:], seconds, executor, 2)
                 sims[3].set_tip_payload("cup", 0.01 if 8 <= k < 14 else 0.0)
-                states.append([np.r_[sim.data.time, sim.data.qpos, sim.data.qvel]
-                               for sim in sims])
+                states.append([np.r_[sim.data.time, sim.data.qpos, sim.data.qvel,
+                                     sim.data.qfrc_applied] for sim in sims])
         return np.array(states)
 
     calls = _open_loop_spy(monkeypatch)
