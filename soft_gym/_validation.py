@@ -106,17 +106,20 @@ def require_choice(name: str, value: Any, allowed: Iterable[Any]) -> Any:
 
 def as_finite_array(name: str, value: Any, shape: tuple[int, ...] | None = None) -> np.ndarray:
     """Convert to a float64 array, checking shape (if given) and that every entry is finite."""
-    try:
-        complex_values = np.iscomplexobj(value)
-        if not complex_values:
-            array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:  # strings, ragged nesting, None, objects
-        raise ValueError(f"{name} must be numeric (real numbers), got {value!r}") from error
-    if complex_values:
-        raise ValueError(f"{name} must be real, got complex values {value!r}")
+    if type(value) is np.ndarray and value.dtype == np.float64:  # the hot path: as it is
+        array = value
+    else:
+        try:
+            complex_values = np.iscomplexobj(value)
+            if not complex_values:
+                array = np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError) as error:  # strings, ragged nesting, None, objects
+            raise ValueError(f"{name} must be numeric (real numbers), got {value!r}") from error
+        if complex_values:
+            raise ValueError(f"{name} must be real, got complex values {value!r}")
     if shape is not None and array.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(f"{name} must be finite (no NaN or inf), got {array.tolist()}")
     return array
 

@@ -588,9 +588,9 @@ class SoftArmEnv(gym.Env):
         array = as_finite_array("action", action)
         if array.shape != self.action_space.shape:
             raise ValueError(f"action must have shape {self.action_space.shape}, got {array.shape}")
-        if np.any(np.abs(array) > 1.0 + 1e-6):
+        if (np.abs(array) > 1.0 + 1e-6).any():
             raise ValueError(f"action must lie in [-1, 1], got {array.tolist()}")
-        return np.clip(array, -1.0, 1.0)  # only float32 rounding beyond +-1 reaches here
+        return array.clip(-1.0, 1.0)  # only float32 rounding beyond +-1 reaches here
 
     def _observation(self):
         parts = {part.name: part.read(self) for part in self._parts}

@@ -29,7 +29,7 @@ from soft_gym.robots.spec import ArmSpec
 def check_pressures(spec: ArmSpec, pressure_pa: np.ndarray) -> np.ndarray:
     """Chamber pressures (Pa) checked: shape (n_chambers,), finite, within ``[0, p_max]``."""
     command = as_finite_array("pressures_pa", pressure_pa, shape=(spec.n_chambers,))
-    if np.any(command < 0) or np.any(command > spec.p_max_pa * (1 + 1e-9)):
+    if (command < 0).any() or (command > spec.p_max_pa * (1 + 1e-9)).any():
         raise ValueError(
             f"pressures_pa must lie within [0, p_max_pa={spec.p_max_pa.tolist()}], "
             f"got {command.tolist()}")

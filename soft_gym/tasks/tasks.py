@@ -70,7 +70,7 @@ class _TrackingReward:
         """``(reward, error_m)``: the tip's distance from the target (m) less the weighted
         squared change of the action."""
         error_m = float(np.linalg.norm(tip_m - target_m))
-        rate = float(np.sum((action - last_action) ** 2))
+        rate = float(((action - last_action) ** 2).sum())
         return -error_m - self.action_rate_weight * rate, error_m
 
 

@@ -20,6 +20,7 @@ a stop's band on the way, the arm is put back and stepped the ordinary way.
 
 from __future__ import annotations
 
+import os
 from concurrent.futures import Executor
 from typing import Protocol, Sequence
 
@@ -193,8 +194,9 @@ _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 the joint positions)."""
 _APPLIED = int(mujoco.mjtState.mjSTATE_QFRC_APPLIED)
 """What ``rollout``'s control rows set before each substep: the applied joint forces."""
-_ROLLOUTS: dict[int, rollout.Rollout] = {}
-"""One MuJoCo rollout pool per thread count (0: on the calling thread), kept for the process."""
+_ROLLOUTS: dict[tuple[int, int], rollout.Rollout] = {}
+"""One MuJoCo rollout pool per process and thread count (0: on the calling thread), kept: a
+forked process (a subprocess env worker) makes its own, as threads do not survive a fork."""
 
 
 _SCHEDULES: dict[tuple[int, int, int], tuple[int, np.ndarray, np.ndarray, np.ndarray]] = {}
@@ -255,9 +257,10 @@ def _step_open_loop(sims: Sequence[MujocoArm], total: int, n_threads: int) -> li
             sim.joint_force, sim.forces_started = table[i, -1], True
     states = np.empty((len(sims), total, start.shape[1]))
     threads = min(n_threads, len(sims)) if n_threads > 1 and len(sims) > 1 else 0
-    pool = _ROLLOUTS.get(threads)
+    key = (os.getpid(), threads)
+    pool = _ROLLOUTS.get(key)
     if pool is None:
-        pool = _ROLLOUTS[threads] = rollout.Rollout(nthread=threads)
+        pool = _ROLLOUTS[key] = rollout.Rollout(nthread=threads)
     # the arms' own data serve as the pool's scratch (one per thread); each arm is given its
     # last state afterwards (alone, its data ends there already)
     pool.rollout([sim.model for sim in sims], [sim.data for sim in sims[:max(threads, 1)]],
