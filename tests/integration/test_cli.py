@@ -425,6 +425,29 @@ def test_revision_speed_refuses_an_unknown_revision_before_any_work(tmp_path, ca
                           capsys, out=out, also="no-such-revision")
 
 
+def test_sensor_speed_refuses_an_unknown_revision_before_any_work(tmp_path, capsys):
+    out = tmp_path / "sensor.json"
+    assert_one_line_error(_bench_module("sensor_speed").main,
+                          ["--against", "no-such-revision", "--json", str(out)], "--against",
+                          capsys, out=out, also="no-such-revision")
+
+
+def test_revision_speed_makes_its_envs_on_the_engine_asked_for(tmp_path, capsys):
+    """``--engine mujoco`` reaches the measured envs: ground truth steps and the JSON records
+    the engine; the camera feedback, which only PyBullet renders, is refused there."""
+    module = _bench_module("revision_speed")
+    out = tmp_path / "revision.json"
+    assert module.main(["--against", "HEAD", "--presets", "zou2022", "--engine", "mujoco",
+                        "--steps", "20", "--rounds", "1", "--json", str(out)]) == 0
+    assert "engine mujoco" in capsys.readouterr().out
+    record = json.loads(out.read_text())
+    assert record["engine"] == "mujoco"
+    assert record["rows"][0]["this_tree_steps_per_wall_s"][0] > 0
+    with pytest.raises(RuntimeError, match="mujoco engine does not have"):
+        module.main(["--against", "HEAD", "--presets", "wang2023", "--engine", "mujoco",
+                     "--feedback", "fused", "--steps", "5", "--rounds", "1"])
+
+
 def test_revision_speed_times_this_tree_against_a_revision_in_turns(tmp_path, capsys):
     """Against HEAD (the same code, extracted from git): both trees run and give figures of the
     same order, each round's ratio is theirs, and the JSON holds every round."""
