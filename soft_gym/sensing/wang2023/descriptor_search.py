@@ -11,8 +11,9 @@ They replace, with the same results bit for bit, a k-d tree pair search with Num
 (the search by projection) and OpenCV's ``BFMatcher.knnMatch`` with ``k=2`` (the whole local
 map): ``tests/soft_gym/sensing/wang2023/test_descriptor_search.py`` checks them against both.
 Each feature is one pass over the map points of the grid cells its window touches, with no arrays
-of pairs between: 0.4 ms instead of 2.7 ms for a 6 px search of a random-action frame, 5 ms
-instead of 23 ms for the whole local map (~4,800 map points).
+of pairs between. Over a random-action run's 592 searches by projection a search took 0.7 ms
+instead of 2.7 ms (the compiled part of a 6 px one 0.4 ms), and the whole local map (~4,800 map
+points) 5 ms instead of 23 ms.
 """
 
 from __future__ import annotations
