@@ -99,6 +99,21 @@ def steps_per_second(tree: Path, preset: str, feedback: str, steps: int,
     return float(wall), float(cpu)
 
 
+def take_turns(revision_tree: Path, preset: str, feedback: str, steps: int, seed: int,
+               rounds: int, engine: str | None = None
+               ) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
+    """``rounds`` measurements (:func:`steps_per_second`) of this tree and of ``revision_tree``,
+    taking turns (who goes first alternates, so neither always gets the fresher machine):
+    (this tree's figures, the revision's), each a (wall, CPU) steps/s pair per round."""
+    ours, theirs = [], []
+    for round_index in range(rounds):
+        print(f"{preset}: round {round_index + 1} of {rounds}", file=sys.stderr, flush=True)
+        pair = [(ROOT, ours), (revision_tree, theirs)]
+        for tree, figures in pair if round_index % 2 == 0 else pair[::-1]:
+            figures.append(steps_per_second(tree, preset, feedback, steps, seed, engine))
+    return ours, theirs
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--against", required=True, metavar="REVISION",
@@ -137,15 +152,8 @@ def main(argv: list[str] | None = None) -> int:
         revision_tree = extract_commit(commit, Path(scratch))
         rows = []
         for preset in args.presets:
-            ours, theirs = [], []
-            for round_index in range(args.rounds):
-                print(f"{preset}: round {round_index + 1} of {args.rounds}", file=sys.stderr,
-                      flush=True)
-                # who goes first alternates, so neither always gets the fresher machine
-                pair = [(ROOT, ours), (revision_tree, theirs)]
-                for tree, figures in pair if round_index % 2 == 0 else pair[::-1]:
-                    figures.append(steps_per_second(tree, preset, args.feedback, args.steps,
-                                                    args.seed, args.engine))
+            ours, theirs = take_turns(revision_tree, preset, args.feedback, args.steps,
+                                      args.seed, args.rounds, args.engine)
             rows.append({
                 "preset": preset,
                 "this_tree_steps_per_wall_s": [wall for wall, _ in ours],

@@ -50,7 +50,7 @@ from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from revision_speed import ROOT, extract_commit, resolve_commit, steps_per_second  # noqa: E402
+from revision_speed import extract_commit, resolve_commit, take_turns  # noqa: E402
 
 
 def stats(samples_s: list[float]) -> dict:
@@ -188,13 +188,10 @@ def main(argv: list[str] | None = None) -> None:
 def _against_revision(revision: str, commit: str, steps: int, rounds: int) -> dict:
     """Random-action fused env steps/s of this tree and of ``commit``, fresh processes taking
     turns (``bench/revision_speed.py``'s measurement); prints and returns the figures."""
-    ours, theirs = [], []
     with tempfile.TemporaryDirectory(prefix="sensor_speed_") as scratch:
-        revision_tree = extract_commit(commit, Path(scratch))
-        for round_index in range(rounds):
-            pair = [(ROOT, ours), (revision_tree, theirs)]
-            for tree, figures in pair if round_index % 2 == 0 else pair[::-1]:
-                figures.append(steps_per_second(tree, "wang2023", "fused", steps, seed=0)[0])
+        figures = take_turns(extract_commit(commit, Path(scratch)), "wang2023", "fused", steps,
+                             seed=0, rounds=rounds)
+    ours, theirs = ([wall for wall, _ in tree] for tree in figures)
     ratios = [a / b for a, b in zip(ours, theirs)]
     print(f"random-action fused env steps/s, side by side over {rounds} rounds: this tree "
           f"{statistics.median(ours):.0f}, {revision} ({commit[:12]}) "

@@ -78,12 +78,9 @@ class PneumaticSupply:
     def advance_many(self, dt_s: float, updates: int) -> np.ndarray:
         """:meth:`advance` ``updates`` times; returns the pressures after each (Pa,
         (updates, n_chambers)), the same bits as the calls one by one."""
-        alpha = 1.0 - math.exp(-dt_s / self.time_constant_s)
         pressures = np.empty((updates, len(self.pressure_pa)))
-        pressure, command = self.pressure_pa, self.command_pa
         for k in range(updates):
-            pressure = pressures[k] = pressure + (command - pressure) * alpha
-        self.pressure_pa = pressure
+            pressures[k] = self.advance(dt_s)
         return pressures
 
 

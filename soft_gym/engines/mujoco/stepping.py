@@ -232,8 +232,8 @@ def _step_open_loop(sims: Sequence[MujocoArm], total: int, n_threads: int) -> li
     start = np.empty((len(sims), mujoco.mj_stateSize(model, _STATE)))
     for i, sim in enumerate(sims):
         mujoco.mj_getState(sim.model, sim.data, start[i], _STATE)
-    kept = [(sim.data.qfrc_applied.copy(), sim.supply.pressure_pa, sim.joint_force,
-             sim.joint_force_previous, sim.forces_started) for sim in sims]
+    kept = [(sim.supply.pressure_pa, sim.joint_force, sim.joint_force_previous,
+             sim.forces_started) for sim in sims]
     # the force table (arms, 1 + updates, dofs): what is applied now, then each update's moments
     table = np.empty((len(sims), 1 + updates, model.nv))
     for i, sim in enumerate(sims):
@@ -274,9 +274,9 @@ def _step_open_loop(sims: Sequence[MujocoArm], total: int, n_threads: int) -> li
         # as after update by update: the latest update's force (not a first substep's mean)
         sim.data.qfrc_applied[:] = table[i, rows[-1]]
         if sim.in_stop_band(states[i, :, 1:1 + nq]):
-            applied, pressure_pa, force, force_previous, started = kept[i]
+            pressure_pa, force, force_previous, started = kept[i]
             sim.restore_state((start[i, 0], start[i, 1:1 + nq], start[i, 1 + nq:1 + nq + nv]))
-            sim.data.qfrc_applied[:] = applied
+            sim.data.qfrc_applied[:] = table[i, 0]
             sim.supply.pressure_pa = pressure_pa
             sim.joint_force, sim.joint_force_previous = force, force_previous
             sim.forces_started = started
@@ -324,14 +324,11 @@ def step_arms(sims: Sequence[MujocoArm], seconds: float,
             step_arms([sim], seconds)
         return
     total = int(round(seconds / sims[0].physics_dt_s))
-    ahead = [sim for sim in sims if sim.forces_known_ahead] if total else []
-    if ahead:
-        back = _step_open_loop(ahead, total, n_threads if executor is not None else 1)
-        stepped = {id(sim) for sim in ahead} - {id(sim) for sim in back}
-        _step_blocks([sim for sim in sims if id(sim) not in stepped], total, executor,
-                     n_threads)
-    else:
-        _step_blocks(sims, total, executor, n_threads)
+    ahead = [sim for sim in sims if total and sim.forces_known_ahead]
+    others = [sim for sim in sims if not (total and sim.forces_known_ahead)]
+    if ahead:  # the arms a stop's band turned back join the others
+        others += _step_open_loop(ahead, total, n_threads if executor is not None else 1)
+    _step_blocks(others, total, executor, n_threads)
     for sim in sims:
         sim.time_s = sim.substep * sim.physics_dt_s
         sim.forget_reads()
