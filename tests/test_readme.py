@@ -159,10 +159,13 @@ def test_the_readme_training_times_are_the_shipped_agents_measured_ones():
     assert sac["stopped_at_plateau"] and sac["timesteps"] == int(steps.replace(",", ""))
     assert int(minutes) == round(sac["wall_s"] / 60)
     td3 = _training("td3_wang2023_track")
-    (minutes,) = re.findall(r"--randomize  # 300,000 steps, ~(\d+) min", readme)
-    assert int(minutes) == round(300_000 / td3["env_steps_per_s"] / 60)
-    assert f"{round(td3['env_steps_per_s'])} env steps/s for the TD3 on PyBullet with one env, " \
-           f"{round(sac['training_env_steps_per_s'])} training env steps/s for the SAC" in text
+    ((steps, minutes),) = re.findall(r"# the shipped TD3: ([\d,]+) steps to its plateau, ~(\d+) min",
+                                     readme)
+    assert td3["stopped_at_plateau"] and td3["timesteps"] == int(steps.replace(",", ""))
+    assert int(minutes) == round(td3["wall_s"] / 60)
+    assert f"{round(td3['training_env_steps_per_s'])} training env steps/s for the TD3 on " \
+           f"PyBullet with one env, {round(sac['training_env_steps_per_s'])} training env " \
+           f"steps/s for the SAC" in text
     plateaus = {
         "ho2018": r"`sac_ho2018_track` \(the sweep's chosen config on 4 batched MuJoCo arms, "
                   r"plateau at ([\d,]+) steps, (\d+) minutes, (\d+) training env steps/s",
