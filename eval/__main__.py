@@ -726,20 +726,22 @@ def _suite_parser(sub) -> argparse.ArgumentParser:
     suite.add_argument("spec", help="suite YAML file, or a bundled suite: "
                        f"{', '.join(suite_module.bundled_suites())}")
     suite.add_argument("--out", default=None,
-                       help="output directory (made; must be writable); default: "
-                            "results/suite_<suite name>")
+                       help="output directory (made); default: results/suite_<suite "
+                            "name>[_<engine>]")
     _add_workers(suite)
     suite.add_argument("--resume", action="store_true",
-                       help="skip the runs whose record is already in the output directory")
+                       help="skip the runs already recorded in --out")
     suite.add_argument("--seeds", type=seed_int, nargs="+", default=None,
                        help="episode seeds replacing the suite's own (distinct integers in "
                             f"[0, {SEED_MAX}])")
     suite.add_argument("--report-only", action="store_true",
                        help="run nothing: write the report from the records there")
+    suite.add_argument("--engine", default=None, choices=list(ENGINES), metavar="ENGINE",
+                       help=f"run every arm on ENGINE ({', '.join(ENGINES)}), less what it "
+                            "cannot run (listed); default: each arm's own")
     suite.add_argument("--backend", default="process", choices=["process", "serial", "ray"],
-                       help="where the runs go: --workers spawned processes, this process, or "
-                            "Ray tasks (a local Ray of --workers CPUs, or the cluster at "
-                            "--address; optional extra: pip install \"soft-arm-gym[ray]\")")
+                       help="--workers spawned processes, this process, or Ray tasks (a "
+                            "local Ray or --address; extra: soft-arm-gym[ray])")
     suite.add_argument("--record", choices=["minari"], default=None,
                        help="also write the runs as Minari datasets, one per arm and "
                             "condition, in <out>/datasets (README: Datasets)")
@@ -785,7 +787,17 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
             spec = spec.with_seeds(args.seeds)
     except ValueError as error:
         parser.error(f"spec: {error}")
-    out = Path(args.out or f"results/suite_{spec.name}")
+    checker = suite_module.EnvChecker()
+    if args.engine is not None:
+        try:
+            spec, left_out = suite_module.on_engine(spec, args.engine, checker)
+        except ValueError as error:
+            parser.error(f"--engine: {error}")
+        for item in left_out:
+            print(f"left out on {args.engine}: {item.label()}: {item.reason}", file=sys.stderr,
+                  flush=True)
+    out = Path(args.out or f"results/suite_{spec.name}"
+               + (f"_{args.engine}" if args.engine else ""))
     if args.out is None:
         check_output_dir(parser, "--out", out)
     try:
@@ -794,7 +806,7 @@ def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
         fail(parser, "--out", str(error))
     try:
         cells = (suite_module.expand(spec) if args.report_only
-                 else suite_module.check_suite(spec, progress=True))
+                 else suite_module.check_suite(spec, progress=True, checker=checker))
     except ValueError as error:
         parser.error(f"spec: {error}")
     if args.report_only and not suite_module.records_dir(out).is_dir():

@@ -66,13 +66,15 @@ from __future__ import annotations
 #   spec.py          the YAML spec: loading, the schema's checks, the file's SHA-256
 #   grid.py          spec -> cells (one run each) and their keys (the hash of a resolved config)
 #   check.py         the spec checked before any run (envs built, baselines made, agents loaded)
+#   engine.py        the suite on another physics engine, less what that engine cannot run
 #   run.py           one cell in a worker, the backends (process pool, serial), run_suite
 #   store.py         the records on disk: write, read and verify, finished or not (resume),
 #                    provenance
 #   locks.py         a cell claimed by one process (lock files), taken over from a dead one
 #   report.py        records -> leaderboard, aggregates with bootstrap CIs, plots
 #   ray_backend.py   the optional "ray" backend (importing it registers it)
-from eval.suite.check import check_suite
+from eval.suite.check import EnvChecker, check_suite
+from eval.suite.engine import LeftOut, on_engine
 from eval.suite.grid import ENV_ID, KEY_DIGITS, Cell, canonical_json, cell_key, expand
 from eval.suite.locks import claim, lock_path, release
 from eval.suite.report import (DEFAULT_REPS, PROFILE_REPS, SCORE, aggregate_scores,
@@ -94,12 +96,13 @@ from eval.suite.store import (REQUIRED_METRICS, RecordError, check_records_dir, 
 __all__ = ["ARM_KEYS", "BACKENDS", "DEFAULT_CYCLES", "DEFAULT_REPS", "ENV_ID", "ENV_KEYS",
            "KEY_DIGITS", "POLICY_ENV_DEFAULTS", "POLICY_KEYS", "PROFILE_REPS",
            "REQUIRED_METRICS", "SCORE", "SUITES_DIR", "SUITE_ENV_KEYS", "TOP_KEYS", "ArmEntry",
-           "Cell", "MapFunction", "PolicyEntry", "RecordError", "SuiteError", "SuiteRunError",
+           "Cell", "EnvChecker", "LeftOut", "MapFunction", "PolicyEntry", "RecordError",
+           "SuiteError", "SuiteRunError",
            "SuiteSpec", "aggregate_scores", "bundled_suites", "canonical_json", "cell_key",
            "cell_metrics", "check_records_dir", "check_suite", "claim", "collect_rows",
            "exit_with_parent", "expand", "fraction_within", "git_revision", "is_finished",
            "leaderboard_markdown", "leaderboards", "library_versions", "load_suite",
-           "lock_path", "one_compute_thread", "order_cells", "parse_suite",
+           "lock_path", "on_engine", "one_compute_thread", "order_cells", "parse_suite",
            "performance_profiles", "process_map", "profile_taus", "read_record", "read_steps",
            "record_path", "record_problem", "records_dir", "register_backend", "release",
            "require_rliable", "resolve_suite_path", "run_cell", "run_suite", "score_matrices",

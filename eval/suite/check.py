@@ -16,8 +16,9 @@ from eval.suite.grid import Cell, arm_env, canonical_json, expand
 from eval.suite.spec import PolicyEntry, SuiteError, SuiteSpec
 
 
-class _EnvChecker:
-    """Builds each distinct env configuration once (uncalibrated) and remembers the outcome."""
+class EnvChecker:
+    """Builds each distinct env configuration once (uncalibrated) and remembers the outcome
+    (its refusal's message, or ``None``)."""
 
     def __init__(self) -> None:
         self.env_class = uncalibrated_env_class()
@@ -44,19 +45,23 @@ class _EnvChecker:
         return self.errors[text]
 
 
-def check_suite(spec: SuiteSpec, progress: bool = False) -> list[Cell]:
+def check_suite(spec: SuiteSpec, progress: bool = False, checker: EnvChecker | None = None
+                ) -> list[Cell]:
     """Check ``spec`` as far as possible without running it and return its cells.
 
     Builds every distinct env configuration once, without calibrating its feedback source, and
     makes every baseline on it (see the module docstring, "Validation"); loads every SB3 agent
     once.
 
+    :param checker: builds the envs; one that has built some already (:func:`eval.suite.engine.
+        on_engine`) does not build them again.
+
     Raises:
         ValueError: (:class:`SuiteError`) naming the file, the key and the env's or policy's
             message.
     """
     cells = expand(spec)
-    checker = _EnvChecker()
+    checker = checker or EnvChecker()
     source = spec.source
     agents: dict[str, str | None] = {}
     # full env config -> (its kwargs, [(key, entry)]) of the baselines to make on it
@@ -102,7 +107,7 @@ def check_suite(spec: SuiteSpec, progress: bool = False) -> list[Cell]:
     return cells
 
 
-def _blame(checker: _EnvChecker, base: Mapping[str, Any], added: Mapping[str, Any],
+def _blame(checker: EnvChecker, base: Mapping[str, Any], added: Mapping[str, Any],
            names: Mapping[str, str], fallback: str = "") -> tuple[str, str | None]:
     """``(key, refusal)`` when the env refuses ``added`` on top of ``base``: ``key`` is the suite
     key (from ``names``) of the first of the ``added`` keyword arguments, in their order, whose

@@ -540,7 +540,8 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
         lines += [f"## {preset}", "",
                   f"{len(arm.paths)} path(s) {list(arm.paths)}, {len(arm.conditions)} "
                   f"condition(s), {arm.cycles} cycle(s) per run, feedback "
-                  f"{arm.feedback or 'the env default'} unless a condition sets it.", ""]
+                  f"{arm.feedback or 'the env default'} unless a condition sets it"
+                  + (f", engine {arm.env['engine']}" if "engine" in arm.env else "") + ".", ""]
         aggregate_rows = []
         for policy, stats in sorted(info["aggregates"].items(),
                                     key=lambda item: item[1]["iqm_mm"]):
