@@ -3,19 +3,22 @@ by the recipe its config file names (``train/configs/<algo>.yml``, or the ``--co
 was trained with), and it tracks its path: over
 one clean episode with its recipe's feedback its mean tip error is well below the path's own
 size, far below holding the arm at its pre-pressure, and within 20 % of its recorded
-evaluation."""
+evaluation; and it ships the tracking curve its training stopped on, flattened (the last 20 % of
+the steps improved its best error by under 5 %)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import gymnasium as gym
+import numpy as np
 import pytest
 import yaml
 
 import soft_gym  # noqa: F401
 from agents.policies import SHIPPED_DIR, make_policy
 from train.ship import EVALUATION_FILE, nominal_evaluation
+from train.tracking_curve import read_curve
 
 AGENTS = sorted(path.name for path in SHIPPED_DIR.iterdir() if (path / "model.zip").is_file())
 
@@ -40,6 +43,22 @@ def test_every_new_arm_has_a_shipped_agent():
             for name in AGENTS}
     assert {"SoftArmTrackWang2023-v0", "SoftArmTrackHo2018-v0", "SoftArmTrackZhao2021-v0",
             "SoftArmTrackZou2022-v0"} <= arms, arms
+
+
+@pytest.mark.parametrize("name", AGENTS)
+def test_a_shipped_agent_carries_a_tracking_curve_that_flattened(name):
+    """Its training stopped on its curve, not on a clock: ``eval/tracking_curve.csv`` and its
+    plot are shipped, and the last 20 % of the steps improved the best error by under 5 %
+    (:func:`train.tracking_curve.has_plateaued`'s rule, checked here by hand); the shipped
+    ``training.yaml`` records the same best error."""
+    timesteps, errors_mm = (np.array(values, float) for values in read_curve(SHIPPED_DIR / name))
+    assert len(timesteps) >= 5, f"{name} has no tracking curve"
+    assert (SHIPPED_DIR / name / "tracking_curve.png").is_file()
+    assert np.all(np.diff(timesteps) > 0)
+    best_before = errors_mm[timesteps <= 0.8 * timesteps[-1]].min()
+    assert best_before - errors_mm.min() < 0.05 * best_before, (best_before, errors_mm.min())
+    training = yaml.safe_load((SHIPPED_DIR / name / "training.yaml").read_text())[-1]
+    assert training["best_tracking_mm"] == pytest.approx(errors_mm.min(), abs=1e-4)
 
 
 @pytest.mark.parametrize("name", _agent_params())
