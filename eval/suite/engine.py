@@ -1,7 +1,7 @@
 """A suite on another physics engine (``python -m eval suite SPEC --engine mujoco``).
 
-:func:`on_engine` sets ``engine`` in every arm's env keyword arguments (over any the file
-gives) and leaves out what that engine cannot run: an arm whose own env it refuses (wang2023's
+:func:`on_engine` sets ``engine`` in every arm's env keyword arguments, and in place of any
+engine a condition or a policy entry names, and leaves out what that engine cannot run: an arm whose own env it refuses (wang2023's
 fused feedback needs the eye-in-hand camera, which the MuJoCo engine lacks) and each condition
 it refuses on an arm (a swaying mass, the stereo pair). Only refusals the engine causes are
 left out, each with the engine's own message (:func:`soft_gym.engines.require_engine_features`):
@@ -18,7 +18,7 @@ from typing import Any
 
 from eval.suite.check import EnvChecker
 from eval.suite.grid import arm_env
-from eval.suite.spec import SuiteSpec
+from eval.suite.spec import ArmEntry, SuiteSpec
 from soft_gym.engines import ENGINES
 
 
@@ -52,19 +52,20 @@ def on_engine(spec: SuiteSpec, engine: str, checker: EnvChecker | None = None
     checker = checker or EnvChecker()
     arms, left_out = [], []
     for arm in spec.arms:
-        moved = replace(arm, env={**arm.env, "engine": engine})
-        refusal = _engine_refusal(checker, [arm_env(arm, path) for path in arm.paths],
-                                  [arm_env(moved, path) for path in arm.paths])
+        moved = replace(arm, env={**arm.env, "engine": engine},
+                        conditions={name: _on_engine(kwargs, engine)
+                                    for name, kwargs in arm.conditions.items()},
+                        policies=tuple(replace(entry, env=_on_engine(entry.env, engine))
+                                       for entry in arm.policies))
+        refusal = _engine_refusal(checker, arm, moved)
         if refusal is not None:
             left_out.append(LeftOut(arm.preset, None, refusal))
             continue
         conditions = {}
-        for name, kwargs in arm.conditions.items():
-            refusal = _engine_refusal(
-                checker, [{**arm_env(arm, path), **kwargs} for path in arm.paths],
-                [{**arm_env(moved, path), **kwargs} for path in arm.paths])
+        for name in arm.conditions:
+            refusal = _engine_refusal(checker, arm, moved, name)
             if refusal is None:
-                conditions[name] = kwargs
+                conditions[name] = moved.conditions[name]
             else:
                 left_out.append(LeftOut(arm.preset, name, refusal))
         if conditions:
@@ -78,13 +79,22 @@ def on_engine(spec: SuiteSpec, engine: str, checker: EnvChecker | None = None
                    description=_description(spec.description, engine, left_out)), left_out
 
 
-def _engine_refusal(checker: EnvChecker, own: list[dict[str, Any]],
-                    moved: list[dict[str, Any]]) -> str | None:
-    """The first refusal of a ``moved`` configuration whose ``own`` one the env accepts:
-    what the engine alone refuses (``None`` when it runs them all)."""
-    for original, on_engine_kwargs in zip(own, moved):
-        refusal = checker.error(on_engine_kwargs)
-        if refusal is not None and checker.error(original) is None:
+def _on_engine(kwargs: dict[str, Any], engine: str) -> dict[str, Any]:
+    """Env keyword arguments of a condition or policy entry with ``engine`` in place of the
+    engine they name (as they are where they name none: the arm's ``env`` gives it)."""
+    return {**kwargs, "engine": engine} if "engine" in kwargs else kwargs
+
+
+def _engine_refusal(checker: EnvChecker, arm: ArmEntry, moved: ArmEntry,
+                    condition: str | None = None) -> str | None:
+    """The first refusal, over the arm's paths, of ``moved``'s env (with ``condition``'s
+    keyword arguments) where ``arm``'s own is accepted: what the engine alone refuses
+    (``None`` when it runs them all)."""
+    own = arm.conditions[condition] if condition is not None else {}
+    on_engine_kwargs = moved.conditions[condition] if condition is not None else {}
+    for path in arm.paths:
+        refusal = checker.error({**arm_env(moved, path), **on_engine_kwargs})
+        if refusal is not None and checker.error({**arm_env(arm, path), **own}) is None:
             return refusal
     return None
 

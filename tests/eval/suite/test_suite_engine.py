@@ -70,6 +70,21 @@ def test_the_reference_engine_leaves_nothing_out_and_overrides_a_files_engine(tm
     assert [arm.env for arm in moved.arms] == [{"speed_m_s": 0.05, "engine": "pybullet"}] * 2
 
 
+def test_an_engine_a_condition_or_policy_names_is_overridden_too(tmp_path):
+    """Every run goes on the asked engine, a condition's or a policy entry's own ``engine``
+    included."""
+    text = (BASE.replace("      nominal: {}\n      load_10g",
+                         "      nominal: {engine: pybullet}\n      load_10g", 1)
+            .replace("{name: cc_model, params: {probe_steps: 5}}",
+                     "{name: cc_model, params: {probe_steps: 5}, env: {engine: pybullet}}"))
+    spec = suite.load_suite(_write(tmp_path, text))
+    wang = [cell for cell in suite.expand(spec) if cell.labels["preset"] == "wang2023"]
+    assert [cell.config["env_kwargs"]["engine"] for cell in wang] == ["pybullet"] * 2
+    moved, left_out = suite.on_engine(spec, "mujoco")
+    assert left_out == []
+    assert {cell.config["env_kwargs"]["engine"] for cell in suite.expand(moved)} == {"mujoco"}
+
+
 def test_a_refusal_not_of_the_engine_stays_for_the_check_to_name(tmp_path):
     """A condition the env refuses on the file's own engine is not the engine's doing: it stays,
     and the suite's check names its key as without --engine."""
