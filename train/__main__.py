@@ -3,6 +3,7 @@
     python -m train --algo sac --env SoftArmTrackWang2023-v0 --timesteps 200000 --seed 0
     python -m train --algo td3 --preset wang2023 --env-kwargs feedback=em 'path=[circle,pentagram]' --randomize
     python -m train --resume results/train/sac_SoftArmTrackWang2023-v0_seed0 --timesteps 50000
+    python -m train --algo ppo_lstm --trained-agent ppo_lstm_wang2023_track --env-kwargs feedback=fused
     python -m train sweep --env SoftArmTrackWang2023-v0 --trials 8 --steps 20000   (Ray Tune;
         python -m train sweep --help, train/sweep.py)
 
@@ -97,6 +98,12 @@ def build_parser() -> argparse.ArgumentParser:
                         help="continue a run (a directory holding config.yaml and model.zip) "
                              "for --timesteps more steps (model, replay buffer and "
                              "normalisation restored)")
+    parser.add_argument("-i", "--trained-agent", default=None, metavar="AGENT",
+                        help="start a new run from a trained agent's weights and normalisation "
+                             "statistics (a run directory, a model .zip or a shipped agent's "
+                             "name, e.g. ppo_lstm_wang2023_track), trained on this run's env and "
+                             "hyperparameters; its training segments open this run's "
+                             "training.yaml (train/warm_start.py)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     demos = parser.add_argument_group(
         "starting from demonstrations (off-policy algorithms; train/demonstrations.py)")
@@ -180,6 +187,34 @@ def check_resume(parser: argparse.ArgumentParser, run_dir: str) -> None:
     check_output_dir(parser, "--resume", path)
 
 
+def check_trained_agent(parser: argparse.ArgumentParser, args: argparse.Namespace, env_id: str,
+                        settings) -> None:
+    """``--trained-agent``: an agent of ``--algo`` that reads the run's observations and writes
+    its actions, normalised as the run is (one line naming the option otherwise)."""
+    from agents.policies.sb3 import SB3Policy
+    from eval.runner import make_uncalibrated_env
+    from train.warm_start import find_trained_agent
+
+    if args.demos is not None or args.demo_dataset is not None:
+        parser.error("--trained-agent starts from an agent's weights; --demos and "
+                     "--demo-dataset from a baseline's episodes: give one")
+    try:
+        agent = find_trained_agent(args.trained_agent, args.algo)
+    except ValueError as error:
+        fail(parser, "--trained-agent", error)
+    if (agent.normalization_path is not None) != (settings.normalize is not None):
+        fail(parser, "--trained-agent",
+             f"{args.trained_agent!r} trained {'with' if agent.normalization_path else 'without'}"
+             f" normalised observations, the recipe's normalize is {settings.normalize!r}")
+    env = make_uncalibrated_env(env_id, {**settings.env_kwargs, **settings.arm_variants()[0]})
+    try:
+        SB3Policy.load(agent.model_path).check_env(env)
+    except ValueError as error:
+        fail(parser, "--trained-agent", error)
+    finally:
+        env.close()
+
+
 def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
                    env_kwargs: dict, hyperparameters: dict):
     """Every check of a new training run before it starts; returns its :class:`TrainRequest`."""
@@ -203,7 +238,7 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         demo_dataset=args.demo_dataset, demo_root=args.demo_root,
         demo_episodes=args.demo_episodes, demo_params=check_demonstrations(parser, args),
         bc_epochs=args.bc_epochs, critic_warmup=args.critic_warmup,
-        curve_freq=args.curve_freq, until_plateau=args.until_plateau,
+        trained_agent=args.trained_agent, curve_freq=args.curve_freq, until_plateau=args.until_plateau,
         plateau_fraction=args.plateau_fraction, plateau_improvement=args.plateau_improvement,
         min_timesteps=args.min_timesteps)
     if args.until_plateau and args.curve_freq == 0:
@@ -227,6 +262,8 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
     check_env_kwargs(parser, env_id, settings.env_kwargs, overrides)
     check_arm_env_kwargs(parser, env_id, settings, args.vec,
                          "--conf-file" if args.conf_file else "--algo")
+    if args.trained_agent is not None:
+        check_trained_agent(parser, args, env_id, settings)
     name = args.name or f"{args.algo}_{env_id}_seed{args.seed}"
     if name.strip() in ("", ".", ".."):
         parser.error(f"--name must name a run directory, got {name!r}")
@@ -259,6 +296,9 @@ def main(argv: list[str] | None = None) -> None:
         if args.demos is not None or args.demo_dataset is not None:
             parser.error("--demos and --demo-dataset start a new run; --resume continues one "
                          "(its replay buffer already holds the demonstrations)")
+        if args.trained_agent is not None:
+            parser.error("--trained-agent starts a new run; --resume continues one (from its "
+                         "own model)")
         check_resume(parser, args.resume)
         request = TrainRequest(resume=args.resume, timesteps=args.timesteps,
                                progress=not args.no_progress)

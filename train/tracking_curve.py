@@ -151,12 +151,16 @@ class TrackingCurveCallback(BaseCallback):
     :param min_improvement: the plateau rule's relative improvement.
     :param min_timesteps: env steps before the plateau rule may stop training (a curve flat at
         the start, before learning takes hold, is not a plateau).
+    :param evaluate_at_start: also evaluate before the first step (a run started from a trained
+        agent: the curve then shows where it began, and the starting model is the best until
+        training beats it).
     """
 
     def __init__(self, env_id: str, env_kwargs: dict, cases: list[EvaluationCase],
                  curve_freq: int, run_dir: str | Path, until_plateau: bool = False,
                  fraction: float = PLATEAU_FRACTION,
-                 min_improvement: float = PLATEAU_IMPROVEMENT, min_timesteps: int = 0) -> None:
+                 min_improvement: float = PLATEAU_IMPROVEMENT, min_timesteps: int = 0,
+                 evaluate_at_start: bool = False) -> None:
         super().__init__()
         self.env_id, self.cases = env_id, list(cases)
         self.env_kwargs = {key: value for key, value in env_kwargs.items()
@@ -164,6 +168,7 @@ class TrackingCurveCallback(BaseCallback):
         self.curve_freq, self.run_dir = int(curve_freq), Path(run_dir)
         self.until_plateau, self.fraction = until_plateau, fraction
         self.min_improvement, self.min_timesteps = min_improvement, int(min_timesteps)
+        self.evaluate_at_start = evaluate_at_start
         self.timesteps: list[int] = []
         self.errors_mm: list[float] = []
         self.plateaued = False
@@ -174,11 +179,24 @@ class TrackingCurveCallback(BaseCallback):
     def _on_training_start(self) -> None:
         self._next = self.num_timesteps + self.curve_freq
         self.timesteps, self.errors_mm = read_curve(self.run_dir)  # a resumed run continues
+        if self.evaluate_at_start and not self.timesteps:
+            self._record()
 
     def _on_step(self) -> bool:
         if self.num_timesteps < self._next:
             return True
         self._next = self.num_timesteps + self.curve_freq
+        self._record()
+        if (self.until_plateau and self.num_timesteps >= self.min_timesteps
+                and has_plateaued(np.array(self.timesteps),
+                                  np.array(self.errors_mm), self.fraction,
+                                  self.min_improvement)):
+            self.plateaued = True
+            return False
+        return True
+
+    def _record(self) -> None:
+        """Evaluate now, write the row and keep the model if it is the best so far."""
         started = time.perf_counter()
         errors = self.evaluate()
         self.evaluation_s += time.perf_counter() - started
@@ -188,13 +206,6 @@ class TrackingCurveCallback(BaseCallback):
             self._save_best()
         self.timesteps.append(self.num_timesteps)
         self.errors_mm.append(mean)
-        if (self.until_plateau and self.num_timesteps >= self.min_timesteps
-                and has_plateaued(np.array(self.timesteps),
-                                  np.array(self.errors_mm), self.fraction,
-                                  self.min_improvement)):
-            self.plateaued = True
-            return False
-        return True
 
     def evaluate(self) -> dict[str, float]:
         """Each case's last-cycle mean tracking error (mm) with the live model."""

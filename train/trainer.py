@@ -15,7 +15,9 @@ A run directory holds:
   ``tracking_curve.png`` and ``best_tracking_model.zip`` (with
   ``best_tracking_vecnormalize.pkl``);
 * ``training.yaml``: one entry per training (a resumed run adds one): steps, wall time, env
-  steps/s, envs, and the curve's evaluations, best error and whether it stopped at a plateau.
+  steps/s, envs, and the curve's evaluations, best error and whether it stopped at a plateau;
+  a run started from a trained agent opens with that agent's entries
+  (:mod:`train.warm_start`).
 
 Ctrl-C (``KeyboardInterrupt``) stops training and keeps the run: the model so far is saved and
 summarised as above, its ``training.yaml`` entry marked ``interrupted``.
@@ -52,6 +54,7 @@ from train.demonstrations import (load_demonstrations, record_demonstrations,
                                   start_from_demonstrations)
 from train.tracking_curve import (PLATEAU_FRACTION, PLATEAU_IMPROVEMENT, TrackingCurveCallback,
                                   evaluation_cases)
+from train.warm_start import find_trained_agent, inherited_segments, load_trained_model
 
 MODEL_FILE = "model.zip"
 BEST_MODEL_FILE = "best_model.zip"
@@ -96,6 +99,9 @@ class TrainRequest:
         demo_params: the ``demos`` baseline's keyword arguments.
         bc_epochs: behaviour-cloning epochs of the actor on the demonstrations.
         critic_warmup: critic gradient steps on the demonstrations with the actor held.
+        trained_agent: a trained agent (run directory, model ``.zip`` or shipped agent name)
+            whose weights and VecNormalize statistics start the run, which then trains on its
+            own env and hyperparameters (:mod:`train.warm_start`), or ``None``: a new model.
         curve_freq: env steps between tracking evaluations (:mod:`train.tracking_curve`; 0:
             none; a track env only).
         until_plateau: stop once the tracking curve has flattened
@@ -129,6 +135,7 @@ class TrainRequest:
     demo_params: dict = field(default_factory=dict)
     bc_epochs: int = 100
     critic_warmup: int = 2000
+    trained_agent: str | None = None
     curve_freq: int = 0
     until_plateau: bool = False
     plateau_fraction: float = PLATEAU_FRACTION
@@ -237,6 +244,9 @@ def train(request: TrainRequest) -> Path:
                              "run_name or pass resume")
     run_dir.mkdir(parents=True, exist_ok=True)
     algo_cls = algorithm_class(request.algo)
+    start = None
+    if request.resume is None and request.trained_agent is not None:
+        start = find_trained_agent(request.trained_agent, request.algo)
 
     env = make_vec_env(request.env_id, settings.env_kwargs, settings.n_envs, request.seed,
                        monitor_dir=str(run_dir / "monitor"), vec=request.vec,
@@ -246,6 +256,9 @@ def train(request: TrainRequest) -> Path:
     if settings.normalize is not None:
         if request.resume is not None and (run_dir / NORMALIZATION_FILE).exists():
             env = VecNormalize.load(str(run_dir / NORMALIZATION_FILE), env)
+        elif start is not None and start.normalization_path is not None:
+            env = VecNormalize.load(str(start.normalization_path), env)
+            env.training = True  # the statistics go on adapting to the new observations
         else:
             env = VecNormalize(env, **settings.normalize)
         eval_env = VecNormalize(eval_env, training=False, norm_reward=False,
@@ -256,6 +269,9 @@ def train(request: TrainRequest) -> Path:
         model = algo_cls.load(str(run_dir / MODEL_FILE), env=env)
         if request.algo in OFF_POLICY and (run_dir / REPLAY_BUFFER_FILE).exists():
             model.load_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
+    elif start is not None:
+        model = load_trained_model(start, algo_cls, env, settings.algo_kwargs, request.seed,
+                                   normalized=settings.normalize is not None)
     else:
         model = new_model(request.algo, settings, env, request.seed)
     # every save (final, best, checkpoints) carries it: a bare model.zip copied without its
@@ -274,6 +290,9 @@ def train(request: TrainRequest) -> Path:
         "hyperparameters": hyperparameters, "seed": request.seed, "n_envs": settings.n_envs,
     }, sort_keys=False))
     (run_dir / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))
+    if start is not None and start.segments:  # the steps that made the agent count too
+        (run_dir / "training.yaml").write_text(yaml.safe_dump(inherited_segments(start),
+                                                              sort_keys=False))
 
     callbacks: list[BaseCallback] = [ThroughputCallback()]
     curve = None
@@ -283,7 +302,8 @@ def train(request: TrainRequest) -> Path:
             evaluation_cases(settings.env_kwargs, settings.arm_variants()),
             request.curve_freq, run_dir, until_plateau=request.until_plateau,
             fraction=request.plateau_fraction, min_improvement=request.plateau_improvement,
-            min_timesteps=request.min_timesteps)
+            min_timesteps=request.min_timesteps,
+            evaluate_at_start=start is not None and request.resume is None)
         callbacks.append(curve)
     if request.eval_freq > 0:
         callbacks.append(EvalCallback(

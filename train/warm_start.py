@@ -1,0 +1,113 @@
+"""Start a training run from a trained agent (rl-baselines3-zoo's ``--trained-agent``).
+
+``python -m train --trained-agent AGENT ...`` makes a new run whose model starts from ``AGENT``'s
+weights and VecNormalize statistics and trains on the new run's env and hyperparameters: an agent
+trained fast on one env (e.g. the MuJoCo engine's batched arms with EM feedback) fine-tuned on
+another that is slower to simulate (the PyBullet arm with the camera's fused feedback and visual
+faults). The new run's ``training.yaml`` starts with the agent's own training segments, each
+marked with the agent it came from (``trained_agent``) and the engine and feedback it trained
+on, so an agent's budget (:func:`agents.policies.sb3.training_budget`) counts every step that
+made it.
+
+The agent must be of the run's algorithm, read the run's observations and write its actions;
+where the run normalises observations the agent must carry its statistics (and the other way
+round). Each mismatch is one ``ValueError`` naming ``trained_agent``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from agents.policies.sb3 import (ALGORITHM_CLASSES, SB3Policy, normalization_file,
+                                 resolve_sb3_path)
+
+TRAINED_AGENT_KEY = "trained_agent"
+"""The key marking a ``training.yaml`` segment inherited from the agent a run started from."""
+
+
+@dataclass(frozen=True)
+class TrainedAgent:
+    """A trained agent's files, checked (:func:`find_trained_agent`).
+
+    Attributes:
+        name: as given (a shipped agent's name, or a path).
+        model_path: its model ``.zip``.
+        normalization_path: its VecNormalize statistics, ``None`` where it trained without.
+        algo: its algorithm (``python -m train``'s ``--algo`` name).
+        config: its run's ``config.yaml`` (empty where there is none).
+        segments: its ``training.yaml`` segments (empty where there is none).
+    """
+
+    name: str
+    model_path: Path
+    normalization_path: Path | None
+    algo: str
+    config: dict
+    segments: list
+
+
+def find_trained_agent(agent: str | Path, algo: str) -> TrainedAgent:
+    """The files of ``agent`` (a run directory of ``python -m train``, a model ``.zip`` beside
+    its statistics, or a shipped agent's name), loaded once to check them (a damaged model,
+    missing statistics: :meth:`agents.policies.sb3.SB3Policy.load`'s ``ValueError``).
+
+    :param agent: the agent to start from.
+    :param algo: the run's algorithm; ``ValueError`` unless the agent's is the same.
+    """
+    try:
+        policy = SB3Policy.load(agent)
+    except ValueError as error:
+        raise ValueError(f"trained_agent {str(agent)!r}: {error}") from None
+    model_path = Path(policy.model_path)
+    config = policy.config or {}
+    agent_algo = str(config.get("algo", "")).lower()
+    if not agent_algo:  # a model without its run's config: the class it was saved as
+        agent_algo = next(name for name, cls in ALGORITHM_CLASSES.items()
+                          if cls == type(policy.model).__name__)
+    if agent_algo != algo:
+        raise ValueError(f"trained_agent {str(agent)!r} is a {agent_algo} agent, the run trains "
+                         f"{algo}: give --algo {agent_algo} or an agent of {algo}")
+    normalization_path = None
+    if policy.normalization is not None:
+        normalization_path = normalization_file(model_path)
+    directory = resolve_sb3_path(agent)
+    directory = directory if directory.is_dir() else model_path.parent
+    segments: list = []
+    record = directory / "training.yaml"
+    if record.is_file():
+        segments = yaml.safe_load(record.read_text()) or []
+    return TrainedAgent(str(agent), model_path, normalization_path, agent_algo, config, segments)
+
+
+def inherited_segments(agent: TrainedAgent) -> list[dict[str, Any]]:
+    """The agent's training segments, each marked with the agent (``trained_agent``) and the
+    engine and feedback it trained on, to open the new run's ``training.yaml``."""
+    env_kwargs = agent.config.get("env_kwargs") or {}
+    marks = {TRAINED_AGENT_KEY: Path(agent.name).name if Path(agent.name).exists() else agent.name,
+             "engine": str(env_kwargs.get("engine", "pybullet")),
+             "feedback": env_kwargs.get("feedback")}
+    return [{**segment, **marks} for segment in agent.segments if isinstance(segment, dict)]
+
+
+def load_trained_model(agent: TrainedAgent, algo_cls, env, algo_kwargs: dict, seed: int,
+                       normalized: bool):
+    """The agent's model on ``env`` (already wrapped in the agent's statistics where
+    ``normalized``), with the run's hyperparameters (``algo_kwargs``) over the saved ones and
+    ``seed``; ``ValueError`` naming ``trained_agent`` where the spaces or the network differ or
+    only one side normalises observations."""
+    if normalized != (agent.normalization_path is not None):
+        raise ValueError(
+            f"trained_agent {agent.name!r} trained {'with' if agent.normalization_path else 'without'}"
+            f" normalised observations and this run {'normalises' if normalized else 'does not'}:"
+            f" its weights expect the other scale (set the recipe's normalize to match)")
+    kwargs = {key: value for key, value in algo_kwargs.items() if key != "action_noise"}
+    try:
+        model = algo_cls.load(str(agent.model_path), env=env, device="cpu", **kwargs)
+    except (ValueError, KeyError) as error:  # spaces or policy_kwargs unlike the agent's
+        raise ValueError(f"trained_agent {agent.name!r} does not fit this run: {error}") from None
+    model.set_random_seed(seed)
+    return model
