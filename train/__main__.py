@@ -195,9 +195,6 @@ def check_trained_agent(parser: argparse.ArgumentParser, args: argparse.Namespac
     from eval.runner import make_uncalibrated_env
     from train.warm_start import find_trained_agent
 
-    if args.demos is not None or args.demo_dataset is not None:
-        parser.error("--trained-agent starts from an agent's weights; --demos and "
-                     "--demo-dataset from a baseline's episodes: give one")
     try:
         agent = find_trained_agent(args.trained_agent, args.algo)
     except ValueError as error:
@@ -303,6 +300,9 @@ def main(argv: list[str] | None = None) -> None:
         request = TrainRequest(resume=args.resume, timesteps=args.timesteps,
                                progress=not args.no_progress)
     else:
+        if args.trained_agent is not None and (args.demos or args.demo_dataset):
+            parser.error("--trained-agent starts from an agent's weights; --demos and "
+                         "--demo-dataset from a baseline's episodes: give one")
         request = check_training(parser, args, env_kwargs, hyperparameters)
     try:
         run_dir = train(request)

@@ -54,7 +54,8 @@ from train.demonstrations import (load_demonstrations, record_demonstrations,
                                   start_from_demonstrations)
 from train.tracking_curve import (PLATEAU_FRACTION, PLATEAU_IMPROVEMENT, TrackingCurveCallback,
                                   evaluation_cases)
-from train.warm_start import find_trained_agent, inherited_segments, load_trained_model
+from train.warm_start import (check_fits, find_trained_agent, inherited_segments,
+                               load_trained_model)
 
 MODEL_FILE = "model.zip"
 BEST_MODEL_FILE = "best_model.zip"
@@ -251,6 +252,8 @@ def train(request: TrainRequest) -> Path:
     env = make_vec_env(request.env_id, settings.env_kwargs, settings.n_envs, request.seed,
                        monitor_dir=str(run_dir / "monitor"), vec=request.vec,
                        per_arm=settings.per_arm_env_kwargs())
+    if start is not None:
+        check_fits(start, env)
     eval_env = make_vec_env(request.env_id, {**settings.env_kwargs, **settings.arm_variants()[0]},
                             1, request.seed + 10_000)
     if settings.normalize is not None:

@@ -40,6 +40,8 @@ class TrainedAgent:
         algo: its algorithm (``python -m train``'s ``--algo`` name).
         config: its run's ``config.yaml`` (empty where there is none).
         segments: its ``training.yaml`` segments (empty where there is none).
+        observation_space: what it reads.
+        action_space: what it writes.
     """
 
     name: str
@@ -48,6 +50,8 @@ class TrainedAgent:
     algo: str
     config: dict
     segments: list
+    observation_space: Any
+    action_space: Any
 
 
 def find_trained_agent(agent: str | Path, algo: str) -> TrainedAgent:
@@ -80,7 +84,18 @@ def find_trained_agent(agent: str | Path, algo: str) -> TrainedAgent:
     record = directory / "training.yaml"
     if record.is_file():
         segments = yaml.safe_load(record.read_text()) or []
-    return TrainedAgent(str(agent), model_path, normalization_path, agent_algo, config, segments)
+    return TrainedAgent(str(agent), model_path, normalization_path, agent_algo, config, segments,
+                        policy.model.observation_space, policy.model.action_space)
+
+
+def check_fits(agent: TrainedAgent, env) -> None:
+    """``ValueError`` naming ``trained_agent`` unless ``env`` (the run's, vectorised or not)
+    gives the observations the agent reads and takes the actions it writes."""
+    for what, ours, theirs in (("observations", agent.observation_space, env.observation_space),
+                               ("actions", agent.action_space, env.action_space)):
+        if ours.shape != theirs.shape:
+            raise ValueError(f"trained_agent {agent.name!r} reads and writes other {what} than "
+                             f"this run's env: {ours} against {theirs}")
 
 
 def inherited_segments(agent: TrainedAgent) -> list[dict[str, Any]]:

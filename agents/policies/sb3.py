@@ -53,8 +53,10 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
     included), ``n_envs``, ``engine`` (the training env's, ``pybullet`` where unset),
     ``feedback`` (the training env's), ``plateau`` (whether the last segment stopped at the
     tracking curve's plateau, :mod:`train.tracking_curve`), ``interrupted`` (whether it was
-    stopped by hand, Ctrl-C) and ``demonstrations`` (whether it started from a baseline's
-    episodes).
+    stopped by hand, Ctrl-C), ``demonstrations`` (whether it started from a baseline's
+    episodes) and ``trained_agent`` (the agent it was fine-tuned from, ``python -m train
+    --trained-agent``, whose steps and time the totals include; ``None`` where it started
+    anew).
     """
     resolved = resolve_sb3_path(path)
     directory = resolved if resolved.is_dir() else resolved.parent
@@ -82,7 +84,9 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
             "feedback": env_kwargs.get("feedback"),
             "plateau": bool(segments[-1].get("stopped_at_plateau", False)),
             "interrupted": bool(segments[-1].get("interrupted", False)),
-            "demonstrations": any("demonstrations" in segment for segment in segments)}
+            "demonstrations": any("demonstrations" in segment for segment in segments),
+            "trained_agent": next((str(segment["trained_agent"]) for segment in segments
+                                   if segment.get("trained_agent")), None)}
 
 
 REPOSITORY_DIR = SHIPPED_DIR.parents[1]

@@ -250,6 +250,8 @@ def budget_text(budget: Mapping[str, Any] | None) -> str:
                  "stopped by hand, no plateau" if budget.get("interrupted") else "no plateau")
     if budget.get("demonstrations"):
         parts.append("from demonstrations")
+    if budget.get("trained_agent"):
+        parts.append(f"fine-tuned from {budget['trained_agent']}")
     return ", ".join(parts)
 
 

@@ -458,7 +458,8 @@ def test_a_training_budget_sums_the_segments_of_a_resumed_run(tmp_path):
         "- {timesteps: 20000, wall_s: 40.0, n_envs: 4, stopped_at_plateau: true}\n")
     assert training_budget(tmp_path) == {
         "timesteps": 70000, "wall_s": 140.0, "n_envs": 4, "engine": "mujoco",
-        "feedback": "em", "plateau": True, "interrupted": False, "demonstrations": False}
+        "feedback": "em", "plateau": True, "interrupted": False, "demonstrations": False,
+        "trained_agent": None}
     assert report.budget_text(training_budget(tmp_path)) == (
         "70k steps, 2 min, mujoco x4, em, plateau")
     (tmp_path / "training.yaml").write_text("- {wall_s: 100.0}\n")
