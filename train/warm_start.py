@@ -100,12 +100,15 @@ def check_fits(agent: TrainedAgent, env) -> None:
 
 def inherited_segments(agent: TrainedAgent) -> list[dict[str, Any]]:
     """The agent's training segments, each marked with the agent (``trained_agent``) and the
-    engine and feedback it trained on, to open the new run's ``training.yaml``."""
+    engine and feedback it trained on, to open the new run's ``training.yaml`` (a segment marked
+    already, from an agent the agent was itself fine-tuned from, keeps its marks)."""
     env_kwargs = agent.config.get("env_kwargs") or {}
     marks = {TRAINED_AGENT_KEY: Path(agent.name).name if Path(agent.name).exists() else agent.name,
              "engine": str(env_kwargs.get("engine", "pybullet")),
              "feedback": env_kwargs.get("feedback")}
-    return [{**segment, **marks} for segment in agent.segments if isinstance(segment, dict)]
+    # a segment the agent itself inherited keeps the marks of the agent it came from
+    return [{**segment, **{key: value for key, value in marks.items() if key not in segment}}
+            for segment in agent.segments if isinstance(segment, dict)]
 
 
 def load_trained_model(agent: TrainedAgent, algo_cls, env, algo_kwargs: dict, seed: int,

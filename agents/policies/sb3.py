@@ -55,8 +55,8 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
     tracking curve's plateau, :mod:`train.tracking_curve`), ``interrupted`` (whether it was
     stopped by hand, Ctrl-C), ``demonstrations`` (whether it started from a baseline's
     episodes) and ``trained_agent`` (the agent it was fine-tuned from, ``python -m train
-    --trained-agent``, whose steps and time the totals include; ``None`` where it started
-    anew).
+    --trained-agent``, whose steps and time the totals include, as do those of the agents that
+    agent came from; ``None`` where it started anew).
     """
     resolved = resolve_sb3_path(path)
     directory = resolved if resolved.is_dir() else resolved.parent
@@ -85,7 +85,7 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
             "plateau": bool(segments[-1].get("stopped_at_plateau", False)),
             "interrupted": bool(segments[-1].get("interrupted", False)),
             "demonstrations": any("demonstrations" in segment for segment in segments),
-            "trained_agent": next((str(segment["trained_agent"]) for segment in segments
+            "trained_agent": next((str(segment["trained_agent"]) for segment in reversed(segments)
                                    if segment.get("trained_agent")), None)}
 
 

@@ -66,6 +66,17 @@ def test_a_run_starts_from_the_agent_and_counts_its_steps(tmp_path, source_run):
     config = yaml.safe_load((run / "config.yaml").read_text())
     assert config["request"]["trained_agent"] == str(source_run)
 
+    again = train(TrainRequest(
+        algo="ppo", env_kwargs=FAST_ENV, n_envs=1, timesteps=64,
+        hyperparameters={**SMALL_PPO, "n_steps": 64}, out_dir=str(tmp_path), run_name="again",
+        eval_freq=0, checkpoint_freq=0, progress=False, trained_agent=str(run)))
+    segments = yaml.safe_load((again / "training.yaml").read_text())
+    assert [(segment["timesteps"], segment.get(TRAINED_AGENT_KEY), segment.get("feedback"))
+            for segment in segments] == [(256, "source", "ground_truth"), (128, "tuned", "em"),
+                                         (64, None, None)]
+    assert training_budget(again)["timesteps"] == 448
+    assert training_budget(again)["trained_agent"] == "tuned"
+
 
 def test_an_agent_of_another_algorithm_or_interface_is_refused(tmp_path, source_run):
     with pytest.raises(ValueError, match="trained_agent .* is a ppo agent, the run trains a2c"):
