@@ -235,7 +235,8 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         demo_dataset=args.demo_dataset, demo_root=args.demo_root,
         demo_episodes=args.demo_episodes, demo_params=check_demonstrations(parser, args),
         bc_epochs=args.bc_epochs, critic_warmup=args.critic_warmup,
-        trained_agent=args.trained_agent, curve_freq=args.curve_freq, until_plateau=args.until_plateau,
+        trained_agent=args.trained_agent, curve_freq=args.curve_freq,
+        until_plateau=args.until_plateau,
         plateau_fraction=args.plateau_fraction, plateau_improvement=args.plateau_improvement,
         min_timesteps=args.min_timesteps)
     if args.until_plateau and args.curve_freq == 0:

@@ -214,13 +214,19 @@ def make_vec_env(env_id: str, env_kwargs: dict, n_envs: int, seed: int,
                             wrapper_kwargs=None)
 
 
-def new_model(algo: str, settings: TrainSettings, env, seed: int):
-    """A fresh ``algo`` model on ``env`` with the settings' hyperparameters (action noise built)."""
+def model_kwargs(settings: TrainSettings, env) -> dict:
+    """The settings' keyword arguments of the algorithm, its action noise built for ``env``."""
     kwargs = dict(settings.algo_kwargs)
     if "action_noise" in kwargs:
         kwargs["action_noise"] = build_action_noise(kwargs["action_noise"],
                                                     env.action_space.shape[0])
-    return algorithm_class(algo)(settings.policy, env, seed=seed, verbose=0, **kwargs)
+    return kwargs
+
+
+def new_model(algo: str, settings: TrainSettings, env, seed: int):
+    """A fresh ``algo`` model on ``env`` with the settings' hyperparameters (action noise built)."""
+    return algorithm_class(algo)(settings.policy, env, seed=seed, verbose=0,
+                                 **model_kwargs(settings, env))
 
 
 def train(request: TrainRequest) -> Path:
@@ -273,8 +279,8 @@ def train(request: TrainRequest) -> Path:
         if request.algo in OFF_POLICY and (run_dir / REPLAY_BUFFER_FILE).exists():
             model.load_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
     elif start is not None:
-        model = load_trained_model(start, algo_cls, env, settings.algo_kwargs, request.seed,
-                                   normalized=settings.normalize is not None)
+        model = load_trained_model(start, algo_cls, env, model_kwargs(settings, env),
+                                   request.seed, normalized=settings.normalize is not None)
     else:
         model = new_model(request.algo, settings, env, request.seed)
     # every save (final, best, checkpoints) carries it: a bare model.zip copied without its

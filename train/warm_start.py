@@ -114,17 +114,17 @@ def inherited_segments(agent: TrainedAgent) -> list[dict[str, Any]]:
 def load_trained_model(agent: TrainedAgent, algo_cls, env, algo_kwargs: dict, seed: int,
                        normalized: bool):
     """The agent's model on ``env`` (already wrapped in the agent's statistics where
-    ``normalized``), with the run's hyperparameters (``algo_kwargs``) over the saved ones and
-    ``seed``; ``ValueError`` naming ``trained_agent`` where the spaces or the network differ or
-    only one side normalises observations."""
+    ``normalized``), with the run's hyperparameters (``algo_kwargs``, action noise built) over
+    the saved ones and ``seed``; ``ValueError`` naming ``trained_agent`` where the spaces or
+    the network differ or only one side normalises observations."""
     if normalized != (agent.normalization_path is not None):
+        trained = "with" if agent.normalization_path else "without"
         raise ValueError(
-            f"trained_agent {agent.name!r} trained {'with' if agent.normalization_path else 'without'}"
-            f" normalised observations and this run {'normalises' if normalized else 'does not'}:"
-            f" its weights expect the other scale (set the recipe's normalize to match)")
-    kwargs = {key: value for key, value in algo_kwargs.items() if key != "action_noise"}
+            f"trained_agent {agent.name!r} trained {trained} normalised observations and this run "
+            f"{'normalises' if normalized else 'does not'}: its weights expect the other scale "
+            f"(set the recipe's normalize to match)")
     try:
-        model = algo_cls.load(str(agent.model_path), env=env, device="cpu", **kwargs)
+        model = algo_cls.load(str(agent.model_path), env=env, device="cpu", **algo_kwargs)
     except (ValueError, KeyError) as error:  # spaces or policy_kwargs unlike the agent's
         raise ValueError(f"trained_agent {agent.name!r} does not fit this run: {error}") from None
     model.set_random_seed(seed)

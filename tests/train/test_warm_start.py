@@ -111,3 +111,22 @@ def test_the_cli_refuses_a_bad_trained_agent_in_one_line(tmp_path, source_run, c
                           "--trained-agent", capsys)
     assert_one_line_error(train_main, [*base, "--trained-agent", str(source_run), "--demos",
                                        "cc_model"], "--trained-agent", capsys)
+
+
+def test_an_off_policy_run_keeps_its_recipes_action_noise(tmp_path):
+    """The run's hyperparameters over the agent's include the exploration noise, built for the
+    run's action space as a new model's is."""
+    from stable_baselines3 import TD3
+    from stable_baselines3.common.noise import NormalActionNoise
+
+    common = dict(algo="td3", env_kwargs=FAST_ENV, n_envs=1, out_dir=str(tmp_path),
+                  eval_freq=0, checkpoint_freq=0, progress=False)
+    source = train(TrainRequest(timesteps=150, run_name="source",
+                                hyperparameters={"learning_starts": 100}, **common))
+    tuned = train(TrainRequest(timesteps=50, run_name="tuned", trained_agent=str(source),
+                               hyperparameters={"learning_starts": 0,
+                                                "noise_type": "normal", "noise_std": 0.3},
+                               **common))
+    noise = TD3.load(tuned / "model.zip").action_noise
+    assert isinstance(noise, NormalActionNoise)
+    assert np.allclose(noise._sigma, 0.3)
