@@ -191,21 +191,13 @@ def check_trained_agent(parser: argparse.ArgumentParser, args: argparse.Namespac
                         settings) -> None:
     """``--trained-agent``: an agent of ``--algo`` that reads the run's observations and writes
     its actions, normalised as the run is (one line naming the option otherwise)."""
-    from agents.policies.sb3 import SB3Policy
     from eval.runner import make_uncalibrated_env
-    from train.warm_start import find_trained_agent
+    from train.warm_start import check_fits, find_trained_agent
 
-    try:
-        agent = find_trained_agent(args.trained_agent, args.algo)
-    except ValueError as error:
-        fail(parser, "--trained-agent", error)
-    if (agent.normalization_path is not None) != (settings.normalize is not None):
-        fail(parser, "--trained-agent",
-             f"{args.trained_agent!r} trained {'with' if agent.normalization_path else 'without'}"
-             f" normalised observations, the recipe's normalize is {settings.normalize!r}")
     env = make_uncalibrated_env(env_id, {**settings.env_kwargs, **settings.arm_variants()[0]})
     try:
-        SB3Policy.load(agent.model_path).check_env(env)
+        check_fits(find_trained_agent(args.trained_agent, args.algo), env,
+                   normalized=settings.normalize is not None)
     except ValueError as error:
         fail(parser, "--trained-agent", error)
     finally:

@@ -259,7 +259,11 @@ def train(request: TrainRequest) -> Path:
                        monitor_dir=str(run_dir / "monitor"), vec=request.vec,
                        per_arm=settings.per_arm_env_kwargs())
     if start is not None:
-        check_fits(start, env)
+        try:
+            check_fits(start, env, normalized=settings.normalize is not None)
+        except ValueError:
+            env.close()
+            raise
     eval_env = make_vec_env(request.env_id, {**settings.env_kwargs, **settings.arm_variants()[0]},
                             1, request.seed + 10_000)
     if settings.normalize is not None:
@@ -280,7 +284,7 @@ def train(request: TrainRequest) -> Path:
             model.load_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
     elif start is not None:
         model = load_trained_model(start, algo_cls, env, model_kwargs(settings, env),
-                                   request.seed, normalized=settings.normalize is not None)
+                                   request.seed)
     else:
         model = new_model(request.algo, settings, env, request.seed)
     # every save (final, best, checkpoints) carries it: a bare model.zip copied without its
@@ -312,7 +316,7 @@ def train(request: TrainRequest) -> Path:
             request.curve_freq, run_dir, until_plateau=request.until_plateau,
             fraction=request.plateau_fraction, min_improvement=request.plateau_improvement,
             min_timesteps=request.min_timesteps,
-            evaluate_at_start=start is not None and request.resume is None)
+            evaluate_at_start=start is not None)
         callbacks.append(curve)
     if request.eval_freq > 0:
         callbacks.append(EvalCallback(

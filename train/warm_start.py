@@ -20,10 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from agents.policies.sb3 import (ALGORITHM_CLASSES, SB3Policy, normalization_file,
-                                 resolve_sb3_path)
+                                 training_segments)
 
 TRAINED_AGENT_KEY = "trained_agent"
 """The key marking a ``training.yaml`` segment inherited from the agent a run started from."""
@@ -40,8 +38,7 @@ class TrainedAgent:
         algo: its algorithm (``python -m train``'s ``--algo`` name).
         config: its run's ``config.yaml`` (empty where there is none).
         segments: its ``training.yaml`` segments (empty where there is none).
-        observation_space: what it reads.
-        action_space: what it writes.
+        policy: the agent, loaded (what it reads and writes).
     """
 
     name: str
@@ -50,8 +47,7 @@ class TrainedAgent:
     algo: str
     config: dict
     segments: list
-    observation_space: Any
-    action_space: Any
+    policy: SB3Policy
 
 
 def find_trained_agent(agent: str | Path, algo: str) -> TrainedAgent:
@@ -78,24 +74,30 @@ def find_trained_agent(agent: str | Path, algo: str) -> TrainedAgent:
     normalization_path = None
     if policy.normalization is not None:
         normalization_path = normalization_file(model_path)
-    directory = resolve_sb3_path(agent)
-    directory = directory if directory.is_dir() else model_path.parent
-    segments: list = []
-    record = directory / "training.yaml"
-    if record.is_file():
-        segments = yaml.safe_load(record.read_text()) or []
+    try:
+        segments = training_segments(agent) or []
+    except ValueError as error:
+        raise ValueError(f"trained_agent {str(agent)!r}: {error}") from None
     return TrainedAgent(str(agent), model_path, normalization_path, agent_algo, config, segments,
-                        policy.model.observation_space, policy.model.action_space)
+                        policy)
 
 
-def check_fits(agent: TrainedAgent, env) -> None:
-    """``ValueError`` naming ``trained_agent`` unless ``env`` (the run's, vectorised or not)
-    gives the observations the agent reads and takes the actions it writes."""
-    for what, ours, theirs in (("observations", agent.observation_space, env.observation_space),
-                               ("actions", agent.action_space, env.action_space)):
-        if ours.shape != theirs.shape:
-            raise ValueError(f"trained_agent {agent.name!r} reads and writes other {what} than "
-                             f"this run's env: {ours} against {theirs}")
+def check_fits(agent: TrainedAgent, env, normalized: bool) -> None:
+    """``ValueError`` naming ``trained_agent`` unless the agent reads the observations ``env``
+    gives (the run's, vectorised or not) and writes the actions it takes
+    (:meth:`~agents.policies.sb3.SB3Policy.check_env`), and trained with normalised
+    observations where the run normalises them (``normalized``) and only there."""
+    try:
+        agent.policy.check_env(env)
+    except ValueError as error:
+        raise ValueError(f"trained_agent {agent.name!r} reads and writes other observations or "
+                         f"actions than this run's env: {error}") from None
+    if normalized != (agent.normalization_path is not None):
+        trained = "with" if agent.normalization_path else "without"
+        raise ValueError(
+            f"trained_agent {agent.name!r} trained {trained} normalised observations and this run "
+            f"{'normalises' if normalized else 'does not'}: its weights expect the other scale "
+            f"(set the recipe's normalize to match)")
 
 
 def inherited_segments(agent: TrainedAgent) -> list[dict[str, Any]]:
@@ -108,21 +110,14 @@ def inherited_segments(agent: TrainedAgent) -> list[dict[str, Any]]:
              "feedback": env_kwargs.get("feedback")}
     # a segment the agent itself inherited keeps the marks of the agent it came from
     return [{**segment, **{key: value for key, value in marks.items() if key not in segment}}
-            for segment in agent.segments if isinstance(segment, dict)]
+            for segment in agent.segments]
 
 
-def load_trained_model(agent: TrainedAgent, algo_cls, env, algo_kwargs: dict, seed: int,
-                       normalized: bool):
-    """The agent's model on ``env`` (already wrapped in the agent's statistics where
-    ``normalized``), with the run's hyperparameters (``algo_kwargs``, action noise built) over
-    the saved ones and ``seed``; ``ValueError`` naming ``trained_agent`` where the spaces or
-    the network differ or only one side normalises observations."""
-    if normalized != (agent.normalization_path is not None):
-        trained = "with" if agent.normalization_path else "without"
-        raise ValueError(
-            f"trained_agent {agent.name!r} trained {trained} normalised observations and this run "
-            f"{'normalises' if normalized else 'does not'}: its weights expect the other scale "
-            f"(set the recipe's normalize to match)")
+def load_trained_model(agent: TrainedAgent, algo_cls, env, algo_kwargs: dict, seed: int):
+    """The agent's model on ``env`` (:func:`check_fits`; wrapped in the agent's statistics
+    where the run normalises), with the run's hyperparameters (``algo_kwargs``, action noise
+    built) over the saved ones and ``seed``; ``ValueError`` naming ``trained_agent`` where the
+    network differs (``policy_kwargs``)."""
     try:
         model = algo_cls.load(str(agent.model_path), env=env, device="cpu", **algo_kwargs)
     except (ValueError, KeyError) as error:  # spaces or policy_kwargs unlike the agent's

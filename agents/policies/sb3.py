@@ -58,23 +58,10 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
     --trained-agent``, whose steps and time the totals include, as do those of the agents that
     agent came from; ``None`` where it started anew).
     """
-    resolved = resolve_sb3_path(path)
-    directory = resolved if resolved.is_dir() else resolved.parent
-    if directory.name == "checkpoints":
-        directory = directory.parent
-    record = directory / "training.yaml"
-    if not record.is_file():
+    segments = training_segments(path)
+    if segments is None:
         return None
-    try:
-        segments = yaml.safe_load(record.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
-        raise ValueError(f"training record {str(record)!r} is not readable YAML "
-                         f"({type(error).__name__})") from None
-    if not isinstance(segments, list) or not segments or not all(
-            isinstance(segment, dict) and "timesteps" in segment for segment in segments):
-        raise ValueError(f"training record {str(record)!r} must be a list of training "
-                         f"segments, each with its timesteps")
-    env_kwargs = _read_run_config(_run_config_file(directory / "model.zip")).get(
+    env_kwargs = _read_run_config(_run_config_file(_run_directory(path) / "model.zip")).get(
         "env_kwargs") or {}
     return {"timesteps": int(sum(segment["timesteps"] for segment in segments)),
             "wall_s": float(sum(segment.get("wall_s", 0.0) + segment.get("demo_wall_s", 0.0)
@@ -87,6 +74,33 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
             "demonstrations": any("demonstrations" in segment for segment in segments),
             "trained_agent": next((str(segment["trained_agent"]) for segment in reversed(segments)
                                    if segment.get("trained_agent")), None)}
+
+
+def _run_directory(path: str | Path) -> Path:
+    """The run (or shipped agent's) directory of an agent's directory, model ``.zip``
+    (a checkpoint's included) or shipped name."""
+    resolved = resolve_sb3_path(path)
+    directory = resolved if resolved.is_dir() else resolved.parent
+    return directory.parent if directory.name == "checkpoints" else directory
+
+
+def training_segments(path: str | Path) -> list[dict[str, Any]] | None:
+    """The segments of the ``training.yaml`` beside an agent (``path`` as
+    :func:`training_budget`'s), one per training, each with its ``timesteps``; ``None``
+    without one, ``ValueError`` naming the file where it is unreadable or malformed."""
+    record = _run_directory(path) / "training.yaml"
+    if not record.is_file():
+        return None
+    try:
+        segments = yaml.safe_load(record.read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        raise ValueError(f"training record {str(record)!r} is not readable YAML "
+                         f"({type(error).__name__})") from None
+    if not isinstance(segments, list) or not segments or not all(
+            isinstance(segment, dict) and "timesteps" in segment for segment in segments):
+        raise ValueError(f"training record {str(record)!r} must be a list of training "
+                         f"segments, each with its timesteps")
+    return segments
 
 
 REPOSITORY_DIR = SHIPPED_DIR.parents[1]
