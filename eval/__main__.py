@@ -594,6 +594,13 @@ def _claims_parser(sub) -> argparse.ArgumentParser:
                         help="also write the ledger to docs/claims.md, its records kept in "
                              "docs/claims/records (a full run of every claim only)")
     _add_workers(claims)
+    claims.add_argument("--backend", default="local", choices=["local", "ray"],
+                        help="--workers local processes, or each job a Ray task (a local Ray "
+                             "or --address; extra: soft-arm-gym[ray])")
+    claims.add_argument("--address", default=None, metavar="ADDR",
+                        help="with --backend ray: an existing Ray cluster (auto, "
+                             "ray://host:10001, host:6379); the package must be importable on "
+                             "every node. Default: a local Ray")
     return claims
 
 
@@ -605,6 +612,21 @@ def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         fail(parser, "--claims", error)
     if args.report_only and args.resume:
         parser.error("--resume runs the missing experiments; --report-only runs none: give one")
+    backend = args.backend
+    if args.address is not None and args.backend != "ray":
+        parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
+                     f"{args.backend}")
+    if args.address is not None and not args.address.strip():
+        parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
+                     "got ''")
+    if args.backend == "ray":
+        from eval.claims import ray_backend as claims_ray  # optional extra, imported lazily
+
+        try:
+            claims_ray.require_ray()
+        except ImportError as error:
+            parser.error(f"--backend ray: {error}")
+        backend = claims_ray.make_ray_map(args.address)
     if args.docs and (args.quick or args.claims is not None
                       or list(args.papers) != list(PAPERS)):
         parser.error("--docs writes the full ledger: every paper and claim, without --quick")
@@ -616,7 +638,7 @@ def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
     command = _claims_command(args)
     ledger = run_ledger(args.papers, args.seeds, quick=args.quick, out=args.out,
                         resume=args.resume, workers=args.workers, progress=True,
-                        claims=args.claims, report_only=args.report_only)
+                        claims=args.claims, report_only=args.report_only, backend=backend)
     markdown_path, _ = write_ledger(ledger, args.out, command)
     print(ledger_table(ledger))
     print(summary_line(ledger))
@@ -626,6 +648,12 @@ def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
             markdown_path.unlink()  # docs/claims.md is its one copy in the repository
         print(f"ledger written to {DOCS_LEDGER}")
     print(f"output directory: {args.out}")
+    bad = ledger["bad_records"]
+    if bad:
+        more = f" and {len(bad) - 5} more" if len(bad) > 5 else ""
+        print(f"error: {len(bad)} bad record(s) left out of the ledger: {'; '.join(bad[:5])}"
+              f"{more}; run again with --resume to redo them", file=sys.stderr)
+        raise SystemExit(1)
 
 
 def _claims_command(args: argparse.Namespace) -> str:

@@ -281,9 +281,7 @@ class LWPRRWRController(BaselinePolicy):
             data = self._collect_pretraining_data() if recorded is None else recorded
             forward, report = self._train_forward(data)
             self.forward = forward
-            inverse = self._new_inverse()
-            inverse.set_fields(*self._inverse_fields())
-            inverse.fit(*data)
+            inverse = self._fit_inverse(data)
             return {"forward": forward, "inverse": inverse, "report": report, "tips_mm": data[0]}
 
         def use(result: dict[str, Any]) -> tuple:
@@ -411,9 +409,17 @@ class LWPRRWRController(BaselinePolicy):
         poses = [observations[step][:3] * _MM for step in steps]
         return self._transitions(poses, schedule)
 
-    def _train_forward(self, data) -> tuple[LWPR, dict[str, Any]]:
+    def _train_forward(
+            self, data,
+            on_epoch: Callable[[LWPR, np.ndarray, np.ndarray], None] | None = None,
+    ) -> tuple[LWPR, dict[str, Any]]:
         """LWPR epochs on 80 % of the transitions; the epoch with the lowest RMSE on the other
-        20 % is kept (ho2018 Fig. 4)."""
+        20 % is kept (ho2018 Fig. 4).
+
+        :param on_epoch: called after each epoch with the model and the indices of the training
+            and test transitions (e.g. :func:`eval.papers.ho2018.run_pretraining_check`); it must
+            not change the model.
+        """
         p, u, du, dp = data
         inputs = np.concatenate([p, u, du], axis=1)
         rng = np.random.default_rng(self.seed)
@@ -434,6 +440,8 @@ class LWPRRWRController(BaselinePolicy):
                           disable=not self.progress, leave=False):
             for index in rng.permutation(train):
                 model.update(inputs[index], dp[index])
+            if on_epoch is not None:
+                on_epoch(model, train, test)
             predicted = model.predict_batch(inputs[test])
             rmse = float(np.sqrt(np.mean(np.sum((predicted - dp[test]) ** 2, axis=1))))
             history.append(rmse)
@@ -450,6 +458,14 @@ class LWPRRWRController(BaselinePolicy):
         return RewardWeightedInverse(3, self.n_chambers, rest_actuation=self.rest_actuation,
                                      attractor_gain=self.attractor_gain, window=self.window,
                                      ridge=self.ridge, task_scale=1.0, actuation_scale=0.1)
+
+    def _fit_inverse(self, data) -> RewardWeightedInverse:
+        """A new inverse on the receptive fields of :attr:`forward`, fitted on the transitions
+        ``data`` (``(p, u, du, dp)``)."""
+        inverse = self._new_inverse()
+        inverse.set_fields(*self._inverse_fields())
+        inverse.fit(*data)
+        return inverse
 
     def _inverse_fields(self) -> tuple[np.ndarray, np.ndarray]:
         """The forward model's receptive fields of all outputs, on ``[p, u]`` (eq. (6))."""

@@ -5,7 +5,16 @@ paper states it, the claim in one sentence, the paper's own figures, and the cri
 "reproduced", taken from those figures. Its ``check`` reads the summary an experiment wrote for
 one seed and returns an :class:`Outcome`: the verdict on that seed and the numbers that decided
 it. Over several seeds, :func:`combine` gives the claim's verdict: *reproduced* where every seed
-reproduced it, *not reproduced* where none reproduced any of it, *partly* otherwise.
+reproduced it, *not reproduced* where most seeds did not reproduce even part of it, *partly*
+otherwise.
+
+Criteria judge effect sizes (:class:`Effect`): the paper's effect as a number (a ratio, an
+improvement or a level, with the paper's own spread over its cases) and a band around it. Ours is
+*reproduced* inside the band (0.8x-1.25x of the paper's size unless stated), *partly* where it has
+at least half the paper's effect in the paper's direction, *not reproduced* below that. A claim the
+paper reports per path, load or configuration is judged on each, and takes the worst
+(:func:`worst`); a claim about a disturbance first judges the disturbance's own effect on the source
+it hurts, and takes the worse of the two.
 
 A :class:`ClaimExperiment` runs one of the papers' experiments for one seed, in full (the
 paper's protocol) or ``quick`` (a small version of it, minutes), and returns a JSON-able summary
@@ -14,6 +23,7 @@ of the numbers the claims read; several claims may share one experiment.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Callable, Literal, Sequence
 
@@ -52,16 +62,167 @@ def graded(full: bool, part: bool, measured: str) -> Outcome:
 
 
 def combine(outcomes: Sequence[Outcome]) -> Verdict:
-    """The verdict over seeds: reproduced on every seed -> reproduced; not reproduced on
-    every seed -> not reproduced; anything else -> partly."""
+    """The verdict over seeds: reproduced on every seed -> reproduced; not even partly
+    reproduced on most seeds (more than half) -> not reproduced; anything else -> partly."""
     if not outcomes:
         raise ValueError("combine needs the outcome of at least one seed, got none")
-    verdicts = {outcome.verdict for outcome in outcomes}
-    if verdicts == {"reproduced"}:
+    verdicts = [outcome.verdict for outcome in outcomes]
+    if all(verdict == "reproduced" for verdict in verdicts):
         return "reproduced"
-    if verdicts == {"not reproduced"}:
+    if 2 * verdicts.count("not reproduced") > len(verdicts):
         return "not reproduced"
     return "partly"
+
+
+def worst(verdicts: Sequence[Verdict]) -> Verdict:
+    """The worst of several verdicts (a claim judged per path, load or configuration, or a
+    disturbance's own effect and the claim about it)."""
+    if not verdicts:
+        raise ValueError("worst needs at least one verdict, got none")
+    return max(verdicts, key=VERDICTS.index)
+
+
+EffectKind = Literal["ratio", "fraction", "level"]
+EFFECT_KINDS: tuple[EffectKind, ...] = ("ratio", "fraction", "level")
+
+
+@dataclass(frozen=True)
+class Effect:
+    """A paper's effect as a number, and the band in which ours reproduces it.
+
+    Three kinds:
+
+    - ``"ratio"``: one error over another (``a / b``; no effect: 1). The paper's ratio may lie on
+      either side of 1; its effect is ``|log r|`` in the paper's direction. Reproduced where
+      ours lies within ``band`` times the paper's range; partly where ours is on the paper's
+      side of 1 with at least half the paper's smallest effect, ``|log r| >= 0.5 |log r_p|``
+      (e.g. a paper's 5.67 -> at least 2.38), or beyond the band's top.
+    - ``"fraction"``: an improvement or reduction ``(a - b) / a`` (no effect: 0). Reproduced
+      within ``band`` times the paper's range; partly at least half the paper's smallest, or
+      beyond the band's top.
+    - ``"level"``: a value the paper states (an error "about 1 mm", an RMSE, a step count),
+      where both too large and far too small miss it (an error far below the paper's is a
+      fidelity gap). Reproduced within ``band`` times the paper's range; partly within half
+      to twice it.
+
+    Attributes:
+        kind: one of :data:`EFFECT_KINDS`.
+        paper: the paper's value, or its ``(smallest, largest)`` over the cases it reports.
+        band: ``(low, high)`` factors on the paper's range for "reproduced" (default 0.8 and
+            1.25; a claim may give the paper's own spread instead).
+        unit: how a value is written (``"x"``, ``"%"`` for a fraction, ``"mm"``...).
+    """
+
+    kind: EffectKind
+    paper: float | tuple[float, float]
+    band: tuple[float, float] = (0.8, 1.25)
+    unit: str = ""
+
+    def __post_init__(self) -> None:
+        if self.kind not in EFFECT_KINDS:
+            raise ValueError(f"kind must be one of {list(EFFECT_KINDS)}, got {self.kind!r}")
+        low, high = self.range
+        if not (math.isfinite(low) and math.isfinite(high) and 0 < low <= high):
+            raise ValueError(f"paper must be a positive value or a (smallest, largest) pair, "
+                             f"got {self.paper!r}")
+        if self.kind == "ratio" and low < 1 < high:
+            raise ValueError(f"a ratio's paper range must lie on one side of 1, got "
+                             f"{self.paper!r}")
+        if self.kind == "ratio" and low == high == 1:
+            raise ValueError("a ratio of 1 is no effect")
+        if not (len(self.band) == 2 and 0 < self.band[0] <= 1 <= self.band[1]):
+            raise ValueError(f"band must be (low <= 1, high >= 1) factors, got {self.band!r}")
+
+    @property
+    def range(self) -> tuple[float, float]:
+        """The paper's ``(smallest, largest)`` value."""
+        if isinstance(self.paper, tuple):
+            return float(self.paper[0]), float(self.paper[1])
+        return float(self.paper), float(self.paper)
+
+    def _oriented(self, value: float) -> tuple[float, float, float]:
+        """A ratio below 1 as its reciprocal, so the effect always grows with the value:
+        ``(value, smallest, largest)``."""
+        low, high = self.range
+        if self.kind == "ratio" and high < 1:
+            return (math.inf if value <= 0 else 1.0 / value), 1.0 / high, 1.0 / low
+        return value, low, high
+
+    def verdict(self, value: float | None) -> Verdict:
+        """Ours (``None`` or NaN: not measured -> not reproduced) against the paper's."""
+        if value is None or not math.isfinite(value):
+            return "not reproduced"
+        value, low, high = self._oriented(float(value))
+        lo, hi = self.band[0] * low, self.band[1] * high
+        if self.kind == "level":
+            if lo <= value <= hi:
+                return "reproduced"
+            return "partly" if 0.5 * low <= value <= 2.0 * high else "not reproduced"
+        half = (math.sqrt(low) if self.kind == "ratio" else 0.5 * low)
+        if value < half:
+            return "not reproduced"
+        return "reproduced" if lo <= value <= hi else "partly"
+
+    def criterion(self) -> str:
+        """The bars in words: ``"reproduced within 4.53-7.09 x (0.8-1.25 x the paper's
+        5.67); partly from 2.38 x"``."""
+        low, high = self.range
+        paper = self.show(low) if low == high else f"{self.show(low)}-{self.show(high)}"
+        oriented = self.kind == "ratio" and high < 1
+        lo, hi = self.band[0] * low, self.band[1] * high
+        if self.kind == "ratio":  # never nearer 1 than half the paper's effect
+            lo = max(lo, math.sqrt(low))
+        if oriented:  # the band on the reciprocal, written back as ratios below 1
+            lo, hi = low / self.band[1], min(high / self.band[0], math.sqrt(high))
+        bars = (f"reproduced within {self.show(lo)}-{self.show(hi)} ({self.band[0]:g}-"
+                f"{self.band[1]:g} x the paper's {paper})")
+        if self.kind == "level":
+            return bars + f"; partly within {self.show(0.5 * low)}-{self.show(2.0 * high)}"
+        if self.kind == "ratio":
+            half = 1.0 / math.sqrt(1.0 / high) if oriented else math.sqrt(low)
+            return bars + f"; partly {'up to' if oriented else 'from'} {self.show(half)}"
+        return bars + f"; partly from {self.show(0.5 * low)}"
+
+    def show(self, value: float | None) -> str:
+        """A value in this effect's unit (a fraction as a percentage)."""
+        if value is None or not math.isfinite(value):
+            return "n/a"
+        if self.kind == "fraction":
+            return f"{100 * value:.0f} %"
+        if self.unit == "steps":
+            return f"{value:.0f} steps"
+        return f"{value:.2f}{' ' + self.unit if self.unit else ''}"
+
+
+    def part(self, label: str, value: float | None) -> "Part":
+        """Ours judged on this effect as one part of a claim (:func:`judged`)."""
+        verdict = self.verdict(value)
+        return verdict, f"{label} {self.show(value)} ({SHORT[verdict]})"
+
+
+Part = tuple[Verdict, str]
+"""One part of a claim's judgement: its verdict and the numbers behind it, in words."""
+
+
+def bar(label: str, verdict: Verdict, shown: str) -> Part:
+    """A part judged by a bar of its own (a count, an "every point reached"), not an
+    :class:`Effect`."""
+    if verdict not in VERDICTS:
+        raise ValueError(f"verdict must be one of {list(VERDICTS)}, got {verdict!r}")
+    return verdict, f"{label} {shown} ({SHORT[verdict]})"
+
+
+def judged(parts: Sequence[Part]) -> Outcome:
+    """A claim judged part by part (per path, load, configuration, or a disturbance and the
+    claim about it): the claim takes the worst part's verdict, and its measured line names
+    every part with its value and verdict."""
+    if not parts:
+        raise ValueError("judged needs at least one part, got none")
+    return Outcome(worst([verdict for verdict, _ in parts]), "; ".join(text for _, text in parts))
+
+
+SHORT = {"reproduced": "in band", "partly": "partly", "not reproduced": "missed"}
+"""How a part's verdict reads in a measured line."""
 
 
 @dataclass(frozen=True)
@@ -81,6 +242,8 @@ class ClaimExperiment:
         cpu_minutes: roughly how long one seed takes on one core, ``(quick, full)`` (minutes,
             measured: the records' ``cpu_seconds``). A parallel ledger starts the longest jobs
             first; nothing else reads it.
+        version: the layout of its summary; raised whenever the summary gains or changes a
+            field, so a record of another version is run again (and named by a report).
     """
 
     name: str
@@ -90,8 +253,12 @@ class ClaimExperiment:
     run: Callable[[int, bool, int, bool], dict[str, Any]]
     shares: str = ""
     cpu_minutes: tuple[float, float] = (1.0, 1.0)
+    version: int = 1
 
     def __post_init__(self) -> None:
+        if not isinstance(self.version, int) or isinstance(self.version, bool) \
+                or self.version < 1:
+            raise ValueError(f"version must be an integer >= 1, got {self.version!r}")
         minutes = self.cpu_minutes
         if (not isinstance(minutes, tuple) or len(minutes) != 2
                 or not all(isinstance(m, (int, float)) and not isinstance(m, bool) and m > 0
@@ -113,7 +280,9 @@ class Claim:
         statement: the claim in one sentence.
         paper_figures: the paper's own numbers behind it.
         criterion: when it counts as reproduced (and partly), from the paper's figures.
-        experiment: the :class:`ClaimExperiment` it reads.
+        experiment: the :class:`ClaimExperiment` it reads; ``None`` where the simulation
+            cannot run the paper's experiment at all (then ``check`` is ``None`` and ``cause``
+            says why: the claim is reported not reproduced, never left out).
         check: ``check(summary) -> Outcome`` on one seed's summary of ``experiment``.
         cause: where the claim is not reproduced on the paper's protocol (full runs, seeds
             0-2), the measured cause in one line (or ``"unknown"``); ``None`` where it is.
@@ -126,12 +295,22 @@ class Claim:
     statement: str
     paper_figures: str
     criterion: str
-    experiment: str
-    check: Callable[[dict[str, Any]], Outcome]
+    experiment: str | None
+    check: Callable[[dict[str, Any]], Outcome] | None
     cause: str | None = None
+
+    def __post_init__(self) -> None:
+        if (self.experiment is None) != (self.check is None):
+            raise ValueError(f"claim {self.key}: experiment and check come together (both or "
+                             f"neither), got experiment {self.experiment!r}")
+        if self.experiment is None and not self.cause:
+            raise ValueError(f"claim {self.key}: a claim the simulation cannot run needs its "
+                             f"cause")
 
     def judge(self, summary: dict[str, Any]) -> Outcome:
         """``check(summary)``, refusing anything but an :class:`Outcome`."""
+        if self.check is None:
+            raise ValueError(f"claim {self.key} has no experiment to judge: {self.cause}")
         outcome = self.check(summary)
         if not isinstance(outcome, Outcome):
             raise TypeError(f"claim {self.key}: check must return an Outcome, got "

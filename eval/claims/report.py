@@ -31,7 +31,8 @@ def ledger_table(ledger: dict[str, Any]) -> str:
     lines = ["| claim | paper | ours, per seed | verdict |", "|---|---|---|---|"]
     for entry in ledger["claims"]:
         ours = "<br>".join(f"seed {s['seed']}: {s['measured']} ({s['verdict']})"
-                           for s in entry["seeds"])
+                           for s in entry["seeds"]) or (
+            "cannot be run in simulation" if entry["experiment"] is None else "")
         verdict = MARK[entry["verdict"]] + quick
         judged = [s["seed"] for s in entry["seeds"]]
         if entry["seeds"] and judged != every:
@@ -48,15 +49,24 @@ def markdown(ledger: dict[str, Any], command: str) -> str:
     """``claims.md``: how it was made, the summary, the table, the criteria and the
     experiments with their times."""
     versions = ", ".join(f"{k} {v}" for k, v in ledger["versions"].items())
+    made = ", ".join(ledger.get("record_revisions", [])) or "none"
     lines = ["# The papers' claims: reproduced or not", "",
-             f"Made by `{command}` (git {ledger['git_revision'] or 'unknown'}; {versions}).",
-             "Each claim's criterion comes from the paper's own figures and was written before "
-             "any run; a claim is *reproduced* when every seed meets it, *not reproduced* when "
-             "no seed meets any of it, *partly* otherwise.", "", f"**{summary_line(ledger)}**",
+             f"Made by `{command}` (git {ledger['git_revision'] or 'unknown'}; {versions}); "
+             f"the records it judged were made at revision(s) {made}.",
+             "Each claim's criterion states the paper's effect as a number and was written "
+             "before any run: on one seed, *reproduced* within a band around the paper's size "
+             "(0.8-1.25 x unless the criterion says otherwise), *partly* with at least half the "
+             "paper's effect in its direction, *not reproduced* below that, judged per path, "
+             "load or configuration where the paper reports them apart, and a disturbance "
+             "first judged on the source it hurts. Over seeds: *reproduced* when every seed "
+             "is, *not reproduced* when most seeds are not even partly, *partly* otherwise. A "
+             "claim the simulation cannot run is *not reproduced*, with why.",
+             "", f"**{summary_line(ledger)}**",
              "", ledger_table(ledger), "", "## Criteria", ""]
     for entry in ledger["claims"]:
-        lines.append(f"- **{entry['key']}**: {entry['criterion']} (experiment "
-                     f"`{entry['experiment']}`)")
+        where = (f"experiment `{entry['experiment']}`" if entry["experiment"] is not None
+                 else "no experiment: the simulation cannot run it")
+        lines.append(f"- **{entry['key']}**: {entry['criterion']} ({where})")
     lines += ["", "## Experiments", "",
               "| experiment | what runs | seconds per seed | CPU seconds per seed |",
               "|---|---|---|---|"]

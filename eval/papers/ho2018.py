@@ -47,6 +47,14 @@ standard deviation and maximum.
 
 Further baselines (``cc_model``, ``hybrid_gpr``, ``sb3:PATH``) model or were trained on chamber
 pressures, so they drive pressures on the same rectangle and load.
+
+Pre-training check (ho2018 Section 3.2, Figs. 4-5; :func:`run_pretraining_check`): the static
+experiment's pre-training walk, its transitions split 80/20 at random into training and test
+sets, the forward LWPR trained on the 80 % epoch by epoch as ``lwpr_rwr`` trains it; the RMSE of
+its predicted tip transitions ``dp`` on both sets (the paper: about 1 mm on the test set, best
+at 11 of 15 epochs, 139 receptive fields), and the error of the inverse's command pushed through
+the learned forward model against the asked ``dp`` of each test transition, per axis (the paper:
+under 0.5 mm).
 """
 
 from __future__ import annotations
@@ -64,6 +72,8 @@ import soft_gym  # noqa: F401
 from agents.policies import make_policy
 from eval.report import package_version, write_json
 from eval.runner import agent_error
+from soft_gym._threads import one_compute_thread
+from soft_gym._validation import require_bool, require_seed
 from soft_gym.scenarios import FillingLoad, TipMass
 from soft_gym.tasks.paths import PathSpec, make_reference_trajectory, workspace_surface
 
@@ -220,7 +230,6 @@ def run_experiment(name: str, seed: int = 0, protocol: str = "paper",
     waypoints = experiment.pretrain_waypoints if pretrain_waypoints is None else pretrain_waypoints
     cycle_s = timing.cycle_s[name] if cycle_s is None else cycle_s
     lead_in_s = timing.lead_in_s if lead_in_s is None else lead_in_s
-    controller_params = {"window": experiment.window, **controller_params}
     load = experiment.runs[-1].load
     runs = list(experiment.runs) + [Run(f"{policy}, {_LOAD_NAMES[load]}", False, load, policy)
                                     for policy in baselines]
@@ -242,11 +251,8 @@ def run_experiment(name: str, seed: int = 0, protocol: str = "paper",
                        **{**interface, **(env_options or {})})
         try:
             if run.policy == "lwpr_rwr":
-                rate = {"hold_steps": timing.hold_steps[name]["online" if run.online
-                                                             else "offline"]}
-                policy = make_policy("lwpr_rwr", env, online=run.online,
-                                     **{**rate, **controller_params},
-                                     pretrain_waypoints=waypoints, seed=seed)
+                policy = make_policy("lwpr_rwr", env, **lwpr_rwr_settings(
+                    name, run.online, seed, protocol, waypoints, **controller_params))
                 report = policy.pretrain()
                 if path_m is None:
                     path_m = workspace_rectangle(workspace_surface(policy.pretraining_tips_mm()),
@@ -267,6 +273,130 @@ def run_experiment(name: str, seed: int = 0, protocol: str = "paper",
         finally:
             env.close()
     return results
+
+
+def lwpr_rwr_settings(name: str, online: bool, seed: int = 0, protocol: str = "paper",
+                      pretrain_waypoints: int | None = None,
+                      **controller_params: Any) -> dict[str, Any]:
+    """``lwpr_rwr``'s keywords in experiment ``name``'s offline or ``online`` runs under
+    ``protocol``: the protocol's decision rate, the experiment's window and pre-training
+    waypoints (``pretrain_waypoints`` replaces them), ``seed``; ``controller_params`` replace
+    any of them but the waypoints and the seed."""
+    experiment = EXPERIMENT_SPECS[name]
+    waypoints = experiment.pretrain_waypoints if pretrain_waypoints is None else pretrain_waypoints
+    rate = PROTOCOLS[protocol].hold_steps[name]["online" if online else "offline"]
+    return {"online": online, "hold_steps": rate, "window": experiment.window,
+            **controller_params, "pretrain_waypoints": waypoints, "seed": seed}
+
+
+QUICK_PRETRAIN_WAYPOINTS = 8
+"""``run_pretraining_check(quick=True)``'s waypoints: a tenth of the static experiment's 80
+(240 transitions at its 30 decisions a line)."""
+
+
+def run_pretraining_check(seed: int = 0, quick: bool = False, progress: bool = True) -> dict:
+    """ho2018 Section 3.2's validation of the pre-trained models (Figs. 4-5), on the static
+    experiment's pre-training (the paper's protocol: 80 random actuator-space waypoints joined by
+    straight lines, a decision every 20 Hz control step, on the unloaded, volume-driven arm with
+    EM feedback; ``quick``: :data:`QUICK_PRETRAIN_WAYPOINTS` waypoints, the rest alike).
+
+    The walk and the forward LWPR's training are ``lwpr_rwr``'s own
+    (:meth:`~agents.controllers.lwpr_rwr.LWPRRWRController.pretrain`): the transitions
+    ``(p, u, du) -> dp`` are split 80/20 at random (seeded by ``seed``), the model is trained
+    on the 80 % for up to ``max_epochs`` (15) epochs and the epoch with the lowest test RMSE is
+    kept, so the test set also picks the epoch, as in the paper's Fig. 4. The inverse
+    (reward-weighted regression on the forward model's receptive fields, with its null-space
+    attractor) is fitted on the training transitions only, so the test transitions are new to
+    both models (``lwpr_rwr`` fits it on all of them: ``inverse_error_deployed_mm``).
+
+    Returns (JSON-able; lengths and positions in mm):
+
+    * ``n_transitions``, ``n_train``, ``n_test``, ``waypoints``, ``hold_steps``;
+    * ``receptive_fields``: the kept forward model's fields per output coordinate (x, y, z);
+    * ``forward_rmse_mm``: ``train`` and ``test``, the RMSE of the predicted ``dp`` (the root of
+      the mean squared 3-D error); ``forward_rmse_axis_mm``: the same per axis;
+      ``forward_rmse_history_mm``: ``train`` and ``test`` after every epoch run;
+    * ``zero_dp_rmse_mm``: ``train`` and ``test``, the RMSE of predicting no motion (a reference
+      the model must beat); ``em_noise_floor_mm``: the RMSE a perfect model would still have
+      against ``dp`` read from two noisy EM readings (``sqrt(6)`` times the per-axis noise);
+    * ``inverse_error_mm``: for each test transition, the inverse's ``du`` for its ``dp`` at its
+      ``(p, u)``, pushed through the learned forward model, against that ``dp``:
+      ``max_per_axis`` (the paper's error bounds), ``rmse_per_axis`` and ``mean`` (of the 3-D
+      error); ``inverse_error_reachable_mm``: the same for the ``dp`` the forward model predicts
+      for the recorded transition (a ``dp`` the model can reach, without the tracker's noise);
+      ``inverse_error_deployed_mm``: ``inverse_error_mm`` of the inverse fitted on all
+      transitions, as ``lwpr_rwr`` deploys it;
+    * ``epochs`` (the kept epoch, 1-based), ``epochs_run``, ``max_epochs``.
+    """
+    seed = require_seed("seed", seed)
+    quick = require_bool("quick", quick)
+    progress = require_bool("progress", progress)
+    name = "static"
+    env = gym.make("SoftArmReach-v0", preset="ho2018", feedback="em", obs=("pose", "target"),
+                   actuation=ACTUATION)
+    try:
+        policy = make_policy("lwpr_rwr", env, cache=False, progress=progress,
+                             **lwpr_rwr_settings(name, False, seed, pretrain_waypoints=(
+                                 QUICK_PRETRAIN_WAYPOINTS if quick else None)))
+        noise_m = float(env.unwrapped.sensors["em"].position_noise_m)
+        with one_compute_thread():  # as the pre-training's cache computes it: the same bits
+            data = policy._collect_pretraining_data()
+            p, u, du, dp = data
+            inputs = np.concatenate([p, u, du], axis=1)
+            split: dict[str, np.ndarray] = {}
+            train_history: list[float] = []
+
+            def on_epoch(model, train: np.ndarray, test: np.ndarray) -> None:
+                split.update(train=train, test=test)
+                train_history.append(_rmse(model.predict_batch(inputs[train]) - dp[train]))
+
+            forward, report = policy._train_forward(data, on_epoch=on_epoch)
+            policy.forward = forward
+            train, test = split["train"], split["test"]
+            inverse = policy._fit_inverse(tuple(array[train] for array in data))
+            deployed = policy._fit_inverse(data)
+            errors = {part: forward.predict_batch(inputs[rows]) - dp[rows]
+                      for part, rows in split.items()}
+            reachable = forward.predict_batch(inputs[test])
+            inverse_errors = {
+                "inverse_error_mm": _inverse_error(forward, inverse, p[test], u[test], dp[test]),
+                "inverse_error_reachable_mm": _inverse_error(forward, inverse, p[test], u[test],
+                                                             reachable),
+                "inverse_error_deployed_mm": _inverse_error(forward, deployed, p[test], u[test],
+                                                            dp[test])}
+    finally:
+        env.close()
+    best = report["best_epoch"]
+    return {"n_transitions": int(len(inputs)), "n_train": int(len(train)),
+            "n_test": int(len(test)),
+            "waypoints": policy.pretrain_waypoints, "hold_steps": policy.hold_steps,
+            "receptive_fields": [int(n) for n in forward.fields_per_output],
+            "forward_rmse_mm": {part: _rmse(error) for part, error in errors.items()},
+            "forward_rmse_axis_mm": {part: [float(v) for v in np.sqrt(np.mean(error ** 2, axis=0))]
+                                     for part, error in errors.items()},
+            "forward_rmse_history_mm": {"train": train_history,
+                                        "test": [float(v) for v in report["test_rmse_mm"]]},
+            "zero_dp_rmse_mm": {part: _rmse(dp[rows]) for part, rows in split.items()},
+            "em_noise_floor_mm": float(np.sqrt(6.0) * noise_m * 1000.0),
+            **inverse_errors,
+            "epochs": int(best), "epochs_run": len(report["test_rmse_mm"]),
+            "max_epochs": policy.max_epochs}
+
+
+def _rmse(error: np.ndarray) -> float:
+    """The root of the mean squared norm of the rows of ``error``."""
+    return float(np.sqrt(np.mean(np.sum(error ** 2, axis=1))))
+
+
+def _inverse_error(forward, inverse, p: np.ndarray, u: np.ndarray,
+                   wanted: np.ndarray) -> dict[str, Any]:
+    """The forward model's ``dp`` for the inverse's ``du`` at each ``(p, u)``, less the
+    ``wanted`` ``dp`` (mm): the largest per axis, the RMSE per axis and the mean 3-D error."""
+    du = np.array([inverse.predict(w, p_k, u_k) for w, p_k, u_k in zip(wanted, p, u)])
+    error = forward.predict_batch(np.concatenate([p, u, du], axis=1)) - wanted
+    return {"max_per_axis": [float(v) for v in np.abs(error).max(axis=0)],
+            "rmse_per_axis": [float(v) for v in np.sqrt(np.mean(error ** 2, axis=0))],
+            "mean": float(np.linalg.norm(error, axis=1).mean())}
 
 
 LEAD_IN_WINDOW_S = 5.0

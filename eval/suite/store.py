@@ -105,6 +105,9 @@ class RecordError(ValueError):
         self.path, self.problem = Path(path), " ".join(str(problem).split())
         super().__init__(f"bad record {self.path}: {self.problem}")
 
+    def __reduce__(self):  # a pool worker's error reaches the parent whole
+        return type(self), (self.path, self.problem)
+
 
 REQUIRED_METRICS = ("last_cycle_error_mm", "mean_error_mm", "max_error_mm", "path_deviation_mm")
 """Metrics a finished record must hold as finite numbers >= 0 (mm): the score and what the
