@@ -200,6 +200,12 @@ class Effect:
         return verdict, f"{label} {self.show(value)} ({SHORT[verdict]})"
 
 
+def criteria(*named: tuple[str, Effect]) -> str:
+    """A criterion in words from its effects, each named with its bars
+    (``"pentagram: reproduced within ...; circle: ..."``)."""
+    return "; ".join(f"{name}: {effect.criterion()}" for name, effect in named)
+
+
 Part = tuple[Verdict, str]
 """One part of a claim's judgement: its verdict and the numbers behind it, in words."""
 

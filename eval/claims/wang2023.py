@@ -9,7 +9,8 @@ import functools
 from typing import Any, Callable
 
 from eval import runner
-from eval.claims.ledger import Claim, ClaimExperiment, Effect, Outcome, bar, judged, numbers
+from eval.claims.ledger import (Claim, ClaimExperiment, Effect, Outcome, bar, criteria, judged,
+                                numbers)
 from eval.metrics import estimation_errors, summarize
 from eval.papers import estimation
 
@@ -51,11 +52,11 @@ def paper_improvements(metric: str, path: str | None = None) -> list[float]:
 
 # ------------------------------------------------------------------------------- experiments
 def _track(seed: int, quick: bool, workers: int, progress: bool, gains: tuple[float, ...],
-           feedback: str) -> dict[str, Any]:
-    """cc_model and hybrid_gpr on both paths at each gain with ``feedback``; each policy's
+           feedback: str, paths: tuple[str, ...] = PATHS) -> dict[str, Any]:
+    """cc_model and hybrid_gpr on ``paths`` at each gain with ``feedback``; each policy's
     last-cycle mean and max tracking error and mean path deviation (mm)."""
     cycles = QUICK_TRACK_CYCLES if quick else TRACK_CYCLES
-    runs = [(path, kp, policy) for path in PATHS for kp in gains
+    runs = [(path, kp, policy) for path in paths for kp in gains
             for policy in ("cc_model", "hybrid_gpr")]
     configs = [runner.RunConfig(policy=policy, policy_params={"kp": kp}, seed=seed,
                                 env_kwargs={"path": path, "cycles": cycles,
@@ -82,7 +83,8 @@ def _run_tracking(seed: int, quick: bool, workers: int, progress: bool) -> dict[
 def _run_fused_control(seed: int, quick: bool, workers: int, progress: bool) -> dict[str, Any]:
     """Fig. 11: the same controllers at K_p = 0.1 on the fused camera/FBG pose (Section IV-E:
     "the pose information would be provided by the fusion result of SLAM and FBG")."""
-    return _track(seed, quick, workers, progress, (FIG11_KP,), "fused")
+    return _track(seed, quick, workers, progress, (FIG11_KP,), "fused",
+                  PATHS[:1] if quick else PATHS)
 
 
 def _phase_stats(errors: dict) -> dict[str, Any]:
@@ -156,7 +158,8 @@ EXPERIMENTS = (
                     "cc_model and hybrid_gpr track the pentagram and the circle for 4 cycles at "
                     "K_p = 0.1 on the fused camera/FBG pose (Fig. 11's controllers; the paper's "
                     "elephant path is not among the env's paths); each policy's last cycle",
-                    "3 cycles", _run_fused_control, shares=_SENSING, cpu_minutes=(2.0, 6.0)),
+                    "the pentagram only, 3 cycles", _run_fused_control, shares=_SENSING,
+                    cpu_minutes=(2.0, 6.0)),
 )
 
 
@@ -319,7 +322,7 @@ def _init_size(summary: dict) -> Outcome:
 
 def _fused_control(summary: dict) -> Outcome:
     parts = []
-    for path in PATHS:
+    for path in (path for path in PATHS if path in summary):  # quick: the pentagram only
         model, hybrid = summary[path]["cc_model"], summary[path]["hybrid_gpr"]
         parts.append(FIG11_MEAN_RATIO.part(
             f"{path} mean cc / hybrid ({model['tracking_mm'][0]:.2f} / "
@@ -331,10 +334,6 @@ def _fused_control(summary: dict) -> Outcome:
     return judged(parts)
 
 
-def _criterion(*named: tuple[str, Effect]) -> str:
-    """A criterion from its effects: each named with its bars."""
-    return "; ".join(f"{name}: {effect.criterion()}" for name, effect in named)
-
 
 DISTURBANCE = "the disturbance first: "
 
@@ -344,7 +343,7 @@ CLAIMS = (
           "on both paths.",
           "cc_model: pentagram 2.99, 4.54, 9.35, 16.94 mm; circle 5.87, 15.87, 24.98, 28.91 mm "
           "(K_p 0.10 -> 0.04): 5.67 x and 4.92 x",
-          "the error at K_p 0.04 over the error at 0.10, per path: " + _criterion(
+          "the error at K_p 0.04 over the error at 0.10, per path: " + criteria(
               *((path, GAIN_EFFECT[path]) for path in PATHS)),
           "wang2023.tracking", _gain_effect,
           cause="the CC model's error grows 1.9-2.3 x from K_p 0.10 to 0.04 (the paper's 4.9-5.7 "
@@ -356,7 +355,7 @@ CLAIMS = (
           "The hybrid controller (CC + online GPR) reduces the tracking error of the CC model "
           "at every K_p on both paths.",
           "improvement 68.9-86.4 % (pentagram), 52.3-90.1 % (circle)",
-          "the improvement at every gain, against the paper's range on that path: " + _criterion(
+          "the improvement at every gain, against the paper's range on that path: " + criteria(
               *((path, IMPROVEMENT["tracking"][path]) for path in PATHS)),
           "wang2023.tracking", _improvement_check("tracking"),
           cause="at K_p 0.10 on the pentagram the improvement is 55-57 % on seeds 0-2, at the "
@@ -367,7 +366,7 @@ CLAIMS = (
           "The hybrid controller reduces the path deviation of the CC model at every K_p on "
           "both paths.",
           "improvement 65.8-80.9 % (pentagram), 78.7-94.1 % (circle)",
-          "the improvement at every gain, against the paper's range on that path: " + _criterion(
+          "the improvement at every gain, against the paper's range on that path: " + criteria(
               *((path, IMPROVEMENT["deviation"][path]) for path in PATHS)),
           "wang2023.tracking", _improvement_check("deviation"),
           cause="the hybrid's path deviation stays at 0.54-0.85 mm at every gain (about the EM "
@@ -378,7 +377,7 @@ CLAIMS = (
           "Undisturbed, the eye-in-hand camera's pose tracks the EM ground truth to about 1 mm "
           "RMSE.",
           "SLAM RMSE 0.998 mm (mean absolute errors 0.508 / 0.596 / 0.385 mm on x / y / z)",
-          _criterion(("camera RMSE", FIG5_CAMERA_RMSE)),
+          criteria(("camera RMSE", FIG5_CAMERA_RMSE)),
           "wang2023.occlusion", _fig5,
           cause="the simulated camera is more accurate than the paper's ORB-SLAM2: 0.67 mm "
                 "RMSE over the undisturbed first half on seeds 0-2 (the paper's 0.998 mm), the "
@@ -387,7 +386,7 @@ CLAIMS = (
           "While a hand covers the whole view for ~2 s at a time, the camera's estimate "
           "stagnates and its error grows, while the fused estimate stays bounded.",
           "full covers: SLAM max 38.48 mm, fusion max 4.75 mm (8.1 x)",
-          DISTURBANCE + _criterion(("camera max under the covers", COVERS_CAMERA_MAX),
+          DISTURBANCE + criteria(("camera max under the covers", COVERS_CAMERA_MAX),
                                    ("camera / fused max", COVERS_RATIO)),
           "wang2023.occlusion", _full_covers,
           cause="the covers hurt the simulated camera less than the paper's: its max under them "
@@ -398,7 +397,7 @@ CLAIMS = (
           "the camera's, most of all at its peaks.",
           "partial occluder: SLAM mean 1.69 / max 26.27 mm, fusion 1.13 / 2.57 mm (1.50 x at "
           "the mean, 10.2 x at the max)",
-          DISTURBANCE + _criterion(("camera max", PARTIAL_CAMERA_MAX),
+          DISTURBANCE + criteria(("camera max", PARTIAL_CAMERA_MAX),
                                    ("camera / fused max", PARTIAL_MAX_RATIO),
                                    ("camera / fused mean", PARTIAL_MEAN_RATIO)),
           "wang2023.occlusion", _partial_occluder,
@@ -410,7 +409,7 @@ CLAIMS = (
           "Under low light, darkness and LED glare the fusion keeps a stable estimate, "
           "improving on the camera's RMSE.",
           "RMSE over the lighting run: SLAM 3.116 mm, fusion 1.324 mm (2.35 x)",
-          DISTURBANCE + _criterion(("camera RMSE", LIGHTING_CAMERA_RMSE),
+          DISTURBANCE + criteria(("camera RMSE", LIGHTING_CAMERA_RMSE),
                                    ("camera / fused RMSE", LIGHTING_RATIO)),
           "wang2023.lighting", _lighting,
           cause="darkness hurts the simulated camera more than the paper's (RMSE 5.6-5.7 mm over "
@@ -422,7 +421,7 @@ CLAIMS = (
           "fusion mean within the two sources' in 7 of 8 cases, at most 0.24 mm above the "
           "better (LEGO cap 0.689/0.950/0.747, body 0.516/0.732/0.703 mm: SLAM/F-emp/fusion); "
           "the camera's max during the pushes 2.37-16.11 mm over the eight cases",
-          DISTURBANCE + "in each push, " + _criterion(("the camera's max", PUSH_CAMERA_MAX))
+          DISTURBANCE + "in each push, " + criteria(("the camera's max", PUSH_CAMERA_MAX))
           + "; then the fused mean: reproduced at most the worse source's and at most "
           f"{PUSH_FUSED_ABOVE_BETTER_MM} mm above the better's; partly at most the worse's",
           "wang2023.push", _push_fusion,
@@ -435,7 +434,7 @@ CLAIMS = (
           "occasional errors that the fusion suppresses.",
           "abdominal, cap push 1: SLAM max 16.109 mm, fusion max 3.180 mm (5.07 x); in the "
           "other seven cases 0.52-1.10 x",
-          _criterion(("camera / fused max under the cap push", CAP_PUSH_SPIKE)),
+          criteria(("camera / fused max under the cap push", CAP_PUSH_SPIKE)),
           "wang2023.push", _cap_push_spike,
           cause="no spike: under the cap push the simulated camera's max is 1.86 mm and the "
                 "fused 1.83-1.85 mm on seeds 0-2 (1.01-1.02 x; the paper's abdominal case 5.07 "
@@ -445,7 +444,7 @@ CLAIMS = (
           "more than under a push on the rigid cap.",
           "F-emp error std, cap vs body: LEGO 0.752/0.730 vs 0.875/0.774 mm, abdominal "
           "0.926/1.188 vs 1.712/1.377 mm (1.06-1.85 x)",
-          _criterion(("body / cap std", BODY_PUSH_STD)),
+          criteria(("body / cap std", BODY_PUSH_STD)),
           "wang2023.push", _body_push_noise,
           cause="F-emp's error scatters as much under the push on the cap as under the push on "
                 "the body (std 0.322-0.334 against 0.327-0.333 mm, seeds 0-2): the contact "
@@ -457,7 +456,7 @@ CLAIMS = (
           "source.",
           "LEGO, 4 cases: SLAM 1.249-1.849 mm (undisturbed 0.840 mm, Fig. 6), F-emp 1.324-2.175, "
           "fusion 1.221-1.769 mm: fusion lowest in all 4, 2-10 % below the better source",
-          DISTURBANCE + _criterion(("camera mean under flicks / without", FLICK_CAMERA),
+          DISTURBANCE + criteria(("camera mean under flicks / without", FLICK_CAMERA),
                                    ("better source / fused mean", FLICK_FUSION_GAIN)),
           "wang2023.flick", _flick_fusion),
     Claim("wang2023.table6_init_size", "wang2023", "Table VI, Appendix",
@@ -466,7 +465,7 @@ CLAIMS = (
           "F-emp mean: case 1 1.972 / 1.939 / 0.615 mm, case 2 1.582 / 1.179 / 0.899 mm "
           "(1800 / 450: 0.31 and 0.57; the camera's own mean falls 0.48 and 0.62 x across "
           "the same runs)",
-          _criterion(("F-emp mean 1800 / 450", INIT_FEMP)),
+          criteria(("F-emp mean 1800 / 450", INIT_FEMP)),
           "wang2023.init", _init_size,
           cause="F-emp's mean error barely moves with its initialisation size (0.492, 0.491, "
                 "0.481 mm on seed 0 for 450 / 900 / 1800 samples: 0.98 x, the paper's 0.31-0.57 "
@@ -477,7 +476,7 @@ CLAIMS = (
           "elephant path, K_p 0.1: model-based 2.625 mm mean / 13.322 mm peak, hybrid 1.604 / "
           "7.944 mm (1.64 x, 1.68 x)",
           "per path (pentagram and circle: the elephant path is not among the env's): "
-          + _criterion(("CC / hybrid mean", FIG11_MEAN_RATIO),
+          + criteria(("CC / hybrid mean", FIG11_MEAN_RATIO),
                        ("CC / hybrid peak", FIG11_PEAK_RATIO)),
           "wang2023.fused_control", _fused_control),
     Claim("wang2023.fig12_spline_mapping", "wang2023", "Fig. 12, Section IV-E2",

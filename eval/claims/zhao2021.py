@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from eval.claims.ledger import (Claim, ClaimExperiment, Effect, Outcome, Part, bar, graded,
-                                judged, numbers)
+from eval.claims.ledger import (Claim, ClaimExperiment, Effect, Outcome, Part, bar, criteria,
+                                graded, judged, numbers)
 from eval.papers import zhao2021 as experiments
 from eval.papers import zhao2021_table2
 from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
@@ -273,9 +273,6 @@ CIRCLE_BALLOONING = (
 """The measured cause shared by the circle claims that do not reproduce."""
 
 
-def _criterion(*named: tuple[str, Effect]) -> str:
-    return "; ".join(f"{name}: {effect.criterion()}" for name, effect in named)
-
 
 CLAIMS = (
     Claim("zhao2021.table2_fit", "zhao2021", "Table II, Section V-A",
@@ -294,7 +291,7 @@ CLAIMS = (
           "With key points off by up to xi = 2-4 mm the fit deviates more, but only a little.",
           "means 2.78 / 3.07 / 3.35 / 3.53 mm at xi = 0 / 2 / 3 / 4 mm: a rise of 0.29 / 0.57 "
           "/ 0.75 mm",
-          "the mean's rise from xi = 0, per xi: " + _criterion(
+          "the mean's rise from xi = 0, per xi: " + criteria(
               *((f"xi = {xi:g}", effect) for xi, effect in TABLE2_RISE.items())),
           "zhao2021.table2", _table2_noisy,
           cause=TABLE2_NOISE),
@@ -302,7 +299,7 @@ CLAIMS = (
           "The SFE-PD network predicts every key point within 3 mm of the measured one.",
           "errors of P1-P6: 1.31, 1.30, 2.14, 1.70, 1.45, 1.51 mm (all under 3 mm)",
           f"the largest under {KEY_POINT_BOUND_MM:g} mm (partly under twice it); "
-          + _criterion(("their mean", KEY_POINT_MEAN)),
+          + criteria(("their mean", KEY_POINT_MEAN)),
           "zhao2021.shape", _key_points,
           cause="the far key points P5 and P6 at 2.7-7.6 mm on every seed, and P1 at 9.5 mm on "
                 "seed 2 (P2-P4 under 1 mm): not isolated; on the earlier arm every key point "
@@ -311,7 +308,7 @@ CLAIMS = (
           "The backbone fitted through the predicted key points lies about 5.85 mm from the "
           "measured shape on average.",
           "mean error (eq. 21) 5.85 mm; Table IV's free rows 5.57-6.01 mm",
-          _criterion(("mean backbone error", BACKBONE_ERROR)),
+          criteria(("mean backbone error", BACKBONE_ERROR)),
           "zhao2021.shape", _backbone,
           cause="the reconstruction is 3-7 x more accurate than the paper's (mean backbone error "
                 "0.8-2.0 mm on seeds 0-2 against 5.85 mm): the simulated key points are read "
@@ -332,7 +329,7 @@ CLAIMS = (
     Claim("zhao2021.p2p_asdm_fewest_steps", "zhao2021", "Fig. 11, Section VI-C1",
           "ASDM reaches the goal in fewer steps than a fixed 8 mm or 2 mm step.",
           "steps: ASDM 14, d = 8 24, d = 2 75 (0.58 x and 0.19 x)",
-          "ASDM's steps over each fixed step's (not reached: no ratio): " + _criterion(
+          "ASDM's steps over each fixed step's (not reached: no ratio): " + criteria(
               *((f"over {label}", effect) for label, effect in ASDM_VS.items())),
           "zhao2021.p2p", _asdm_fewest,
           cause=P2P_BALLOONING),
@@ -353,7 +350,7 @@ CLAIMS = (
           "Under a swaying 119 g block and then a pull at the middle, ASDM enlarges its step "
           "and still reaches the goal.",
           "the step grows to 15 mm during the pull (steps 7-12); the goal is reached",
-          "the goal reached; " + _criterion(("the largest step during the pull", PULL_STEP)),
+          "the goal reached; " + criteria(("the largest step during the pull", PULL_STEP)),
           "zhao2021.sway", _sway,
           cause="seed 2's ASDM does not get within E of the goal in 100 steps after the pull "
                 "(24 and 37 steps on seeds 0-1), as none of its point-to-point runs does: "
@@ -368,7 +365,7 @@ CLAIMS = (
           "rejected: the tip returns to the path after each change.",
           "back on the path four steps after the removal; the circle completed",
           "every point reached (partly: half), back within E after adding; "
-          + _criterion(("steps back after removing", RECOVERY_STEPS)),
+          + criteria(("steps back after removing", RECOVERY_STEPS)),
           "zhao2021.circle", _heavy_circle, cause=CIRCLE_BALLOONING),
     Claim("zhao2021.sectionVB_simulation", "zhao2021", "Section V-B",
           "On a piecewise-constant-curvature simulation with a noisy tip, ASDM completes the "

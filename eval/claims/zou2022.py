@@ -9,7 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from eval.claims.ledger import Claim, ClaimExperiment, Effect, Outcome, bar, judged, numbers
+from eval.claims.ledger import (Claim, ClaimExperiment, Effect, Outcome, bar, criteria, judged,
+                                numbers)
 from eval.papers import zou2022 as experiments
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 
