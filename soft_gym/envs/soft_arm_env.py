@@ -40,7 +40,8 @@ is calibrated when the env is created, by its procedure on a private simulator o
 the env's fixed loads (:mod:`soft_gym.procedures.calibration`; the result is cached in memory
 and on disk, :mod:`soft_gym.sensing.calibration_cache`), and again on
 ``reset(options={"recalibrate": True})``. It keeps learning across ``reset()`` calls;
-``reset(seed=...)`` returns it to its calibrated state, so that a seed fixes an episode
+``reset(seed=...)`` returns it to its calibrated state, and every reset gives it the episode's
+generator for its own random draws (wang2023's RANSAC), so that a seed fixes an episode
 exactly. ``faults=`` puts visual faults (:mod:`soft_gym.sensors.faults`) on the cameras
 the env simulates: the eye-in-hand camera (``image``: the ``image`` part or camera-based
 feedback) and the stereo pair (``stereo``: feedback ``"stereo"`` or ``sensors=("stereo",)``).
@@ -457,6 +458,7 @@ class SoftArmEnv(gym.Env):
             self._calibrate(use_cache=False)
         elif seed is not None:
             self.feedback_source.restore()
+        self.feedback_source.reset(self.np_random)  # e.g. wang2023's RANSAC: seeded per episode
         if self.randomizer is not None:
             self._apply_draw(self.randomizer.sample(self.np_random))
         self.sim.reset(settle_s=self.settle_s)

@@ -110,6 +110,10 @@ class FeedbackSource:
     def restore(self) -> None:
         """Return to the state right after calibration (``reset(seed=...)``)."""
 
+    def reset(self, rng: np.random.Generator) -> None:
+        """Start an episode (every ``reset``, after :meth:`restore`): draw any randomness of
+        the estimates from ``rng``, the env's ``np_random`` (default: none)."""
+
     def estimate(self, measurement: Measurement) -> FeedbackEstimate:
         """The estimate from one step's measurement."""
         raise NotImplementedError

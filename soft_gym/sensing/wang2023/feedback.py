@@ -56,6 +56,9 @@ class _PipelineFeedback(FeedbackSource):
         self.pipeline.vision, self.pipeline.femp = vision, femp
         self.pipeline.calibration_samples = samples
 
+    def reset(self, rng: np.random.Generator) -> None:
+        self.pipeline.reset(rng)
+
     def estimate(self, measurement: Measurement) -> FeedbackEstimate:
         estimates = self.pipeline.observe(measurement)
         position, quaternion = getattr(estimates, self.output)

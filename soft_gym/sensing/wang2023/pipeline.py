@@ -157,6 +157,13 @@ class SensingPipeline:
         self.calibration_samples = len(samples)
         return len(samples)
 
+    def reset(self, rng: np.random.Generator) -> None:
+        """Start an episode: the vision tracker's RANSAC draws from a child of ``rng`` (the
+        env's ``np_random``, seeded by ``reset(seed=...)``), spawned so that ``rng``'s own
+        stream (the sensors' noise, the targets) does not move."""
+        if self.vision is not None:
+            self.vision.set_rng(rng.spawn(1)[0])
+
     def observe(self, measurement: Measurement) -> PoseEstimates:
         """Estimate from one step's camera frame and FBG reading: F-emp predicts, the vision
         tracker solves the camera pose, F-emp is updated selectively, eq. (18) fuses (wang2023)."""

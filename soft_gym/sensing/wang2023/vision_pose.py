@@ -269,6 +269,19 @@ class VisionPoseEstimator:
         # (the keyframes' arrays, their uncertainties, their stacks) of the last local map
         # (see _local_map)
         self._local_map_cache: tuple | None = None
+        # the episode's generator RANSAC's samples are drawn from (see set_rng)
+        self._rng: np.random.Generator | None = None
+
+    def set_rng(self, rng: np.random.Generator | None) -> None:
+        """Draw RANSAC's samples from ``rng``: the episode's generator
+        (:meth:`SensingPipeline.reset <soft_gym.sensing.wang2023.pipeline.SensingPipeline.reset>`
+        gives a child of the env's ``np_random``, seeded by ``reset(seed=...)``), so each seed
+        gives its own RANSAC draws (see :meth:`_solve`). ``None`` (the default: calibration, an
+        estimator used on its own): the samples OpenCV's fixed generator picks from the matches
+        in their own order, the same in every run."""
+        if rng is not None and not isinstance(rng, np.random.Generator):
+            raise ValueError(f"rng must be None or a numpy Generator, got {rng!r}")
+        self._rng = rng
 
     def __deepcopy__(self, memo: dict) -> "VisionPoseEstimator":
         """A copy with its own map (OpenCV's ORB is rebuilt, not copied)."""
@@ -284,6 +297,7 @@ class VisionPoseEstimator:
         twin._last_gray = copy.deepcopy(self._last_gray, memo)
         twin._misses = list(self._misses)
         twin.match_stages = dict(self.match_stages)
+        twin._rng = copy.deepcopy(self._rng, memo)
         return twin
 
     def __getstate__(self) -> dict:
@@ -648,17 +662,23 @@ class VisionPoseEstimator:
         camera_from_world = np.linalg.inv(guess_world_from_camera)
         rvec, _ = cv2.Rodrigues(camera_from_world[:3, :3])
         tvec = camera_from_world[:3, 3].reshape(3, 1)
-        # OpenCV's RANSAC draws from a process-wide generator: seed it per frame so that a frame
-        # gives the same pose whatever ran before it in the process
-        cv2.setRNGSeed(len(image_points))
+        # cv2.solvePnPRansac draws its minimal samples from a generator of its own with a fixed
+        # seed (cv2.setRNGSeed does not reach it: any seed gives the same pose), so its samples
+        # are a function of the order of the matches. The episode's draw is that order: a
+        # permutation from the episode's generator (set_rng: a child of the env's np_random,
+        # seeded by reset(seed=...)); without one (calibration, an estimator used on its own)
+        # the matches go in their own order, the same in every run.
+        order = None if self._rng is None else self._rng.permutation(len(image_points))
         ok, rvec, tvec, inliers = cv2.solvePnPRansac(
-            object_points, image_points, self.camera_matrix, None, rvec.copy(), tvec.copy(),
+            object_points if order is None else object_points[order],
+            image_points if order is None else image_points[order],
+            self.camera_matrix, None, rvec.copy(), tvec.copy(),
             useExtrinsicGuess=True, iterationsCount=self.ransac_iterations,
             reprojectionError=self.ransac_threshold_px, confidence=0.999,
             flags=cv2.SOLVEPNP_ITERATIVE)
         if not ok or inliers is None or len(inliers) < self.min_inliers:
             return self._lost(0 if inliers is None else len(inliers))
-        inliers = inliers.ravel()
+        inliers = inliers.ravel() if order is None else np.sort(order[inliers.ravel()])
         self._inliers = inliers
         weights = 1.0 / sigma2[inliers]
         rvec, tvec = self._refine_weighted(object_points[inliers], image_points[inliers],
