@@ -276,6 +276,40 @@ def _add_workers(parser: argparse.ArgumentParser) -> None:
                         help="runs in parallel processes, >= 1 (up to 2 helps, one per core)")
 
 
+def _add_backend(parser: argparse.ArgumentParser, choices: list[str], what: str) -> None:
+    """``--backend`` (``choices``, the first the default; ``what`` says what they run) and its
+    ``--address``."""
+    parser.add_argument("--backend", default=choices[0], choices=choices,
+                        help=f"{what} (a local Ray or --address; extra: soft-arm-gym[ray])")
+    parser.add_argument("--address", default=None, metavar="ADDR",
+                        help="with --backend ray: an existing Ray cluster (auto, "
+                             "ray://host:10001, host:6379); the package must be importable on "
+                             "every node. Default: a local Ray")
+
+
+def _ray_backend(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                 ray_module: str) -> Any:
+    """The backend of ``--backend`` and ``--address`` (checked, a parser error otherwise): the
+    name given, or with ``ray`` the map of ``make_ray_map(--address)`` of ``ray_module`` (the
+    Ray backend's module, imported only then: Ray is an optional extra)."""
+    if args.address is not None and args.backend != "ray":
+        parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
+                     f"{args.backend}")
+    if args.address is not None and not args.address.strip():
+        parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
+                     "got ''")
+    if args.backend != "ray":
+        return args.backend
+    from importlib import import_module
+
+    module = import_module(ray_module)
+    try:
+        module.require_ray()
+    except ImportError as error:
+        parser.error(f"--backend ray: {error}")
+    return module.make_ray_map(args.address)
+
+
 # ------------------------------------------------------------------------------------ benchmark
 BENCHMARK_LOAD_KG = 0.010
 """The tip mass of ``benchmark``'s runs (kg)."""
@@ -594,13 +628,7 @@ def _claims_parser(sub) -> argparse.ArgumentParser:
                         help="also write the ledger to docs/claims.md, its records kept in "
                              "docs/claims/records (a full run of every claim only)")
     _add_workers(claims)
-    claims.add_argument("--backend", default="local", choices=["local", "ray"],
-                        help="--workers local processes, or each job a Ray task (a local Ray "
-                             "or --address; extra: soft-arm-gym[ray])")
-    claims.add_argument("--address", default=None, metavar="ADDR",
-                        help="with --backend ray: an existing Ray cluster (auto, "
-                             "ray://host:10001, host:6379); the package must be importable on "
-                             "every node. Default: a local Ray")
+    _add_backend(claims, ["local", "ray"], "--workers local processes, or each job a Ray task")
     return claims
 
 
@@ -612,21 +640,7 @@ def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         fail(parser, "--claims", error)
     if args.report_only and args.resume:
         parser.error("--resume runs the missing experiments; --report-only runs none: give one")
-    backend = args.backend
-    if args.address is not None and args.backend != "ray":
-        parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
-                     f"{args.backend}")
-    if args.address is not None and not args.address.strip():
-        parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
-                     "got ''")
-    if args.backend == "ray":
-        from eval.claims import ray_backend as claims_ray  # optional extra, imported lazily
-
-        try:
-            claims_ray.require_ray()
-        except ImportError as error:
-            parser.error(f"--backend ray: {error}")
-        backend = claims_ray.make_ray_map(args.address)
+    backend = _ray_backend(parser, args, "eval.claims.ray_backend")
     if args.docs and (args.quick or args.claims is not None
                       or list(args.papers) != list(PAPERS)):
         parser.error("--docs writes the full ledger: every paper and claim, without --quick")
@@ -767,36 +781,17 @@ def _suite_parser(sub) -> argparse.ArgumentParser:
     suite.add_argument("--engine", default=None, choices=list(ENGINES), metavar="ENGINE",
                        help=f"run every arm on ENGINE ({', '.join(ENGINES)}), less what it "
                             "cannot run (listed); default: each arm's own")
-    suite.add_argument("--backend", default="process", choices=["process", "serial", "ray"],
-                       help="--workers spawned processes, this process, or Ray tasks (a "
-                            "local Ray or --address; extra: soft-arm-gym[ray])")
     suite.add_argument("--record", choices=["minari"], default=None,
                        help="also write the runs as Minari datasets, one per arm and "
                             "condition, in <out>/datasets (README: Datasets)")
-    suite.add_argument("--address", default=None, metavar="ADDR",
-                       help="with --backend ray: an existing Ray cluster (auto, "
-                            "ray://host:10001, host:6379); the package must be importable on "
-                            "every node. Default: a local Ray")
+    _add_backend(suite, ["process", "serial", "ray"],
+                 "--workers spawned processes, this process, or Ray tasks")
     return suite
 
 
 def _run_suite(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """``suite``: check every option and the spec before any run, run, report."""
-    backend = args.backend
-    if args.address is not None and args.backend != "ray":
-        parser.error(f"--address is the Ray cluster of --backend ray, got --backend "
-                     f"{args.backend}")
-    if args.address is not None and not args.address.strip():
-        parser.error("--address must be a Ray address (auto, ray://host:10001, host:6379), "
-                     "got ''")
-    if args.backend == "ray":
-        from eval.suite import ray_backend  # optional extra; importing it registers "ray"
-
-        try:
-            ray_backend.require_ray()
-        except ImportError as error:
-            parser.error(f"--backend ray: {error}")
-        backend = ray_backend.make_ray_map(args.address)
+    backend = _ray_backend(parser, args, "eval.suite.ray_backend")  # it registers "ray"
     if args.seeds is not None and (any(not 0 <= seed <= SEED_MAX for seed in args.seeds)
                                    or len(set(args.seeds)) != len(args.seeds)):
         parser.error(f"--seeds must be distinct integers >= 0 and <= {SEED_MAX}, got "

@@ -27,25 +27,25 @@ else each record stays on the node that ran its job (the ledger of that run is w
 records also come back with the tasks). The package must be importable on every node, as for
 the suite.
 
-A task lost with its worker or node (killed, out of memory) is run again, up to
-:data:`MAX_RETRIES` times (Ray's ``max_retries``; the suite's cells get Ray's default, the same
-3). An experiment that raises is not run again: the other jobs run to their end, then the first
-error is raised (a resume runs the failed jobs again).
+The tasks are the suite's (:func:`eval.suite.ray_backend.ray_map` runs them): a task lost with
+its worker or node (killed, out of memory) is run again, up to Ray's default ``max_retries``
+(3). An experiment that raises stops the run, as a failed task stops that map: the first error
+is raised and the jobs not finished are cancelled; the records already written stay, and a
+resume runs the rest.
 """
 
 from __future__ import annotations
 
-import sys
+import functools
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from eval.claims.ledger import ClaimExperiment
+from eval.suite import ray_backend as suite_ray
 from eval.suite.ray_backend import INSTALL_HINT, _check_address, require_ray
 
 BACKEND_NAME = "ray"
-MAX_RETRIES = 3
-"""How often a task lost with its worker or node is run again (Ray's ``max_retries``)."""
 
 Job = tuple[list[ClaimExperiment], int, bool, str, bool]
 """A job as :func:`eval.claims.run._run_job` takes it: ``(experiments, seed, quick, out,
@@ -57,89 +57,27 @@ JobMap = Callable[[Callable[[Job], Records], Sequence[Job], int], Iterator[Recor
 order), as :data:`eval.suite.MapFunction` does for cells."""
 
 
-def _apply(run_job: Callable[[Job], Records], task: Job) -> Records:
-    """A Ray task's body: ``run_job(task)`` (``run_job`` travels by reference, so it must be
-    importable: :func:`eval.claims.run._run_job`)."""
-    return run_job(task)
-
-
 def ray_map(run_job: Callable[[Job], Records], tasks: Sequence[Job], workers: int = 1, *,
             address: str | None = None,
             runtime_env: Mapping[str, Any] | None = None) -> Iterator[Records]:
-    """Run every job as a Ray task (one CPU, retried :data:`MAX_RETRIES` times when lost),
-    yielding each job's records as it completes; the tasks write the records.
+    """Run every job as a Ray task by :func:`eval.suite.ray_backend.ray_map` (one CPU each; where
+    Ray runs, its arguments and the end of the run are as there), yielding each job's records as
+    it completes; the tasks write the records.
 
     Args:
         run_job: :func:`eval.claims.run._run_job` (importable on every node).
         tasks: jobs as it takes them; their ``out`` is made absolute for the tasks.
-        workers: CPUs of the local Ray this starts (>= 1); ignored on an existing cluster.
-        address: an existing cluster (``"auto"``, ``"ray://host:10001"``, ``"host:6379"``);
-            ``None``: a local Ray (or the one already initialised in this process).
-        runtime_env: Ray's runtime environment of the tasks (e.g. ``{"working_dir": "."}`` to
-            ship the checkout), used when this call initialises Ray.
-
-    Stopping the iteration early (an interrupt too) cancels the tasks not yet finished; a Ray
-    this call started (or connected to) is shut down (disconnected) at the end, one initialised
-    before is left running.
+        workers, address, runtime_env: as for :func:`eval.suite.ray_backend.ray_map`.
 
     Raises:
         ImportError: Ray is not installed (before any task).
         ValueError: ``workers`` or ``address`` is bad (before any task).
         Exception: the first failed job's error (Ray's ``RayTaskError``, also an instance of
-            the experiment's exception class), once the other jobs have ended.
+            the experiment's exception class); the jobs not finished are cancelled.
     """
-    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-    _check_address(address)
-    ray = require_ray()
     tasks = [(list(experiments), seed, quick, str(Path(out).resolve()), progress)
              for experiments, seed, quick, out, progress in tasks]
-    return _job_results(ray, run_job, tasks, workers, address, runtime_env)
-
-
-def _job_results(ray, run_job: Callable[[Job], Records], tasks: list[Job], workers: int,
-                 address: str | None,
-                 runtime_env: Mapping[str, Any] | None) -> Iterator[Records]:
-    """The generator of :func:`ray_map` (its arguments already checked)."""
-    if not tasks:
-        return
-    started = not ray.is_initialized()
-    if started:
-        options: dict[str, Any] = {"include_dashboard": False}
-        if runtime_env is not None:
-            options["runtime_env"] = dict(runtime_env)
-        if address is None:
-            ray.init(num_cpus=workers, **options)
-        else:
-            ray.init(address=address, **options)
-    pending: list[Any] = []
-    failures: list[Exception] = []
-    try:
-        remote = ray.remote(num_cpus=1, max_retries=MAX_RETRIES)(_apply)
-        job_of: dict[Any, Job] = {}
-        for task in tasks:
-            ref = remote.remote(run_job, task)
-            job_of[ref] = task
-            pending.append(ref)
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            experiments, seed = job_of.pop(done[0])[:2]
-            try:
-                records = ray.get(done[0])
-            except Exception as error:  # noqa: BLE001 - the other jobs go on; raised below
-                failures.append(error)
-                first_line = (str(error).strip().splitlines() or [type(error).__name__])[0]
-                print(f"claims job {', '.join(e.name for e in experiments)}, seed {seed} "
-                      f"failed: {first_line}", file=sys.stderr, flush=True)
-                continue
-            yield records
-        if failures:
-            raise failures[0]
-    finally:
-        for ref in pending:
-            ray.cancel(ref)
-        if started:
-            ray.shutdown()
+    return suite_ray.ray_map(run_job, tasks, workers, address=address, runtime_env=runtime_env)
 
 
 def make_ray_map(address: str | None = None,
@@ -151,12 +89,7 @@ def make_ray_map(address: str | None = None,
         ValueError: ``address`` is not non-empty text or ``None``.
     """
     _check_address(address)
-
-    def map_function(run_job: Callable[[Job], Records], tasks: Sequence[Job],
-                     workers: int = 1) -> Iterator[Records]:
-        return ray_map(run_job, tasks, workers, address=address, runtime_env=runtime_env)
-
-    return map_function
+    return functools.partial(ray_map, address=address, runtime_env=runtime_env)
 
 
 def backend_map(backend: str | JobMap) -> JobMap:
@@ -177,5 +110,5 @@ def backend_map(backend: str | JobMap) -> JobMap:
                      f"(eval.claims.ray_backend.make_ray_map), got {backend!r}")
 
 
-__all__ = ["BACKEND_NAME", "INSTALL_HINT", "MAX_RETRIES", "JobMap", "backend_map",
-           "make_ray_map", "ray_map"]
+__all__ = ["BACKEND_NAME", "INSTALL_HINT", "JobMap", "backend_map", "make_ray_map",
+           "ray_map"]

@@ -1,8 +1,9 @@
 """The claims ledger's Ray backend (eval/claims/ray_backend.py, ``python -m eval claims --backend
 ray``): on a local Ray of two CPUs each job is a task that writes the records the local run
 writes (the same summaries and ledger), a resume runs only the records missing, a task lost with
-its worker is run again, and a failed job is raised once the others are done; the map starts and
-shuts down only the Ray it should (on a stand-in module); bad backend options fail in one line
+its worker is run again, and a failed job is raised, a resume after it running only what is
+missing; the map hands the suite's Ray map (tested in tests/eval/suite/test_suite_ray.py) the
+jobs with their ``out`` absolute and the workers count; bad backend options fail in one line
 before any work. The fake experiments are module-level functions, pickled by value for the Ray
 workers (which cannot import this test module)."""
 
@@ -12,6 +13,7 @@ import functools
 import json
 import os
 import sys
+import time
 import uuid
 from pathlib import Path
 
@@ -23,6 +25,8 @@ from eval.claims import CLAIMS, EXPERIMENTS, ClaimExperiment, graded
 from eval.claims import ray_backend
 from eval.claims.ledger import Claim
 from eval.claims.run import read_record, record_file, run_ledger
+from eval.suite import ray_backend as suite_ray
+from eval.suite.store import RecordError
 
 PAPERS = ["wang2023", "ho2018"]
 
@@ -44,16 +48,23 @@ def _dies_once(log: str, name: str, seed, quick, workers, progress):
     return _logged_error(log, name, seed, quick, workers, progress)
 
 
-def _raises(log: str, name: str, seed, quick, workers, progress):
-    raise ValueError(f"the fake arm broke on seed {seed}")
+def _raises_once(log: str, name: str, seed, quick, workers, progress):
+    """A fake experiment whose first run, of any seed, raises (after a second, so that the sound
+    jobs beside it most likely end first); then as :func:`_logged_error`."""
+    marker = Path(log, f"raised_{name}")
+    if not marker.exists():
+        marker.touch()
+        time.sleep(1.0)
+        raise ValueError(f"the fake arm broke on seed {seed}")
+    return _logged_error(log, name, seed, quick, workers, progress)
 
 
 @pytest.fixture
 def ray_claims(tmp_path):
     """Register fake experiments and a claim on each; yields ``make(kind)`` -> ``(keys, log)``:
     ``"shared"`` two wang2023 experiments sharing a build (one job per seed) and a ho2018 one,
-    ``"dies"`` one whose first run kills its worker, ``"raises"`` one that raises beside a
-    sound one. Pickles this module by value for the Ray workers."""
+    ``"dies"`` one whose first run kills its worker, ``"raises"`` one whose first run raises
+    beside a sound one. Pickles this module by value for the Ray workers."""
     cloudpickle = pytest.importorskip("ray.cloudpickle")
     module = sys.modules[__name__]
     cloudpickle.register_pickle_by_value(module)
@@ -80,7 +91,7 @@ def ray_claims(tmp_path):
         elif kind == "dies":
             keys = [experiment("wang2023.ray_dies", "wang2023", _dies_once)]
         else:
-            keys = [experiment("wang2023.ray_raises", "wang2023", _raises),
+            keys = [experiment("wang2023.ray_raises", "wang2023", _raises_once),
                     experiment("ho2018.ray_sound", "ho2018", _logged_error)]
         return keys, log
 
@@ -94,7 +105,7 @@ def ray_claims(tmp_path):
 def _runs(log: Path) -> list[str]:
     """The experiment runs logged, as ``name_seedN`` (sorted)."""
     return sorted(path.name.rsplit("_", 1)[0] for path in log.iterdir()
-                  if not path.name.startswith("died_"))
+                  if not path.name.startswith(("died_", "raised_")))
 
 
 def _record(out: Path, name: str, seed: int) -> dict:
@@ -156,7 +167,6 @@ def test_a_ray_resume_runs_only_the_missing_records(ray_claims, local_ray, tmp_p
 
 def test_a_task_lost_with_its_worker_is_run_again(ray_claims, local_ray, tmp_path):
     keys, log = ray_claims("dies")
-    assert ray_backend.MAX_RETRIES >= 1
     ledger = run_ledger(["wang2023"], seeds=[3], out=tmp_path / "out", claims=keys,
                         progress=False, backend="ray")
     assert (log / "died_wang2023.ray_dies_seed3").exists()  # the first try killed its worker
@@ -165,95 +175,81 @@ def test_a_task_lost_with_its_worker_is_run_again(ray_claims, local_ray, tmp_pat
     assert _record(tmp_path / "out", "wang2023.ray_dies", 3)["summary"]["seed"] == 3
 
 
-def test_a_failed_job_is_raised_after_the_others_wrote_their_records(ray_claims, local_ray,
-                                                                     tmp_path, capsys):
+def _missing(out: Path, names, seeds) -> list[str]:
+    """The records not under ``out`` (or not whole), as ``name_seedN`` (sorted)."""
+    missing = []
+    for name in names:
+        for seed in seeds:
+            try:
+                whole = _record(out, name, seed) is not None
+            except RecordError:
+                whole = False
+            if not whole:
+                missing.append(f"{name}_seed{seed}")
+    return sorted(missing)
+
+
+def _wait_until_quiet(folder: Path, quiet_s: float = 1.5, limit_s: float = 15.0) -> None:
+    """Wait until no file appears in ``folder`` for ``quiet_s`` (at most ``limit_s``)."""
+    start = last_change = time.monotonic()
+    seen = set(folder.rglob("*.json"))
+    while time.monotonic() - last_change < quiet_s and time.monotonic() - start < limit_s:
+        time.sleep(0.25)
+        now = set(folder.rglob("*.json"))
+        if now != seen:
+            seen, last_change = now, time.monotonic()
+
+
+def test_a_failed_job_is_raised_and_a_resume_after_it_runs_only_what_is_missing(
+        ray_claims, local_ray, tmp_path, capsys):
     keys, log = ray_claims("raises")
-    with pytest.raises(ValueError, match="the fake arm broke on seed 0"):
-        run_ledger(PAPERS, seeds=[0], out=tmp_path / "out", claims=keys, progress=False,
-                   backend="ray")
-    assert "claims job wang2023.ray_raises, seed 0 failed" in capsys.readouterr().err
-    assert _record(tmp_path / "out", "ho2018.ray_sound", 0)["summary"]["seed"] == 0
-    assert not record_file(tmp_path / "out", "wang2023.ray_raises", 0, False).exists()
+    out, names = tmp_path / "out", ("wang2023.ray_raises", "ho2018.ray_sound")
+    with pytest.raises(ValueError, match="the fake arm broke on seed [01]"):
+        run_ledger(PAPERS, seeds=[0, 1], out=out, claims=keys, progress=False, backend="ray")
+    assert local_ray.is_initialized()
+    _wait_until_quiet(out / "records")  # a job being cancelled may still be ending
+    missing = _missing(out, names, (0, 1))  # the jobs not finished were cancelled
+    assert [run for run in missing if run.startswith("wang2023.ray_raises_seed")]
+    kept = {path.name: path.read_bytes() for path in (out / "records").rglob("*.json")}
+    for path in log.iterdir():
+        if not path.name.startswith("raised_"):
+            path.unlink()
+
+    main(["claims", "--papers", *PAPERS, "--claims", *keys, "--seeds", "0", "1", "--out",
+          str(out), "--resume", "--backend", "ray", "--workers", "2"])
+    assert capsys.readouterr().out.strip().splitlines()[-1] == f"output directory: {out}"
+    assert _runs(log) == missing
+    assert _missing(out, names, (0, 1)) == []
+    for path in (out / "records").rglob("*.json"):
+        if path.name in kept:
+            assert path.read_bytes() == kept[path.name], path.name
 
 
-# ------------------------------------------------------- starting and stopping (no Ray)
-class FakeRef:
-    """An object reference of :class:`FakeRay` (hashable, as Ray's are)."""
+# ------------------------------------------------------------ delegation (no Ray needed)
+def test_the_map_hands_the_suites_map_absolute_outs_and_the_workers(monkeypatch):
+    calls = []
 
-    def __init__(self, value) -> None:
-        self.value = value
+    def suite_map(fn, items, workers=1, *, address=None, runtime_env=None):
+        calls.append((fn, items, workers, address, runtime_env))
+        return iter([fn(item) for item in items])
 
+    def job(task):
+        experiments, seed, quick, out, progress = task
+        return {(name, seed): {"out": out} for name in experiments}
 
-class FakeRay:
-    """A stand-in for the ``ray`` module: runs tasks at once and records the calls."""
-
-    def __init__(self, initialized: bool = False) -> None:
-        self.initialized = initialized
-        self.calls: list[tuple] = []
-
-    def is_initialized(self) -> bool:
-        return self.initialized
-
-    def init(self, **options) -> None:
-        self.calls.append(("init", options))
-        self.initialized = True
-
-    def shutdown(self) -> None:
-        self.calls.append(("shutdown",))
-        self.initialized = False
-
-    def remote(self, **options):
-        self.calls.append(("remote", options))
-
-        def decorate(function):
-            class Task:
-                @staticmethod
-                def remote(*args):
-                    return FakeRef(function(*args))
-            return Task
-        return decorate
-
-    def wait(self, refs, num_returns=1):
-        return refs[:num_returns], refs[num_returns:]
-
-    def get(self, ref):
-        return ref.value
-
-    def cancel(self, ref) -> None:
-        self.calls.append(("cancel",))
-
-
-def _echo_job(task):
-    experiments, seed, quick, out, progress = task
-    return {(name, seed): {"out": out} for name in experiments}
-
-
-def test_a_local_ray_gets_the_workers_cpus_retries_and_is_shut_down(monkeypatch):
-    fake = FakeRay()
-    monkeypatch.setitem(sys.modules, "ray", fake)
-    tasks = [(["a"], 0, False, "rel/out", False), (["b", "c"], 1, False, "rel/out", False)]
-    results = list(ray_backend.ray_map(_echo_job, tasks, workers=3))
+    monkeypatch.setattr(suite_ray, "ray_map", suite_map)
+    tasks = [(["a"], 0, False, "rel/out", False), (["b", "c"], 1, True, "rel/out", True)]
     absolute = str(Path("rel/out").resolve())  # the tasks write where this process would
-    assert results == [{("a", 0): {"out": absolute}},
-                       {("b", 1): {"out": absolute}, ("c", 1): {"out": absolute}}]
-    assert fake.calls[0] == ("init", {"num_cpus": 3, "include_dashboard": False})
-    assert ("remote", {"num_cpus": 1, "max_retries": ray_backend.MAX_RETRIES}) in fake.calls
-    assert fake.calls[-1] == ("shutdown",) and not fake.initialized
-    assert list(ray_backend.ray_map(_echo_job, [], workers=1)) == []
-    assert fake.calls[-1] == ("shutdown",) and len(fake.calls) == 3  # no Ray for no job
-
-
-def test_an_address_connects_and_a_ray_initialised_before_is_left_running(monkeypatch):
-    fake = FakeRay()
-    monkeypatch.setitem(sys.modules, "ray", fake)
-    job = [(["a"], 0, False, "o", False)]
-    assert len(list(ray_backend.make_ray_map("ray://head:10001")(_echo_job, job, 2))) == 1
-    assert fake.calls[0] == ("init", {"address": "ray://head:10001", "include_dashboard": False})
-    assert fake.calls[-1] == ("shutdown",)
-    running = FakeRay(initialized=True)
-    monkeypatch.setitem(sys.modules, "ray", running)
-    assert len(list(ray_backend.ray_map(_echo_job, job, workers=2))) == 1
-    assert not [call for call in running.calls if call[0] in ("init", "shutdown")]
+    assert list(ray_backend.ray_map(job, tasks, workers=3)) == [
+        {("a", 0): {"out": absolute}}, {("b", 1): {"out": absolute}, ("c", 1): {"out": absolute}}]
+    assert calls == [(job, [(["a"], 0, False, absolute, False),
+                            (["b", "c"], 1, True, absolute, True)], 3, None, None)]
+    runtime_env = {"working_dir": "."}
+    map_function = ray_backend.make_ray_map("ray://head:10001", runtime_env=runtime_env)
+    assert len(list(map_function(job, tasks[:1], 2))) == 1
+    assert calls[-1][2:] == (2, "ray://head:10001", runtime_env)
+    with pytest.raises(ValueError, match="address"):
+        ray_backend.make_ray_map(" ")
 
 
 def test_run_ledger_refuses_a_bad_backend_before_any_run(monkeypatch, tmp_path):
