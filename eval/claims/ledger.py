@@ -179,7 +179,7 @@ class Effect:
         if self.kind == "level":
             return bars + f"; partly within {self.show(0.5 * low)}-{self.show(2.0 * high)}"
         if self.kind == "ratio":
-            half = 1.0 / math.sqrt(1.0 / high) if oriented else math.sqrt(low)
+            half = math.sqrt(high) if oriented else math.sqrt(low)
             return bars + f"; partly {'up to' if oriented else 'from'} {self.show(half)}"
         return bars + f"; partly from {self.show(0.5 * low)}"
 
@@ -192,7 +192,6 @@ class Effect:
         if self.unit == "steps":
             return f"{value:.0f} steps"
         return f"{value:.2f}{' ' + self.unit if self.unit else ''}"
-
 
     def part(self, label: str, value: float | None) -> "Part":
         """Ours judged on this effect as one part of a claim (:func:`judged`)."""
