@@ -17,6 +17,7 @@ import torch.nn as nn
 import yaml
 
 import soft_gym  # noqa: F401
+from cli_errors import assert_one_line_error
 from agents.policies import SHIPPED_DIR, make_policy, model_normalization_mark
 from train.__main__ import main as train_main
 from train.config import (ALGORITHMS, check_hyperparameters, parse_key_values,
@@ -242,6 +243,19 @@ def test_a_refused_env_keyword_is_the_one_that_fails_the_whole_set(tmp_path, cap
     error = capsys.readouterr().err.strip().splitlines()[-1]
     assert "--conf-file" in error and "env keyword randomization=" in error, error
     assert "swaying" in error and "camera" not in error, error
+
+
+def test_the_engine_refusal_names_the_feedback_that_runs_there_on_one_line(tmp_path, capsys):
+    """``--env-kwargs engine=mujoco feedback=fused``: fused feedback needs the eye-in-hand
+    camera, which MuJoCo lacks; the one-line error names the option, the camera and the
+    feedback sources the MuJoCo engine runs."""
+    out = tmp_path / "runs"
+    line = assert_one_line_error(
+        train_main, ["--env-kwargs", "engine=mujoco", "feedback=fused", "--out", str(out)],
+        "--env-kwargs", capsys, out=out, also="sensor 'image' (feedback 'fused'")
+    assert "use engine= one of ['pybullet'] or pass feedback= one of [" in line, line
+    able = line.split("or pass feedback= one of ")[1]
+    assert "'em'" in able and "'ground_truth'" in able and "'fused'" not in able, line
 
 
 @pytest.fixture(scope="module")
