@@ -35,7 +35,7 @@ from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_o
                            finite_float, non_negative_int, positive_int, seed_int)
 from train.cli_options import (add_env_options, check_arm_env_kwargs, check_conf_file,
                                check_env_kwargs, check_hyperparameter_overrides,
-                               parse_env_and_hyperparameters, resolve_env_id)
+                               parse_env_and_hyperparameters, randomization_hint, resolve_env_id)
 from train.config import ALGORITHMS, OFF_POLICY, VEC_KINDS, parse_key_values
 from train.sweep import main as sweep_main
 
@@ -243,13 +243,15 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         settings, _ = resolve(request)
     except ValueError as error:  # the config file's entry (the overrides passed above)
         fail(parser, "--conf-file" if args.conf_file else "--algo", error)
-    overrides = {key: ("--randomization-config" if key == "randomization"
-                       and args.randomization_config is not None else "--env-kwargs")
+    randomization = ("--randomization-config" if args.randomization_config is not None
+                     else "--randomize" if args.randomize else "--env-kwargs")
+    overrides = {key: randomization if key == "randomization" else "--env-kwargs"
                  for key in env_kwargs}
     if args.vec == "batched" and settings.env_kwargs.get("engine") != "mujoco":
         parser.error(f"--vec batched steps MuJoCo arms as one batch: add --env-kwargs "
                      f"engine=mujoco (got engine={settings.env_kwargs.get('engine', 'pybullet')!r})")
-    check_env_kwargs(parser, env_id, settings.env_kwargs, overrides)
+    check_env_kwargs(parser, env_id, settings.env_kwargs, overrides,
+                     randomization_hint("--randomization-config "))
     check_arm_env_kwargs(parser, env_id, settings, args.vec,
                          "--conf-file" if args.conf_file else "--algo")
     if args.trained_agent is not None:

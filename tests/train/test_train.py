@@ -258,6 +258,42 @@ def test_the_engine_refusal_names_the_feedback_that_runs_there_on_one_line(tmp_p
     assert "'em'" in able and "'ground_truth'" in able and "'fused'" not in able, line
 
 
+@pytest.mark.parametrize("argv, option", [
+    (["--env-kwargs", "engine=mujoco"], "--env-kwargs"),  # the recipe's randomization: true
+    (["--conf-file", "MUJOCO", "--randomize"], "--randomize"),
+    (["--conf-file", "MUJOCO", "--randomization-config", "train/configs/randomization.yaml"],
+     "--randomization-config"),
+])
+def test_drawn_swaying_masses_on_mujoco_name_the_randomisation_file_without_them(
+        argv, option, tmp_path, capsys):
+    """Randomisation drawing swaying masses on MuJoCo: the one-line error names the option that
+    gave what is refused (engine=mujoco on the recipe's randomisation; --randomize or
+    --randomization-config on a MuJoCo recipe) and the file that draws none (which exists and
+    has no swaying-mass odds)."""
+    from soft_gym.scenarios.randomization import RandomizationConfig
+    from train.config import CONFIG_DIR
+
+    shipped = CONFIG_DIR / "randomization_mujoco.yaml"
+    assert RandomizationConfig.from_any(shipped).load_weights.get("swaying_mass", 0) == 0
+    config = tmp_path / "sac.yml"
+    config.write_text(yaml.safe_dump({"SoftArmTrackWang2023-v0": {
+        "n_timesteps": 1000, "policy": "MlpPolicy",
+        "env_kwargs": {"engine": "mujoco", "feedback": "em"}}}))
+    out = tmp_path / "runs"
+    line = assert_one_line_error(
+        train_main, [str(config) if arg == "MUJOCO" else arg for arg in argv]
+        + ["--out", str(out)], option, capsys, out=out,
+        also="randomization drawing swaying_mass loads")
+    assert line.startswith(f"python -m train: error: {option}: env keyword "), line
+    assert line.endswith("--randomization-config train/configs/randomization_mujoco.yaml "
+                         "draws none"), line
+    assert "RandomizationConfig.load_weights['swaying_mass']" in line, line
+    from eval.runner import make_uncalibrated_env
+
+    make_uncalibrated_env("SoftArmTrackWang2023-v0", {  # the file named runs on MuJoCo
+        "engine": "mujoco", "feedback": "em", "randomization": str(shipped)}).close()
+
+
 @pytest.fixture(scope="module")
 def small_ppo_run(tmp_path_factory) -> Path:
     """A 256-step PPO run on FAST_ENV (its directory is only read by the tests that use it)."""
