@@ -199,9 +199,26 @@ def check_trained_agent(parser: argparse.ArgumentParser, args: argparse.Namespac
         check_fits(find_trained_agent(args.trained_agent, args.algo), env,
                    normalized=settings.normalize is not None)
     except ValueError as error:
-        fail(parser, "--trained-agent", error)
+        arm = getattr(error, "trained_preset", None)  # an agent of another arm: the option to it
+        fail(parser, "--trained-agent",
+             f"{error}" + ("" if arm is None else f"; {_arm_option(args, env_id, arm)}"))
     finally:
         env.close()
+
+
+def _arm_option(args: argparse.Namespace, env_id: str, preset: str) -> str:
+    """The option that trains on the arm ``preset`` instead of ``env_id``'s: ``--preset`` without
+    ``--env``; an alias id's counterpart (``--env SoftArmTrackZhao2021-v0``); ``preset=`` among
+    the env keyword arguments of a generic id."""
+    from soft_gym.envs.registration import TASK_IDS, preset_env_id
+
+    if args.env is None:
+        return f"--preset {preset}"
+    task = next((name for name, generic in TASK_IDS.items()
+                 if env_id == generic or env_id.startswith(generic[:-3])), "track")
+    if env_id in TASK_IDS.values():
+        return f"--env-kwargs preset={preset}"
+    return f"--env {preset_env_id(task, preset)}"
 
 
 def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
