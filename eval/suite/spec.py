@@ -3,8 +3,8 @@
 The schema is the package's (:mod:`eval.suite`, "Schema"). :func:`load_suite` reads a suite file or
 a bundled suite (``eval/suites/<name>.yaml``), refusing an unknown key, preset, path, feedback
 source, policy or policy parameter with a :class:`SuiteError` naming the file and the key (every
-such mistake of the file at once, one line each), and keeps the text with its SHA-256; :func:`eval.suite.check.check_suite` goes further and builds the
-envs.
+such mistake of the file at once, one line each), and keeps the text with its SHA-256;
+:func:`eval.suite.check.check_suite` goes further and builds the envs.
 """
 
 from __future__ import annotations
