@@ -103,7 +103,8 @@ def _check_configs(parser: argparse.ArgumentParser, configs: list,
                    options: dict[str, str]) -> None:
     """Check every run's configuration before the first run (:func:`eval.runner.check_configs`);
     a refusal is one ``parser.error`` line naming the option of the refused part (``options``:
-    part -> option) and its value in the refused configuration."""
+    part -> option) and its value in the refused configuration; an SB3 agent refused for
+    another arm than its training's ends with the preset option naming that arm."""
     try:
         check_configs(configs)
     except ConfigError as error:
@@ -118,8 +119,11 @@ def _check_configs(parser: argparse.ArgumentParser, configs: list,
             shown = error.config.env_kwargs.get(error.part.split(".", 1)[1])
         else:
             shown = getattr(error.config, error.part, None)
-        fail(parser, option, f"{shown!r} refused: {error.message}" if shown is not None
-             else error.message)
+        preset = options.get("env_kwargs.preset")
+        hint = (f"; {preset} {error.trained_preset}" if error.trained_preset and preset
+                else "")
+        fail(parser, option, (f"{shown!r} refused: {error.message}" if shown is not None
+                              else error.message) + hint)
 
 
 def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,

@@ -250,10 +250,13 @@ def run_many(configs: list[RunConfig], workers: int = 1, progress: bool = False,
 class ConfigError(ValueError):
     """A run configuration that cannot run: ``index`` of the config in the checked list,
     ``part`` that is refused (``"policy"``, ``"policy_params"``, ``"env_id"`` or
-    ``"env_kwargs.<key>"``) and the env's or policy's own message."""
+    ``"env_kwargs.<key>"``) and the env's or policy's own message; ``trained_preset``: the arm
+    an SB3 agent refused for another arm was trained on (else ``None``)."""
 
-    def __init__(self, index: int, config: RunConfig, part: str, message: str) -> None:
+    def __init__(self, index: int, config: RunConfig, part: str, message: str,
+                 trained_preset: str | None = None) -> None:
         self.index, self.config, self.part = index, config, part
+        self.trained_preset = trained_preset
         self.message = " ".join(str(message).split())
         super().__init__(f"run {index} ({config.policy}, seed {config.seed}): {part}: "
                          f"{self.message}")
@@ -380,7 +383,8 @@ def check_configs(configs: Sequence[RunConfig], progress: bool = False) -> None:
             if config.policy.startswith("sb3:"):
                 message = _space_error(agents[config.policy], env)
                 if message is not None:
-                    raise ConfigError(index, config, "policy", message)
+                    raise ConfigError(index, config, "policy", message,
+                                      trained_preset=agents[config.policy].other_arm(env))
                 continue
             _check_baseline(index, config, env)
         finally:

@@ -35,7 +35,7 @@ from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_o
                            finite_float, non_negative_int, positive_int, seed_int)
 from train.cli_options import (add_env_options, check_arm_env_kwargs, check_conf_file,
                                check_env_kwargs, check_hyperparameter_overrides,
-                               parse_env_and_hyperparameters, resolve_env_id)
+                               parse_env_and_hyperparameters, randomization_hint, resolve_env_id)
 from train.config import ALGORITHMS, OFF_POLICY, VEC_KINDS, parse_key_values
 from train.sweep import main as sweep_main
 
@@ -199,9 +199,26 @@ def check_trained_agent(parser: argparse.ArgumentParser, args: argparse.Namespac
         check_fits(find_trained_agent(args.trained_agent, args.algo), env,
                    normalized=settings.normalize is not None)
     except ValueError as error:
-        fail(parser, "--trained-agent", error)
+        arm = getattr(error, "trained_preset", None)  # an agent of another arm: the option to it
+        fail(parser, "--trained-agent",
+             f"{error}" + ("" if arm is None else f"; {_arm_option(args, env_id, arm)}"))
     finally:
         env.close()
+
+
+def _arm_option(args: argparse.Namespace, env_id: str, preset: str) -> str:
+    """The option that trains on the arm ``preset`` instead of ``env_id``'s: ``--preset`` without
+    ``--env``; an alias id's counterpart (``--env SoftArmTrackZhao2021-v0``); ``preset=`` among
+    the env keyword arguments of a generic id."""
+    from soft_gym.envs.registration import TASK_IDS, preset_env_id
+
+    if args.env is None:
+        return f"--preset {preset}"
+    task = next((name for name, generic in TASK_IDS.items()
+                 if env_id == generic or env_id.startswith(generic[:-3])), "track")
+    if env_id in TASK_IDS.values():
+        return f"--env-kwargs preset={preset}"
+    return f"--env {preset_env_id(task, preset)}"
 
 
 def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
@@ -243,13 +260,15 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         settings, _ = resolve(request)
     except ValueError as error:  # the config file's entry (the overrides passed above)
         fail(parser, "--conf-file" if args.conf_file else "--algo", error)
-    overrides = {key: ("--randomization-config" if key == "randomization"
-                       and args.randomization_config is not None else "--env-kwargs")
+    randomization = ("--randomization-config" if args.randomization_config is not None
+                     else "--randomize" if args.randomize else "--env-kwargs")
+    overrides = {key: randomization if key == "randomization" else "--env-kwargs"
                  for key in env_kwargs}
     if args.vec == "batched" and settings.env_kwargs.get("engine") != "mujoco":
         parser.error(f"--vec batched steps MuJoCo arms as one batch: add --env-kwargs "
                      f"engine=mujoco (got engine={settings.env_kwargs.get('engine', 'pybullet')!r})")
-    check_env_kwargs(parser, env_id, settings.env_kwargs, overrides)
+    check_env_kwargs(parser, env_id, settings.env_kwargs, overrides,
+                     randomization_hint("--randomization-config "))
     check_arm_env_kwargs(parser, env_id, settings, args.vec,
                          "--conf-file" if args.conf_file else "--algo")
     if args.trained_agent is not None:

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import argparse
 import difflib
-from typing import Any
+from pathlib import Path
+from typing import Any, Callable
 
 import gymnasium
 import yaml
@@ -16,9 +17,13 @@ import yaml
 import soft_gym  # noqa: F401  (registers the env ids)
 from eval.runner import make_uncalibrated_env
 from soft_gym._cli import check_file, fail
+from soft_gym.engines import EngineFeatureError
 from soft_gym.envs.registration import preset_env_id
 from soft_gym.robots.presets import PRESETS
-from train.config import TrainSettings, check_hyperparameters, parse_key_values
+from train.config import CONFIG_DIR, TrainSettings, check_hyperparameters, parse_key_values
+
+MUJOCO_RANDOMIZATION = CONFIG_DIR / "randomization_mujoco.yaml"
+"""The randomisation file that draws no swaying mass (which the MuJoCo engine cannot simulate)."""
 
 
 def add_env_options(parser: argparse.ArgumentParser) -> None:
@@ -87,16 +92,38 @@ def check_conf_file(parser: argparse.ArgumentParser, path: str | None) -> None:
                      f"mappings, as train/configs/*.yml do")
 
 
+def shown_path(path: Path) -> str:
+    """``path`` relative to the working directory where it lies below it, else absolute."""
+    try:
+        return str(path.resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
+def randomization_hint(option: str) -> Callable[[Exception], str]:
+    """For :func:`check_env_kwargs`: where the refusal is randomisation drawing what the engine
+    lacks (swaying masses), the option ``option`` (``"--randomization-config "``, ``"--env-kwargs
+    randomization="``) with :data:`MUJOCO_RANDOMIZATION`, which draws none."""
+    def hint(error: Exception) -> str:
+        if isinstance(error, EngineFeatureError) and "randomization" in error.need.arguments:
+            return f"; {option}{shown_path(MUJOCO_RANDOMIZATION)} draws none"
+        return ""
+    return hint
+
+
 def check_env_kwargs(parser: argparse.ArgumentParser, env_id: str, env_kwargs: dict[str, Any],
-                     overrides: dict[str, str]) -> None:
+                     overrides: dict[str, str],
+                     hint: Callable[[Exception], str] | None = None) -> None:
     """Build the env ``env_id`` with ``env_kwargs`` (without calibrating its feedback) and close
     it; a refusal names the option that gave the refused keyword argument (``overrides``: key
-    -> option, e.g. ``{"feedback": "--env-kwargs"}``; other keys came from ``--conf-file``)."""
+    -> option, e.g. ``{"feedback": "--env-kwargs"}``; other keys came from ``--conf-file``),
+    followed by ``hint(error)`` (e.g. :func:`randomization_hint`: the option that lifts it)."""
     try:
         make_uncalibrated_env(env_id, env_kwargs).close()
         return
     except Exception as error:  # noqa: BLE001  (any refusal is the user's input)
         message = " ".join(str(error).split())
+        hinted = message + (hint(error) if hint is not None else "")
     # which option: the first keyword argument (config entry's first) whose addition fails the
     # way the whole set does; a subset can fail for another reason that a later keyword lifts
     # (engine=mujoco alone meets the preset's camera feedback, which feedback=em replaces)
@@ -111,8 +138,8 @@ def check_env_kwargs(parser: argparse.ArgumentParser, env_id: str, env_kwargs: d
             if " ".join(str(error).split()) == message:
                 option = overrides.get(key, "--conf-file")
                 fail(parser, option, f"env keyword {key}={env_kwargs[key]!r} refused by "
-                                     f"{env_id}: {message}")
-    fail(parser, "--env", f"{env_id} refused {env_kwargs}: {message}")
+                                     f"{env_id}: {hinted}")
+    fail(parser, "--env", f"{env_id} refused {env_kwargs}: {hinted}")
 
 
 def check_arm_env_kwargs(parser: argparse.ArgumentParser, env_id: str, settings: TrainSettings,

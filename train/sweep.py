@@ -93,7 +93,7 @@ from soft_gym._validation import SEED_MAX
 from soft_gym.envs.config import EnvConfig
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
-                               resolve_env_id)
+                               randomization_hint, resolve_env_id)
 from train.config import (algorithm_class, parse_python_value, read_hyperparameters,
                           split_hyperparameters)
 
@@ -697,7 +697,8 @@ def main(argv: list[str] | None = None) -> None:
     check_hyperparameter_overrides(parser, ALGO, hyperparameters)
     entry = base_entry(request)
     check_env_kwargs(parser, args.env, entry["env_kwargs"],
-                     {key: "--env-kwargs" for key in env_kwargs})
+                     {key: "--env-kwargs" for key in env_kwargs},
+                     randomization_hint("--env-kwargs randomization="))
     try:
         require_tune()
         if request.search == "optuna":

@@ -90,8 +90,10 @@ def check_fits(agent: TrainedAgent, env, normalized: bool) -> None:
     try:
         agent.policy.check_env(env)
     except ValueError as error:
-        raise ValueError(f"trained_agent {agent.name!r} reads and writes other observations or "
-                         f"actions than this run's env: {error}") from None
+        refusal = ValueError(f"trained_agent {agent.name!r} reads and writes other observations "
+                             f"or actions than this run's env: {error}")
+        refusal.trained_preset = getattr(error, "trained_preset", None)  # another arm's agent
+        raise refusal from None
     if normalized != (agent.normalization_path is not None):
         trained = "with" if agent.normalization_path else "without"
         raise ValueError(

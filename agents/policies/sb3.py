@@ -399,6 +399,33 @@ class SB3Policy(BaselinePolicy):
         self._memory, self._episode_start = None, True
 
     @property
+    def trained_preset(self) -> str | None:
+        """The arm preset the agent was trained on (its run's ``config.yaml``: the env keyword
+        ``preset``, else the env id's arm), ``None`` where the run does not say."""
+        env_kwargs = self.config.get("env_kwargs") or {}
+        if isinstance(env_kwargs.get("preset"), str):
+            return env_kwargs["preset"]
+        env_id = self.config.get("env_id")
+        if not isinstance(env_id, str):
+            return None
+        from soft_gym.envs.config import EnvConfig
+        from soft_gym.envs.registration import TASK_IDS, preset_env_id
+        from soft_gym.robots.presets import PRESETS
+
+        if env_id in TASK_IDS.values():
+            return EnvConfig.__dataclass_fields__["preset"].default
+        return next((preset for preset in PRESETS for task in TASK_IDS
+                     if preset_env_id(task, preset) == env_id), None)
+
+    def other_arm(self, env) -> str | None:
+        """The preset the agent was trained on where ``env``'s arm is another (``None`` where it
+        is the same or either is unknown)."""
+        arm = getattr(getattr(env, "unwrapped", env), "arm", None)
+        trained = self.trained_preset
+        name = getattr(arm, "name", None)
+        return trained if trained is not None and name is not None and name != trained else None
+
+    @property
     def env_interface(self) -> dict:
         """The training env's observation and action settings (``SB3_INTERFACE_KEYS``)."""
         env_kwargs = self.config.get("env_kwargs", {})
@@ -480,7 +507,10 @@ class SB3Policy(BaselinePolicy):
 
     def check_env(self, env) -> None:
         """Raise ``ValueError`` unless ``env`` gives observations of the shape the agent reads
-        and takes actions of the shape it writes, naming the model file and both spaces."""
+        and takes actions of the shape it writes, naming the model file and both spaces.
+
+        The refusal is a :class:`PolicyRefusal`; where ``env``'s arm is not the one the agent
+        was trained on it names that arm, also as its ``trained_preset`` (else ``None``)."""
         if not (hasattr(env, "observation_space") and hasattr(env, "action_space")):
             raise ValueError(f"env must be a gymnasium environment, got {describe_value(env)}")
         model_spaces = (self.model.observation_space, self.model.action_space)
@@ -490,7 +520,8 @@ class SB3Policy(BaselinePolicy):
                  if _space_shapes(ours) != _space_shapes(theirs)]
         if wrong:
             source = "" if self.model_path is None else f" {str(self.model_path)!r}"
-            raise PolicyRefusal(
+            other_arm = self.other_arm(env)
+            refusal = PolicyRefusal(
                 f"the sb3 model{source} does not fit the env's {' and '.join(wrong)}: the agent "
                 f"reads observations {_describe_space(model_spaces[0])} and writes actions "
                 f"{_describe_space(model_spaces[1])}, the env gives observations "
@@ -498,7 +529,11 @@ class SB3Policy(BaselinePolicy):
                 f"{_describe_space(env_spaces[1])}" + (
                     f": make the env with the agent's interface {self.env_interface}"
                     if self.env_interface else
-                    " (an agent's interface is the arm and observation layout it was trained on)"))
+                    " (an agent's interface is the arm and observation layout it was trained on)")
+                + (f"; it was trained on the {other_arm} arm (preset={other_arm!r})"
+                   if other_arm else ""))
+            refusal.trained_preset = other_arm
+            raise refusal
 
 
 def _guess_algorithm(model_path: Path, data: dict | None = None) -> str:

@@ -28,7 +28,8 @@ is refused before any work.
 Before running a cell the process claims it with the lock file ``out/locks/<key>.lock``
 (:mod:`eval.suite.locks`: made atomically, holding the owner's pid and host), so two processes
 on one output directory never run the same cell: the second leaves the cells the first holds
-to it. A claim whose process has died is taken over by the next run. Pool workers end with the
+to it. A claim whose process has died is taken over by the next run; a run that ends
+with ``out/locks/`` empty removes it. Pool workers end with the
 process that started them (:func:`exit_with_parent`), so a killed suite leaves no process
 behind. The JSON record::
 

@@ -8,7 +8,8 @@ then hard-linked to its name, which fails when the name is taken, so a reader ne
 claim. A claim whose owner is on this host and no longer alive is stale: the next process takes
 it over (renamed away first, so of two successors only one wins). A claim from another host is
 never taken over (its owner cannot be checked from here): delete its file once that process is
-known to be gone.
+known to be gone. A run removes the claims' directory when it ends empty
+(:func:`remove_locks_dir`); a claim made meanwhile makes it again.
 """
 
 from __future__ import annotations
@@ -90,10 +91,14 @@ def claim(out: str | os.PathLike, key: str) -> bool:
     """Claim cell ``key`` for this process: ``True`` when this process holds it now (made, taken
     over from a dead owner, or already its own), ``False`` when a live process holds it."""
     path = lock_path(out, key)
-    path.parent.mkdir(parents=True, exist_ok=True)
     me = this_owner()
     for _ in range(4):
-        handle, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            handle, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp",
+                                           dir=path.parent)
+        except FileNotFoundError:  # another run removed the empty directory just now
+            continue
         try:
             with os.fdopen(handle, "w", encoding="utf-8") as stream:
                 json.dump(me, stream)
@@ -132,4 +137,14 @@ def release(out: str | os.PathLike, key: str) -> None:
         path.unlink(missing_ok=True)
 
 
-__all__ = ["LOCKS_DIR", "claim", "is_stale", "lock_path", "read_owner", "release", "this_owner"]
+def remove_locks_dir(out: str | os.PathLike) -> None:
+    """Remove the claims' directory of the output directory ``out`` if it is empty (a run's
+    end: the claims of other live processes keep it)."""
+    try:
+        (Path(out) / LOCKS_DIR).rmdir()
+    except OSError:  # absent, or holding another process's claims
+        pass
+
+
+__all__ = ["LOCKS_DIR", "claim", "is_stale", "lock_path", "read_owner", "release",
+           "remove_locks_dir", "this_owner"]

@@ -22,7 +22,7 @@ from agents.policies import PolicyRefusal
 from eval.datasets.episodes import EpisodeRecorder
 from eval.runner import RunConfig, build, run_episode
 from eval.suite.check import check_suite
-from eval.suite.locks import LOCKS_DIR, claim, release
+from eval.suite.locks import LOCKS_DIR, claim, release, remove_locks_dir
 from eval.suite.grid import Cell, expand, label_text
 from eval.suite.spec import SuiteSpec, load_suite
 from eval.suite.store import (cell_metrics, check_records_dir, git_revision, is_finished,
@@ -280,6 +280,7 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
     finally:
         for cell in claimed:
             release(out, cell.key)
+        remove_locks_dir(out)
     counts["wall_s"] = time.perf_counter() - start
     if failures:
         raise SuiteRunError(failures)

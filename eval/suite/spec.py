@@ -2,9 +2,9 @@
 
 The schema is the package's (:mod:`eval.suite`, "Schema"). :func:`load_suite` reads a suite file or
 a bundled suite (``eval/suites/<name>.yaml``), refusing an unknown key, preset, path, feedback
-source, policy or policy parameter with a :class:`SuiteError` naming the file and the key, and
-keeps the text with its SHA-256; :func:`eval.suite.check.check_suite` goes further and builds the
-envs.
+source, policy or policy parameter with a :class:`SuiteError` naming the file and the key (every
+such mistake of the file at once, one line each), and keeps the text with its SHA-256;
+:func:`eval.suite.check.check_suite` goes further and builds the envs.
 """
 
 from __future__ import annotations
@@ -73,10 +73,17 @@ alias bomb, a few hundred bytes, expands to gigabytes)."""
 MAX_DEPTH = 24
 """The deepest nesting of lists and mappings in a suite file."""
 
+MAX_ERRORS = 50
+"""The most mistakes of one file a :class:`SuiteError` lists (a last line counts the rest)."""
+
 
 class SuiteError(ValueError):
     """A suite file that cannot be run: names the file, the key and what is allowed (one line, at
-    most :data:`MESSAGE_CHARS` characters)."""
+    most :data:`MESSAGE_CHARS` characters).
+
+    :func:`parse_suite` raises one for all the mistakes of a file (:meth:`combined`): one line
+    each, in the file's order, listed in ``errors``; ``source`` and ``key`` are the first's.
+    """
 
     def __init__(self, source: str, key: str, message: str) -> None:
         self.source, self.key = source, key
@@ -85,6 +92,57 @@ class SuiteError(ValueError):
         if len(text) > MESSAGE_CHARS:
             text = text[:MESSAGE_CHARS - 3] + "..."
         super().__init__(text)
+        self.errors: list[SuiteError] = [self]
+
+    @classmethod
+    def combined(cls, errors: Sequence["SuiteError"]) -> "SuiteError":
+        """One error listing ``errors`` (at least one), one line each (at most
+        :data:`MAX_ERRORS`, then a line counting the rest)."""
+        if len(errors) == 1:
+            return errors[0]
+        lines = [str(error) for error in errors[:MAX_ERRORS]]
+        if len(errors) > MAX_ERRORS:
+            lines.append(f"{errors[0].source}: and {len(errors) - MAX_ERRORS} more mistake(s)")
+        error = cls.__new__(cls)
+        ValueError.__init__(error, "\n".join(lines))
+        error.source, error.key = errors[0].source, errors[0].key
+        error.errors = [item for each in errors for item in each.errors]
+        return error
+
+
+class _Errors:
+    """The mistakes of one suite file, gathered so that all of them are reported at once."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self.found: list[SuiteError] = []
+
+    def _covered(self, key: str) -> bool:
+        """Whether a mistake at ``key``, or at a key holding it, is noted already."""
+        return any(error.key == key or (error.key and key.startswith(error.key)
+                                        and key[len(error.key)] in ".[")
+                   for error in self.found)
+
+    def add(self, key: str, message: str) -> None:
+        """Note a mistake at ``key`` (one per key: a later one at a key already refused, or
+        within it, adds nothing)."""
+        if not self._covered(key):
+            self.found.append(SuiteError(self.source, key, message))
+
+    def check(self, function, *args, default: Any = None) -> Any:
+        """``function(*args)``, noting the :class:`SuiteError` it raises (then ``default``)."""
+        try:
+            return function(*args)
+        except SuiteError as error:
+            for item in error.errors:
+                if not self._covered(item.key):
+                    self.found.append(item)
+            return default
+
+    def raise_any(self) -> None:
+        """Raise every mistake noted, in one :class:`SuiteError`."""
+        if self.found:
+            raise SuiteError.combined(self.found)
 
 
 def _short(value: Any) -> str:
@@ -238,116 +296,137 @@ def load_suite(spec: str | os.PathLike) -> SuiteSpec:
     return parse_suite(data, source=source, text=text)
 
 
-def _check_plain(source: str, key: str, value: Any) -> None:
+def _check_plain(errors: _Errors, key: str, value: Any) -> None:
     """Refuse anything but JSON's types in the parsed suite (text keys; mappings, lists, text,
     integers, finite floats, booleans, null), naming the key: YAML's dates, ``!!binary``,
     ``!!set`` and the like, and ``.nan``/``.inf``, before anything is hashed."""
     if isinstance(value, dict):
         for name, item in value.items():
             if not isinstance(name, str):
-                raise SuiteError(source, key, f"keys must be text, got {_short(name)} "
-                                              f"({type(name).__name__})")
-            _check_plain(source, f"{key}.{name}" if key else name, item)
+                errors.add(key, f"keys must be text, got {_short(name)} "
+                                f"({type(name).__name__})")
+                continue
+            _check_plain(errors, f"{key}.{name}" if key else name, item)
     elif isinstance(value, list):
         for i, item in enumerate(value):
-            _check_plain(source, f"{key}[{i}]", item)
+            _check_plain(errors, f"{key}[{i}]", item)
     elif isinstance(value, float):
         if not math.isfinite(value):
-            raise SuiteError(source, key, f"must be a finite number, got {value!r}")
+            errors.add(key, f"must be a finite number, got {value!r}")
     elif not (value is None or isinstance(value, (str, int, bool))):
-        raise SuiteError(source, key, f"must be text, a number, true/false, null, a list or a "
-                                      f"mapping, got a {type(value).__name__} "
-                                      f"({_short(value)})")
+        errors.add(key, f"must be text, a number, true/false, null, a list or a "
+                        f"mapping, got a {type(value).__name__} "
+                        f"({_short(value)})")
 
 
 def parse_suite(data: Any, source: str = "<suite>", text: str | None = None) -> SuiteSpec:
-    """A :class:`SuiteSpec` from the parsed YAML ``data`` (``source`` names it in errors)."""
-    _check_plain(source, "", data)
+    """A :class:`SuiteSpec` from the parsed YAML ``data`` (``source`` names it in errors).
+
+    Raises:
+        ValueError: (:class:`SuiteError`) every mistake of the file, one line each naming the
+            file and the key, in the file's order.
+    """
+    errors = _Errors(source)
+    _check_plain(errors, "", data)
+    errors.raise_any()  # a value YAML alone has (a date, a set) is reported before any other
     if text is None:
         text = yaml.safe_dump(data, sort_keys=False)
-    _mapping(source, "", data, TOP_KEYS, required=("name", "seeds", "arms"))
-    name = data["name"]
-    if not isinstance(name, str) or not _NAME.match(name):
-        raise SuiteError(source, "name", f"must be a non-empty name of letters, digits and "
-                                         f"'_.-', got {_short(name)}")
+    if not _mapping(errors, "", data, TOP_KEYS, required=("name", "seeds", "arms")):
+        errors.raise_any()
+    name = data.get("name")
+    if "name" in data and (not isinstance(name, str) or not _NAME.match(name)):
+        errors.add("name", f"must be a non-empty name of letters, digits and "
+                           f"'_.-', got {_short(name)}")
     description = data.get("description", "")
     if not isinstance(description, str):
-        raise SuiteError(source, "description", f"must be text, got {_short(description)}")
-    seeds = _check_seeds(source, "seeds", data["seeds"])
-    cycles = _check_cycles(source, "cycles", data.get("cycles", DEFAULT_CYCLES))
-    arms_data = data["arms"]
-    if not isinstance(arms_data, dict) or not arms_data:
-        raise SuiteError(source, "arms", f"must map preset names from {sorted(PRESETS)} to arm "
-                                         f"blocks, got {_short(arms_data)}")
-    arms = []
-    for preset, block in arms_data.items():
-        key = f"arms.{preset}"
-        if preset not in PRESETS:
-            raise SuiteError(source, key, f"unknown preset {_short(preset)}; allowed: "
-                                          f"{sorted(PRESETS)}")
-        _mapping(source, key, block, ARM_KEYS, required=("paths", "conditions", "policies"))
-        paths = block["paths"]
-        allowed_paths = list(PATH_SHAPES) + ["waypoints"]
-        if not isinstance(paths, list) or not paths:
-            raise SuiteError(source, f"{key}.paths", f"must be a non-empty list of path names "
-                                                     f"from {allowed_paths}, got {_short(paths)}")
-        for i, path in enumerate(paths):
-            if path not in allowed_paths:
-                raise SuiteError(source, f"{key}.paths[{i}]", f"unknown path {_short(path)}; "
-                                                              f"allowed: {allowed_paths}")
-        if len(set(paths)) != len(paths):
-            raise SuiteError(source, f"{key}.paths", f"paths repeat: {_short(paths)}")
-        feedback = block.get("feedback")
-        if feedback is not None and feedback not in FEEDBACK_SOURCES:
-            raise SuiteError(source, f"{key}.feedback", f"unknown feedback source "
-                                                        f"{_short(feedback)}; "
-                                                        f"allowed: {sorted(FEEDBACK_SOURCES)}")
-        env = _env_block(source, f"{key}.env", block.get("env", {}), allow_feedback=False)
-        arm_cycles = _check_cycles(source, f"{key}.cycles", block.get("cycles", cycles))
-        conditions_data = block["conditions"]
-        if not isinstance(conditions_data, dict) or not conditions_data:
-            raise SuiteError(source, f"{key}.conditions",
-                             f"must map condition names to env keyword arguments (from "
-                             f"{list(ENV_KEYS)}; {{}} for nominal), got {_short(conditions_data)}")
-        conditions = {}
-        for condition, kwargs in conditions_data.items():
-            ckey = f"{key}.conditions.{condition}"
-            if not isinstance(condition, str) or not _NAME.match(condition):
-                raise SuiteError(source, ckey, "condition names must be non-empty names of "
-                                               "letters, digits and '_.-' (they name table "
-                                               "rows and plot files)")
-            kwargs = _env_block(source, ckey, {} if kwargs is None else kwargs,
-                                allow_feedback=True)
-            feedback_here = kwargs.get("feedback")
-            if feedback_here is not None and feedback_here not in FEEDBACK_SOURCES:
-                raise SuiteError(source, f"{ckey}.feedback",
-                                 f"unknown feedback source {_short(feedback_here)}; allowed: "
-                                 f"{sorted(FEEDBACK_SOURCES)}")
-            conditions[condition] = kwargs
-        policies = _policies(source, f"{key}.policies", block["policies"], BASELINES)
-        arms.append(ArmEntry(preset=preset, paths=tuple(paths), feedback=feedback, env=env,
-                             cycles=arm_cycles, conditions=conditions, policies=policies))
+        errors.add("description", f"must be text, got {_short(description)}")
+    seeds = (errors.check(_check_seeds, source, "seeds", data["seeds"], default=())
+             if "seeds" in data else ())
+    cycles = errors.check(_check_cycles, source, "cycles", data.get("cycles", DEFAULT_CYCLES),
+                          default=DEFAULT_CYCLES)
+    arms_data = data.get("arms", {})
+    if "arms" in data and (not isinstance(arms_data, dict) or not arms_data):
+        errors.add("arms", f"must map preset names from {sorted(PRESETS)} to arm "
+                           f"blocks, got {_short(arms_data)}")
+        arms_data = {}
+    arms = [_arm(errors, preset, block, cycles) for preset, block in arms_data.items()]
+    errors.raise_any()
     return SuiteSpec(name=name, description=description, seeds=seeds, cycles=cycles,
                      arms=tuple(arms), source=source, text=text,
                      sha256=hashlib.sha256(text.encode("utf-8")).hexdigest())
 
 
-def _mapping(source: str, key: str, value: Any, allowed: Sequence[str],
-             required: Sequence[str] = ()) -> None:
+def _arm(errors: _Errors, preset: Any, block: Any, cycles: int) -> ArmEntry | None:
+    """The arm ``preset`` of the suite from its ``block``, noting every mistake in it (``None``
+    when it has one)."""
+    key = f"arms.{preset}"
+    before = len(errors.found)
+    if preset not in PRESETS:
+        errors.add(key, f"unknown preset {_short(preset)}; allowed: {sorted(PRESETS)}")
+    if not _mapping(errors, key, block, ARM_KEYS, required=("paths", "conditions", "policies")):
+        return None
+    paths = block.get("paths", [])
+    allowed_paths = list(PATH_SHAPES) + ["waypoints"]
+    if "paths" in block:
+        if not isinstance(paths, list) or not paths:
+            errors.add(f"{key}.paths", f"must be a non-empty list of path names from "
+                                       f"{allowed_paths}, got {_short(paths)}")
+            paths = []
+        for i, path in enumerate(paths):
+            if path not in allowed_paths:
+                errors.add(f"{key}.paths[{i}]", f"unknown path {_short(path)}; allowed: "
+                                                f"{allowed_paths}")
+        if len(set(map(repr, paths))) != len(paths):
+            errors.add(f"{key}.paths", f"paths repeat: {_short(paths)}")
+    feedback = block.get("feedback")
+    if feedback is not None and not (isinstance(feedback, str) and feedback in FEEDBACK_SOURCES):
+        errors.add(f"{key}.feedback", f"unknown feedback source {_short(feedback)}; "
+                                      f"allowed: {sorted(FEEDBACK_SOURCES)}")
+    env = _env_block(errors, f"{key}.env", block.get("env", {}), allow_feedback=False)
+    arm_cycles = errors.check(_check_cycles, errors.source, f"{key}.cycles",
+                              block.get("cycles", cycles), default=cycles)
+    conditions_data = block.get("conditions", {})
+    if "conditions" in block and (not isinstance(conditions_data, dict) or not conditions_data):
+        errors.add(f"{key}.conditions",
+                   f"must map condition names to env keyword arguments (from "
+                   f"{list(ENV_KEYS)}; {{}} for nominal), got {_short(conditions_data)}")
+        conditions_data = {}
+    conditions = {}
+    for condition, kwargs in conditions_data.items():
+        ckey = f"{key}.conditions.{condition}"
+        if not isinstance(condition, str) or not _NAME.match(condition):
+            errors.add(ckey, "condition names must be non-empty names of letters, digits and "
+                             "'_.-' (they name table rows and plot files)")
+        kwargs = _env_block(errors, ckey, {} if kwargs is None else kwargs, allow_feedback=True)
+        feedback_here = kwargs.get("feedback")
+        if feedback_here is not None and not (isinstance(feedback_here, str)
+                                              and feedback_here in FEEDBACK_SOURCES):
+            errors.add(f"{ckey}.feedback", f"unknown feedback source {_short(feedback_here)}; "
+                                           f"allowed: {sorted(FEEDBACK_SOURCES)}")
+        conditions[condition] = kwargs
+    policies = (_policies(errors, f"{key}.policies", block["policies"], BASELINES)
+                if "policies" in block else ())
+    if len(errors.found) > before:
+        return None
+    return ArmEntry(preset=preset, paths=tuple(paths), feedback=feedback, env=env,
+                    cycles=arm_cycles, conditions=conditions, policies=policies)
+
+
+def _mapping(errors: _Errors, key: str, value: Any, allowed: Sequence[str],
+             required: Sequence[str] = ()) -> bool:
+    """Note ``value``'s unknown and missing keys; ``False`` when it is no mapping at all."""
     where = key or "top level"
     if not isinstance(value, dict):
-        raise SuiteError(source, key, f"{where} must be a mapping with keys from "
-                                      f"{list(allowed)}, got {_short(value)}")
-    unknown = [k for k in value if k not in allowed]
-    if unknown:
-        name = f"{key}.{unknown[0]}" if key else str(unknown[0])
-        raise SuiteError(source, name, f"unknown key {_short(unknown[0])}; allowed at {where}: "
-                                       f"{list(allowed)}")
-    missing = [k for k in required if k not in value]
-    if missing:
-        name = f"{key}.{missing[0]}" if key else missing[0]
-        raise SuiteError(source, name, f"missing required key {_short(missing[0])} ({where} needs "
-                                       f"{list(required)})")
+        errors.add(key, f"{where} must be a mapping with keys from "
+                        f"{list(allowed)}, got {_short(value)}")
+        return False
+    for unknown in (k for k in value if k not in allowed):
+        errors.add(f"{key}.{unknown}" if key else str(unknown),
+                   f"unknown key {_short(unknown)}; allowed at {where}: {list(allowed)}")
+    for missing in (k for k in required if k not in value):
+        errors.add(f"{key}.{missing}" if key else missing,
+                   f"missing required key {_short(missing)} ({where} needs {list(required)})")
+    return True
 
 
 def _check_seeds(source: str, key: str, seeds: Any) -> tuple[int, ...]:
@@ -366,11 +445,14 @@ def _check_cycles(source: str, key: str, cycles: Any) -> int:
     return int(cycles)
 
 
-def _env_block(source: str, key: str, value: Any, allow_feedback: bool) -> dict[str, Any]:
+def _env_block(errors: _Errors, key: str, value: Any, allow_feedback: bool) -> dict[str, Any]:
+    """The env keyword arguments of ``value``, noting each one not allowed here (``{}`` when
+    ``value`` is no mapping)."""
     allowed = [k for k in ENV_KEYS if allow_feedback or k != "feedback"]
     if not isinstance(value, dict):
-        raise SuiteError(source, key, f"must be a mapping of env keyword arguments from "
-                                      f"{allowed}, got {_short(value)}")
+        errors.add(key, f"must be a mapping of env keyword arguments from "
+                        f"{allowed}, got {_short(value)}")
+        return {}
     for name in value:
         if name not in allowed:
             hint = ""
@@ -378,8 +460,8 @@ def _env_block(source: str, key: str, value: Any, allow_feedback: bool) -> dict[
                 hint = " (the suite sets it: use the arm's key or paths)"
             elif name == "feedback":
                 hint = " (set the arm's feedback key instead)"
-            raise SuiteError(source, f"{key}.{name}", f"unknown env keyword {_short(name)}{hint}; "
-                                                      f"allowed: {allowed}")
+            errors.add(f"{key}.{name}", f"unknown env keyword {_short(name)}{hint}; "
+                                        f"allowed: {allowed}")
     return copy.deepcopy(dict(value))
 
 
@@ -388,59 +470,67 @@ def _baseline_parameters(name: str, baselines: Mapping[str, type]) -> list[str]:
             if p not in ("self", "env")]
 
 
-def _policies(source: str, key: str, value: Any,
+def _policies(errors: _Errors, key: str, value: Any,
               baselines: Mapping[str, str]) -> tuple[PolicyEntry, ...]:
+    """The policy entries of ``value``, noting every mistake in them."""
     if not isinstance(value, list) or not value:
-        raise SuiteError(source, key, f"must be a non-empty list of policies: names from "
-                                      f"{sorted(baselines)}, sb3:PATH, or mappings with keys "
-                                      f"{list(POLICY_KEYS)}; got {_short(value)}")
+        errors.add(key, f"must be a non-empty list of policies: names from "
+                        f"{sorted(baselines)}, sb3:PATH, or mappings with keys "
+                        f"{list(POLICY_KEYS)}; got {_short(value)}")
+        return ()
     entries, labels = [], {}
     for i, item in enumerate(value):
         pkey = f"{key}[{i}]"
         if isinstance(item, str):
             item = {"name": item}
-        _mapping(source, pkey, item, POLICY_KEYS, required=("name",))
-        name = item["name"]
-        if not isinstance(name, str) or not (name in baselines or
-                                             (name.startswith("sb3:") and len(name) > 4)):
-            raise SuiteError(source, f"{pkey}.name", f"unknown policy {_short(name)}; allowed: "
-                                                     f"{sorted(baselines)} or sb3:PATH")
+        if not _mapping(errors, pkey, item, POLICY_KEYS, required=("name",)):
+            continue
+        name = item.get("name")
+        known = isinstance(name, str) and (name in baselines
+                                           or (name.startswith("sb3:") and len(name) > 4))
+        if "name" in item and not known:
+            errors.add(f"{pkey}.name", f"unknown policy {_short(name)}; allowed: "
+                                       f"{sorted(baselines)} or sb3:PATH")
         params = item.get("params", {}) or {}
         seed_params = item.get("seed_params", []) or []
         if not isinstance(params, dict):
-            raise SuiteError(source, f"{pkey}.params", f"must be a mapping of the policy's "
-                                                       f"keyword arguments, got {_short(params)}")
+            errors.add(f"{pkey}.params", f"must be a mapping of the policy's "
+                                         f"keyword arguments, got {_short(params)}")
+            params = {}
         if not isinstance(seed_params, list) or not all(isinstance(p, str) for p in seed_params):
-            raise SuiteError(source, f"{pkey}.seed_params", f"must be a list of parameter "
-                                                            f"names, got {_short(seed_params)}")
-        if name.startswith("sb3:"):
+            errors.add(f"{pkey}.seed_params", f"must be a list of parameter "
+                                              f"names, got {_short(seed_params)}")
+            seed_params = []
+        if not known:
+            pass
+        elif name.startswith("sb3:"):
             if params or seed_params:
-                raise SuiteError(source, f"{pkey}.params", "an sb3 agent takes no params or "
-                                                           "seed_params")
+                errors.add(f"{pkey}.params", "an sb3 agent takes no params or seed_params")
         else:
             allowed = _baseline_parameters(name, baselines)
             for pname in list(params) + list(seed_params):
                 if pname not in allowed:
                     where = "params" if pname in params else "seed_params"
-                    raise SuiteError(source, f"{pkey}.{where}.{pname}",
-                                     f"unknown parameter {_short(pname)} of {name}; allowed: "
-                                     f"{allowed}")
-            both = sorted(set(params) & set(seed_params))
-            if both:
-                raise SuiteError(source, f"{pkey}.params.{both[0]}",
-                                 f"{_short(both[0])} is in both params and seed_params")
-        env = _env_block(source, f"{pkey}.env",
-                         item.get("env", POLICY_ENV_DEFAULTS.get(name, {})), allow_feedback=True)
-        label = item.get("label", policy_label(name))
+                    errors.add(f"{pkey}.{where}.{pname}",
+                               f"unknown parameter {_short(pname)} of {name}; allowed: "
+                               f"{allowed}")
+            for both in sorted(set(params) & set(seed_params)):
+                errors.add(f"{pkey}.params.{both}",
+                           f"{_short(both)} is in both params and seed_params")
+        env = _env_block(errors, f"{pkey}.env",
+                         item.get("env", POLICY_ENV_DEFAULTS.get(name, {}) if known else {}),
+                         allow_feedback=True)
+        label = item.get("label", policy_label(name) if known else f"policy{i}")
         if not isinstance(label, str) or not _NAME.match(label):
-            raise SuiteError(source, f"{pkey}.label", f"must be a name of letters, digits and "
-                                                      f"'_.-', got {_short(label)}")
-        if label in labels:
-            raise SuiteError(source, f"{pkey}.label",
-                             f"label {_short(label)} is also {key}[{labels[label]}]'s: give each "
-                             f"entry its own label")
-        labels[label] = i
-        entries.append(PolicyEntry(name=name, label=label, params=copy.deepcopy(params),
-                                   seed_params=tuple(seed_params), env=env))
+            errors.add(f"{pkey}.label", f"must be a name of letters, digits and "
+                                        f"'_.-', got {_short(label)}")
+        elif label in labels:
+            errors.add(f"{pkey}.label",
+                       f"label {_short(label)} is also {key}[{labels[label]}]'s: give each "
+                       f"entry its own label")
+        else:
+            labels[label] = i
+        if known:
+            entries.append(PolicyEntry(name=name, label=label, params=copy.deepcopy(params),
+                                       seed_params=tuple(seed_params), env=env))
     return tuple(entries)
-

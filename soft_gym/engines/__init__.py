@@ -10,11 +10,13 @@ the same chain (:mod:`soft_gym.robots.chain`) with its springs native, several t
 (docs/architecture.md, "The MuJoCo engine"). :func:`make_simulator` builds one; everything above
 the engines (env, sensors, loads, tasks, procedures, baselines) uses only the interface
 (docs/architecture.md, "The simulator interface"). What an engine lacks is refused before any
-work by :func:`require_engine_features`.
+work by :func:`require_engine_features`, naming beside the engines that have it what would run on
+the engine asked for (e.g. the feedback sources it runs).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Iterable
 
 from soft_gym._registry import Registry
@@ -49,27 +51,61 @@ def make_simulator(spec: ArmSpec, engine: str = DEFAULT_ENGINE,
     return ENGINES[engine](spec, physics_dt_s=physics_dt_s)
 
 
-def require_engine_features(engine: str, needs: Iterable[tuple[str, Iterable[str]]]) -> None:
+@dataclass(frozen=True)
+class EngineNeed:
+    """What of a configuration needs which engine features, and what would run without them.
+
+    Attributes:
+        what: the thing, e.g. ``"scenario element 'swaying_mass'"``.
+        features: the features it needs, from :data:`ENGINE_FEATURES`.
+        remedy: the change of the configuration that runs on the engine asked for, e.g.
+            ``"pass render_mode=None"`` (empty: only another engine runs it).
+        arguments: the env arguments ``remedy`` changes, e.g. ``("render_mode",)``.
+    """
+
+    what: str
+    features: frozenset[str]
+    remedy: str = ""
+    arguments: tuple[str, ...] = ()
+
+
+class EngineFeatureError(ValueError):
+    """A configuration that needs what its engine lacks (:func:`require_engine_features`); its
+    ``engine`` and ``need`` (:class:`EngineNeed`) say what and what would run."""
+
+    def __init__(self, message: str, engine: str, need: EngineNeed) -> None:
+        super().__init__(message)
+        self.engine, self.need = engine, need
+
+
+def require_engine_features(engine: str,
+                            needs: Iterable[EngineNeed | tuple[str, Iterable[str]]]) -> None:
     """Refuse, before any work, a configuration that needs what ``engine`` lacks.
 
     Args:
         engine: an engine name from :data:`ENGINES`.
-        needs: ``(what, features)`` pairs, e.g. ``("scenario element 'swaying_mass'",
-            {"bodies"})``, features from :data:`ENGINE_FEATURES`.
+        needs: :class:`EngineNeed` s, or ``(what, features)`` pairs, e.g.
+            ``("scenario element 'swaying_mass'", {"bodies"})``, features from
+            :data:`ENGINE_FEATURES`.
 
     Raises:
-        ValueError: naming the first thing whose features the engine lacks, the engine, and
-            the engines that have them.
+        EngineFeatureError: (a ``ValueError``) on one line, naming the first thing whose
+            features the engine lacks, the engine, the engines that have them and, where there
+            is one, the change that runs on ``engine`` (the need's ``remedy``).
     """
     offered = ENGINES[engine].features
-    for what, features in needs:
-        missing = sorted(set(features) - offered)
+    for need in needs:
+        if not isinstance(need, EngineNeed):
+            need = EngineNeed(need[0], frozenset(need[1]))
+        missing = sorted(set(need.features) - offered)
         if missing:
-            able = [name for name in ENGINES if set(features) <= ENGINES[name].features]
-            raise ValueError(
-                f"{what} needs {' and '.join(ENGINE_FEATURES[f] for f in missing)}, which the "
-                f"{engine} engine does not have: use engine= one of {able}")
+            able = [name for name in ENGINES if set(need.features) <= ENGINES[name].features]
+            remedy = f" or {need.remedy}" if need.remedy else ""
+            raise EngineFeatureError(
+                f"{need.what} needs {' and '.join(ENGINE_FEATURES[f] for f in missing)}, which "
+                f"the {engine} engine does not have: use engine= one of {able}{remedy}",
+                engine, need)
 
 
-__all__ = ["ENGINES", "DEFAULT_ENGINE", "ENGINE_FEATURES", "make_simulator",
-           "require_engine_features"]
+__all__ = ["ENGINES", "DEFAULT_ENGINE", "ENGINE_FEATURES", "EngineFeatureError", "EngineNeed",
+           "make_simulator", "require_engine_features"]

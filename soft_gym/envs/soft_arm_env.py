@@ -110,7 +110,7 @@ import numpy as np
 from gymnasium import spaces
 
 from soft_gym._validation import as_finite_array, require_bool, require_integer
-from soft_gym.engines import make_simulator, require_engine_features
+from soft_gym.engines import ENGINES, EngineNeed, make_simulator, require_engine_features
 from soft_gym.envs.config import EnvConfig, check_arguments
 from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.envs.rendering import SceneRenderer
@@ -125,7 +125,7 @@ from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConf
 from soft_gym.sensing import FEEDBACK_SOURCES, make_feedback_source
 from soft_gym.sensing.feedback_base import CalibrationContext, FeedbackEstimate
 from soft_gym.sensing.measurement import Measurement
-from soft_gym.sensors import make_sensor
+from soft_gym.sensors import SENSORS, make_sensor
 from soft_gym.sensors.faults import FAULT_SENSORS, copy_faults, faults_per_sensor, make_faults
 from soft_gym.sensors.reading import measure
 from soft_gym.tasks import ReachTask, Task, TrackTask
@@ -266,21 +266,40 @@ class SoftArmEnv(gym.Env):
         self._calibrate(use_cache=True)
 
     # ------------------------------------------------------------------ composition
-    def _engine_needs(self, randomization: RandomizationConfig | None
-                      ) -> list[tuple[str, frozenset[str]]]:
+    def _engine_needs(self, randomization: RandomizationConfig | None) -> list[EngineNeed]:
         """What of this env needs which engine features (:func:`~soft_gym.engines.
-        require_engine_features`): its loads, sensors, drawn loads and ``render()``."""
-        needs = [(f"scenario element {load!r}", getattr(load, "engine_features", frozenset()))
+        require_engine_features`): its loads, sensors, drawn loads and ``render()``, each with
+        the change of arguments that runs without them (a scenario element has none)."""
+        config = self.config
+        needs = [EngineNeed(f"scenario element {load!r}",
+                            frozenset(getattr(load, "engine_features", frozenset())))
                  for load in self.loads]
-        needs += [(f"sensor {name!r} (feedback {self.config.feedback!r}, obs "
-                   f"{self.config.obs!r})", sensor.engine_features)
-                  for name, sensor in self.sensors.items()]
+        for name, sensor in self.sensors.items():
+            remedies, arguments = [], []
+            if name in self.feedback_source.sensors:
+                able = feedback_sources_on(config.engine, shape="shape" in config.obs)
+                if able:
+                    remedies.append(f"pass feedback= one of {able}")
+                    arguments.append("feedback")
+            if name in config.obs:
+                remedies.append(f"leave {name!r} out of obs=")
+                arguments.append("obs")
+            if name in config.sensors:
+                remedies.append(f"leave {name!r} out of sensors=")
+                arguments.append("sensors")
+            needs.append(EngineNeed(f"sensor {name!r} (feedback {config.feedback!r}, obs "
+                                    f"{config.obs!r})", frozenset(sensor.engine_features),
+                                    " and ".join(remedies), tuple(arguments)))
         if randomization is not None and randomization.load_weights.get("swaying_mass", 0) > 0:
-            needs.append(("randomization drawing swaying_mass loads (load_weights"
-                          f"['swaying_mass'] = {randomization.load_weights['swaying_mass']!r}; "
-                          "set it to 0 to draw none)", SwayingMass.engine_features))
-        if self.config.render_mode is not None:
-            needs.append((f"render_mode={self.config.render_mode!r}", frozenset({"rendering"})))
+            needs.append(EngineNeed(
+                "randomization drawing swaying_mass loads (load_weights['swaying_mass'] = "
+                f"{randomization.load_weights['swaying_mass']!r})", SwayingMass.engine_features,
+                "set RandomizationConfig.load_weights['swaying_mass'] (randomization=) to 0 to "
+                "draw none", ("randomization",)))
+        if config.render_mode is not None:
+            needs.append(EngineNeed(f"render_mode={config.render_mode!r}",
+                                    frozenset({"rendering"}), "pass render_mode=None",
+                                    ("render_mode",)))
         return needs
 
     def _make_tasks(self, paths: list[str]) -> list[Task]:
@@ -657,6 +676,17 @@ def _is_boolean(value: Any) -> bool:
 def _rebuild_env(cls: type, config: EnvConfig) -> "SoftArmEnv":
     """A new ``cls(config=config)`` (the target of :meth:`SoftArmEnv.__reduce__`)."""
     return cls(config=config)
+
+
+def feedback_sources_on(engine: str, shape: bool = False) -> list[str]:
+    """The feedback sources (:data:`~soft_gym.sensing.FEEDBACK_SOURCES`) whose sensors the
+    engine ``engine`` simulates (each sensor's ``engine_features`` among the engine's), sorted;
+    with ``shape``, only those that estimate the backbone (for a ``shape`` part)."""
+    offered = ENGINES[engine].features
+    return sorted(name for name in FEEDBACK_SOURCES
+                  if all(SENSORS[sensor].engine_features <= offered
+                         for sensor in FEEDBACK_SOURCES[name].sensors)
+                  and (FEEDBACK_SOURCES[name].estimates_shape or not shape))
 
 
 def _make_feedback_source(feedback: Any, sensing: Any):

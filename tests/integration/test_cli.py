@@ -463,3 +463,13 @@ def test_revision_speed_times_this_tree_against_a_revision_in_turns(tmp_path, ca
                                    row["revision_steps_per_cpu_s"], row["cpu_ratios"]):
         assert ratio == pytest.approx(ours / theirs)
     assert all(0.2 < ratio < 5.0 for ratio in row["wall_ratios"] + row["cpu_ratios"])
+
+
+def test_eval_track_names_the_arm_of_a_shipped_agent_of_another_arm(tmp_path, capsys):
+    """``--policies sb3:sac_zhao2021_track`` on the default --preset (wang2023): the one-line
+    error ends with the --preset the agent was trained on."""
+    out = tmp_path / "track"
+    line = assert_one_line_error(eval_main.main, ["track", "--policies", "sb3:sac_zhao2021_track",
+                                                  "--out", str(out)], "--policies", capsys,
+                                 out=out, also="does not fit")
+    assert line.endswith("; --preset zhao2021"), line

@@ -17,6 +17,7 @@ import torch.nn as nn
 import yaml
 
 import soft_gym  # noqa: F401
+from cli_errors import assert_one_line_error
 from agents.policies import SHIPPED_DIR, make_policy, model_normalization_mark
 from train.__main__ import main as train_main
 from train.config import (ALGORITHMS, check_hyperparameters, parse_key_values,
@@ -242,6 +243,55 @@ def test_a_refused_env_keyword_is_the_one_that_fails_the_whole_set(tmp_path, cap
     error = capsys.readouterr().err.strip().splitlines()[-1]
     assert "--conf-file" in error and "env keyword randomization=" in error, error
     assert "swaying" in error and "camera" not in error, error
+
+
+def test_the_engine_refusal_names_the_feedback_that_runs_there_on_one_line(tmp_path, capsys):
+    """``--env-kwargs engine=mujoco feedback=fused``: fused feedback needs the eye-in-hand
+    camera, which MuJoCo lacks; the one-line error names the option, the camera and the
+    feedback sources the MuJoCo engine runs."""
+    out = tmp_path / "runs"
+    line = assert_one_line_error(
+        train_main, ["--env-kwargs", "engine=mujoco", "feedback=fused", "--out", str(out)],
+        "--env-kwargs", capsys, out=out, also="sensor 'image' (feedback 'fused'")
+    assert "use engine= one of ['pybullet'] or pass feedback= one of [" in line, line
+    able = line.split("or pass feedback= one of ")[1]
+    assert "'em'" in able and "'ground_truth'" in able and "'fused'" not in able, line
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["--env-kwargs", "engine=mujoco"], "--env-kwargs"),  # the recipe's randomization: true
+    (["--conf-file", "MUJOCO", "--randomize"], "--randomize"),
+    (["--conf-file", "MUJOCO", "--randomization-config", "train/configs/randomization.yaml"],
+     "--randomization-config"),
+])
+def test_drawn_swaying_masses_on_mujoco_name_the_randomisation_file_without_them(
+        argv, option, tmp_path, capsys):
+    """Randomisation drawing swaying masses on MuJoCo: the one-line error names the option that
+    gave what is refused (engine=mujoco on the recipe's randomisation; --randomize or
+    --randomization-config on a MuJoCo recipe) and the file that draws none (which exists and
+    has no swaying-mass odds)."""
+    from soft_gym.scenarios.randomization import RandomizationConfig
+    from train.config import CONFIG_DIR
+
+    shipped = CONFIG_DIR / "randomization_mujoco.yaml"
+    assert RandomizationConfig.from_any(shipped).load_weights.get("swaying_mass", 0) == 0
+    config = tmp_path / "sac.yml"
+    config.write_text(yaml.safe_dump({"SoftArmTrackWang2023-v0": {
+        "n_timesteps": 1000, "policy": "MlpPolicy",
+        "env_kwargs": {"engine": "mujoco", "feedback": "em"}}}))
+    out = tmp_path / "runs"
+    line = assert_one_line_error(
+        train_main, [str(config) if arg == "MUJOCO" else arg for arg in argv]
+        + ["--out", str(out)], option, capsys, out=out,
+        also="randomization drawing swaying_mass loads")
+    assert line.startswith(f"python -m train: error: {option}: env keyword "), line
+    assert line.endswith("--randomization-config train/configs/randomization_mujoco.yaml "
+                         "draws none"), line
+    assert "RandomizationConfig.load_weights['swaying_mass']" in line, line
+    from eval.runner import make_uncalibrated_env
+
+    make_uncalibrated_env("SoftArmTrackWang2023-v0", {  # the file named runs on MuJoCo
+        "engine": "mujoco", "feedback": "em", "randomization": str(shipped)}).close()
 
 
 @pytest.fixture(scope="module")

@@ -199,6 +199,21 @@ def test_cli_steps_below_learning_starts_is_refused(tmp_path, capsys):
     assert "--steps" in error and "learning_starts (1000)" in error
 
 
+
+def test_cli_drawn_swaying_masses_on_mujoco_name_the_randomisation_file_without_them(
+        tmp_path, capsys):
+    """The recipe's randomisation draws swaying masses, which MuJoCo lacks: the one-line error
+    names the --env-kwargs entry that draws none."""
+    with pytest.raises(SystemExit) as exit_info:
+        train_main(["sweep", "--out", str(tmp_path / "o"), "--steps", "5000", "--env-kwargs",
+                    "engine=mujoco"])
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert error.startswith("python -m train sweep: error: --env-kwargs:"), error
+    assert error.endswith("; --env-kwargs randomization=train/configs/randomization_mujoco.yaml "
+                          "draws none"), error
+    assert not (tmp_path / "o").exists()
+
 def test_cli_without_ray_names_the_extra(tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray raises ImportError
     with pytest.raises(SystemExit) as exit_info:

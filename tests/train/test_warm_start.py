@@ -130,3 +130,20 @@ def test_an_off_policy_run_keeps_its_recipes_action_noise(tmp_path):
     noise = TD3.load(tuned / "model.zip").action_noise
     assert isinstance(noise, NormalActionNoise)
     assert np.allclose(noise._sigma, 0.3)
+
+
+def test_a_shipped_agent_of_another_arm_is_refused_naming_the_option_of_its_arm(tmp_path,
+                                                                               capsys):
+    """--trained-agent sac_zhao2021_track on the default arm (wang2023): the one-line error names
+    the agent's arm: --preset, or with --env the alias id of that arm or the generic id's
+    preset keyword."""
+    out = tmp_path / "runs"
+    base = ["--algo", "sac", "--trained-agent", "sac_zhao2021_track", "--out", str(out)]
+    line = assert_one_line_error(train_main, base, "--trained-agent", capsys, also="(6,)")
+    assert line.endswith("; --preset zhao2021"), line
+    line = assert_one_line_error(train_main, [*base, "--env", "SoftArmTrackWang2023-v0"],
+                                 "--trained-agent", capsys)
+    assert line.endswith("; --env SoftArmTrackZhao2021-v0"), line
+    line = assert_one_line_error(train_main, [*base, "--env", "SoftArmTrack-v0"],
+                                 "--trained-agent", capsys)
+    assert line.endswith("; --env-kwargs preset=zhao2021"), line

@@ -391,6 +391,22 @@ def test_an_sb3_model_with_six_actions_is_refused_for_a_three_chamber_env(tmp_pa
     _refused(r"env must be a gymnasium environment", lambda: policy.check_env("track"))
 
 
+
+def test_a_shipped_agent_on_another_arm_names_the_arm_it_was_trained_on(track):
+    """sac_zhao2021_track (six chambers) on wang2023's arm: the refusal names the arm of its
+    training (its config.yaml's env id) and carries it; on that arm it fits."""
+    policy = SB3Policy.load("sac_zhao2021_track")
+    assert policy.trained_preset == "zhao2021"
+    with pytest.raises(PolicyRefusal) as error:
+        policy.check_env(track)
+    assert error.value.trained_preset == "zhao2021"
+    assert str(error.value).endswith("; it was trained on the zhao2021 arm "
+                                     "(preset='zhao2021')"), str(error.value)
+    env = gym.make("SoftArmTrack-v0", preset="zhao2021", feedback="ground_truth",
+                   **policy.env_interface)
+    policy.check_env(env)
+    env.close()
+
 def test_an_sb3_agent_refuses_bad_observations_and_takes_batches(track):
     policy = make_policy("sb3:sac_wang2023_track", env=track)
     observation, _ = track.reset(seed=0)

@@ -66,10 +66,49 @@ def test_structure_errors_name_the_file_the_key_and_what_is_allowed(case, tmp_pa
     path = _write(tmp_path, text, name="bad_suite.yaml")
     with pytest.raises(ValueError) as error:
         suite.load_suite(path)
-    message = str(error.value)
-    assert str(path) in message and key in message and allowed in message, message
-    assert "\n" not in message
+    first, *others = str(error.value).splitlines()  # each further mistake on its own line
+    assert str(path) in first and key in first and allowed in first, first
+    assert all(line.startswith(f"{path}: ") for line in others)
+    if case == "unknown arm key":  # and the key it was meant to be is missing
+        assert others == [f"{path}: arms.wang2023.paths: missing required key 'paths' "
+                          "(arms.wang2023 needs ['paths', 'conditions', 'policies'])"]
+    else:
+        assert others == []
 
+
+def test_every_structure_error_of_a_file_is_listed_one_line_each(tmp_path):
+    """A file with several mistakes lists them all at once, in the file's order, each on its own
+    line naming the file and the key (with the wording it has alone)."""
+    text = TINY
+    for case in ("unknown top-level key", "bad seeds", "unknown path", "unknown feedback",
+                 "unknown policy parameter", "unknown condition key", "unknown preset"):
+        old, new = {
+            "unknown top-level key": ("cycles: 1", "cycle: 1"),
+            "bad seeds": ("seeds: [0]", "seeds: [0, 0]"),
+            "unknown path": ("[circle]", "[circel]"),
+            "unknown feedback": ("feedback: ground_truth", "feedback: gps"),
+            "unknown policy parameter": ("probe_steps: 5", "probe_stepz: 5"),
+            "unknown condition key": ("{scenario: {name: tip_mass", "{scenaro: {name: tip_mass"),
+            "unknown preset": ("  ho2018:", "  ho2019:"),
+        }[case]
+        text = _edit(old, new, text)
+    path = _write(tmp_path, text, name="many_mistakes.yaml")
+    with pytest.raises(ValueError) as error:
+        suite.load_suite(path)
+    lines = str(error.value).splitlines()
+    keys = ["cycle", "seeds", "arms.wang2023.paths[0]", "arms.wang2023.feedback",
+            "arms.wang2023.conditions.load_10g.scenaro",
+            "arms.wang2023.policies[0].params.probe_stepz", "arms.ho2019"]
+    assert [line.split(": ")[1] for line in lines] == keys, lines
+    assert all(line.startswith(f"{path}: ") for line in lines)
+    for line, case in zip(lines, ("unknown top-level key", "bad seeds", "unknown path",
+                                  "unknown feedback", "unknown condition key",
+                                  "unknown policy parameter", "unknown preset")):
+        alone = _write(tmp_path, STRUCTURE_ERRORS[case][0], name="many_mistakes.yaml")
+        with pytest.raises(ValueError) as single:
+            suite.load_suite(alone)
+        assert str(single.value) == line  # the wording it has alone
+    assert [e.key for e in error.value.errors] == keys
 
 ENV_ERRORS = {
     "unknown scenario": (_edit("name: tip_mass", "name: tip_mas"),

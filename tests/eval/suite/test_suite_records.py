@@ -321,3 +321,40 @@ def _load_claim_module_alone():
 
 def test_the_locks_module_needs_only_the_standard_library():
     assert _load_claim_module_alone().lock_path("o", "k") == Path("o") / "locks" / "k.lock"
+
+
+def _failing_backend(ran: list[str]):
+    """A suite backend that runs nothing: every cell comes back failed."""
+    def map_function(fn, items, workers):
+        for item in items:
+            ran.append(item["key"])
+            yield {"key": item["key"], "labels": item["labels"], "status": "error",
+                   "error": "RuntimeError: boom", "traceback": "boom"}
+    return map_function
+
+
+def test_a_run_leaves_no_empty_locks_folder_behind(tmp_path):
+    """The claims' folder goes with the last claim; a live process's claim keeps it."""
+    path = tmp_path / "records.yaml"
+    path.write_text(TINY)
+    spec = suite.load_suite(path)
+    out = tmp_path / "out"
+    ran: list[str] = []
+    with pytest.raises(suite.SuiteRunError):
+        suite.run_suite(spec, out, backend=_failing_backend(ran), progress=False, check=False)
+    assert len(ran) == 3 and (out / "errors").is_dir()
+    assert not (out / claim_module.LOCKS_DIR).exists()
+
+    key = suite.expand(spec)[0].key
+    sleeper = _sleeper()
+    try:
+        _hold(out, key, _owner_of(sleeper.pid))
+        ran = []
+        with pytest.raises(suite.SuiteRunError):
+            suite.run_suite(spec, out, backend=_failing_backend(ran), progress=False,
+                            check=False)
+        assert key not in ran and len(ran) == 2
+        assert [p.name for p in (out / claim_module.LOCKS_DIR).iterdir()] == [f"{key}.lock"]
+    finally:
+        sleeper.kill()
+        sleeper.wait()

@@ -25,6 +25,7 @@ from soft_gym.engines.mujoco.simulator import MujocoArmSimulator
 from soft_gym.engines.mujoco.stepping import step_arms
 from soft_gym.robots import get_preset
 from soft_gym.scenarios.loads import TipMass
+from soft_gym.sensing import FEEDBACK_SOURCES
 
 NO_SWAYING = {"load_weights": {"none": 0.3, "tip_mass": 0.35, "filling_load": 0.2,
                                "push": 0.15}}
@@ -61,6 +62,53 @@ def test_what_mujoco_lacks_is_refused_naming_the_feature_and_the_engine(kwargs, 
         _make(**kwargs)
     message = str(error.value)
     assert named in message and "mujoco engine" in message and "pybullet" in message
+
+
+def _feedback_mujoco_runs() -> list[str]:
+    """The feedback sources an env on the MuJoCo engine accepts, found by making it."""
+    from eval.runner import make_uncalibrated_env
+
+    accepted = []
+    for name in FEEDBACK_SOURCES:
+        try:
+            make_uncalibrated_env("SoftArmReach-v0", {"engine": "mujoco", "feedback": name}).close()
+        except ValueError:
+            continue
+        accepted.append(name)
+    return sorted(accepted)
+
+
+GT = {"feedback": "ground_truth"}
+
+
+@pytest.mark.parametrize("kwargs, remedy", [
+    ({}, "feedback"),  # the default feedback, fused, needs the eye-in-hand camera
+    ({"feedback": "camera", "obs": ("pose", "target", "image"), "obs_format": "dict"},
+     "feedback and obs"),
+    ({**GT, "obs": ("pose", "target", "image"), "obs_format": "dict"},
+     " or leave 'image' out of obs="),
+    ({**GT, "sensors": ("stereo",)}, " or leave 'stereo' out of sensors="),
+    ({**GT, "scenario": ["swaying_mass"]}, ""),
+    ({**GT, "render_mode": "rgb_array"}, " or pass render_mode=None"),
+    ({**GT, "randomization": True},
+     " or set RandomizationConfig.load_weights['swaying_mass'] (randomization=) to 0 to draw "
+     "none"),
+])
+def test_what_mujoco_lacks_is_refused_naming_the_argument_that_makes_it_run(kwargs, remedy):
+    """Beside the engines that have it, the refusal names what would run on the engine asked
+    for, on the same line: the feedback sources it runs (those the env accepts on it), the
+    part or sensor to leave out, render_mode=None, no swaying masses drawn; a scenario element
+    needs another engine."""
+    with pytest.raises(ValueError) as error:
+        gym.make("SoftArmReach-v0", engine="mujoco", **kwargs)
+    message = str(error.value)
+    assert "\n" not in message
+    engines = "use engine= one of ['pybullet']"
+    feedback = f" or pass feedback= one of {_feedback_mujoco_runs()}"
+    expected = {"feedback": feedback,
+                "feedback and obs": f"{feedback} and leave 'image' out of obs="}.get(remedy,
+                                                                                   remedy)
+    assert message.endswith(engines + expected), message
 
 
 @pytest.mark.parametrize("engine", ["bullet", "MuJoCo", 3, None])
