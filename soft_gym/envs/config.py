@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import os
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -19,7 +20,8 @@ from soft_gym._validation import (require_choice, require_integer, require_names
 from soft_gym.engines import DEFAULT_ENGINE, ENGINES
 from soft_gym.envs.observations import OBSERVATION_PARTS, STATE_PARTS
 from soft_gym.envs.rendering import check_render_size
-from soft_gym.robots.presets import get_preset, volume_actuated
+from soft_gym.robots.arm_file import arm_from_preset
+from soft_gym.robots.presets import volume_actuated
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing import FEEDBACK_SOURCES
 from soft_gym.sensors import PUBLIC_SENSORS
@@ -50,7 +52,7 @@ class EnvConfig:
         ValueError: naming the argument, the value and what is allowed.
     """
 
-    preset: str | ArmSpec = "wang2023"
+    preset: str | os.PathLike | ArmSpec = "wang2023"
     engine: str = DEFAULT_ENGINE
     task: str = "reach"
     path: str | list[str] = "circle"
@@ -79,10 +81,10 @@ class EnvConfig:
     render_size: tuple[int, int] = (320, 240)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.preset, (str, ArmSpec)):
-            raise ValueError(f"preset must be a preset name or an ArmSpec, got {self.preset!r} "
-                             f"({type(self.preset).__name__})")
-        self.arm = self.preset if isinstance(self.preset, ArmSpec) else get_preset(self.preset)
+        if not isinstance(self.preset, (str, os.PathLike, ArmSpec)):
+            raise ValueError(f"preset must be a preset name, a path to an arm file or an "
+                             f"ArmSpec, got {self.preset!r} ({type(self.preset).__name__})")
+        self.arm = arm_from_preset(self.preset)
         require_choice("actuation", self.actuation, ACTUATIONS)
         # the same arm driven by pressures: its workspace stands for the volume-driven arm's
         self.pressure_arm = (self.arm if self.arm.cylinders is None

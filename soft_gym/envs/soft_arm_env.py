@@ -102,6 +102,7 @@ from __future__ import annotations
 
 import copy
 import inspect
+import os
 from dataclasses import fields
 from typing import Any
 
@@ -146,7 +147,10 @@ class SoftArmEnv(gym.Env):
     the reward and the episode's end (:mod:`soft_gym.tasks`); it keeps ``reset`` and ``step``.
 
     Args:
-        preset: arm preset name (``wang2023``, ``zhao2021``, ``zou2022``, ``ho2018``) or an ArmSpec.
+        preset: arm preset name (``wang2023``, ``zhao2021``, ``zou2022``, ``ho2018``), an
+            ArmSpec, or a path to an arm file (a ``str`` ending in ``.yaml``/``.yml`` or holding a
+            path separator, or any ``os.PathLike``; :func:`soft_gym.robots.save_preset` writes
+            one; docs/architecture.md, "Your own arm").
         engine: physics engine (:data:`soft_gym.engines.ENGINES`): ``"pybullet"`` (the default,
             the reference) or ``"mujoco"`` (the same arm, several times faster; no bodies beside
             the arm and no cameras, so no swaying mass, obstacle rod, camera-based feedback or
@@ -206,7 +210,7 @@ class SoftArmEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
-    def __init__(self, preset: str | ArmSpec = "wang2023", **kwargs: Any) -> None:
+    def __init__(self, preset: str | os.PathLike | ArmSpec = "wang2023", **kwargs: Any) -> None:
         config = kwargs.pop("config", None)
         if config is None:
             check_arguments(kwargs)
