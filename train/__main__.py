@@ -20,7 +20,13 @@ is allowed, exit status 2): counts and frequencies, the env id or preset, the co
 ``-hp`` key (refused unless the algorithm takes it, naming those it does) and value (``gamma`` in
 (0, 1], ``learning_rate`` > 0, ``batch_size`` an integer >= 1, ...), the env keyword arguments
 (the env is built once, without calibration), the output directory, and a ``--resume`` run
-directory (it must hold config.yaml and model.zip).
+directory (it must hold config.yaml and model.zip). An option that applies only with another is
+refused when given without it, even at its default (``--bc-epochs``, ``--critic-warmup`` without
+``--demos`` or ``--demo-dataset``; ``--plateau-fraction``, ``--plateau-improvement``,
+``--min-timesteps`` without ``--until-plateau``), and so are curve options that cannot act within
+the run's steps: a ``--curve-freq`` above them (no curve would be written), a ``--min-timesteps``
+not below them or too few evaluations for the plateau rule (``--until-plateau`` could never stop
+the run).
 """
 
 from __future__ import annotations
@@ -40,9 +46,20 @@ from train.config import ALGORITHMS, OFF_POLICY, VEC_KINDS, parse_key_values
 from train.sweep import main as sweep_main
 
 
+class Given(argparse.Action):
+    """Store the value and add the option's ``dest`` to ``args.given``: an option that applies
+    only with another is refused when given without it, even at its default value (which
+    argparse alone cannot tell from leaving it out)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        namespace.given = namespace.given | {self.dest}
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m train", description=__doc__,
                                      formatter_class=HelpFormatter)
+    parser.set_defaults(given=frozenset())
     parser.add_argument("--algo", default="sac", choices=ALGORITHMS, help="SB3 algorithm")
     add_env_options(parser)
     parser.add_argument("--randomize", action="store_true",
@@ -79,13 +96,17 @@ def build_parser() -> argparse.ArgumentParser:
                              "--plateau-improvement of it (needs --curve-freq; --timesteps is "
                              "then the most it may take)")
     parser.add_argument("--plateau-fraction", type=finite_float(0.0, 1.0, True, True),
-                        default=0.2, help="the plateau rule's share of the latest steps, in (0, 1)")
+                        default=0.2, action=Given,
+                        help="the plateau rule's share of the latest steps, in (0, 1) (with "
+                             "--until-plateau)")
     parser.add_argument("--plateau-improvement", type=finite_float(0.0, 1.0, True, True),
-                        default=0.05,
-                        help="the plateau rule's relative improvement, in (0, 1)")
-    parser.add_argument("--min-timesteps", type=non_negative_int, default=0,
+                        default=0.05, action=Given,
+                        help="the plateau rule's relative improvement, in (0, 1) (with "
+                             "--until-plateau)")
+    parser.add_argument("--min-timesteps", type=non_negative_int, default=0, action=Given,
                         help="env steps before --until-plateau may stop training (a curve flat "
-                             "before learning takes hold is not a plateau)")
+                             "before learning takes hold is not a plateau), below the run's "
+                             "steps")
     parser.add_argument("--checkpoint-freq", type=non_negative_int, default=50_000,
                         help="env steps between checkpoints (0: none)")
     parser.add_argument("--threads", type=positive_int, default=1, help="torch threads (>= 1)")
@@ -117,13 +138,13 @@ def build_parser() -> argparse.ArgumentParser:
     demos.add_argument("--demo-root", default=None, metavar="DIR",
                        help="the datasets root --demo-dataset lies under (default: the "
                             "package's, python -m eval datasets --help)")
-    demos.add_argument("--demo-episodes", type=positive_int, default=4,
+    demos.add_argument("--demo-episodes", type=positive_int, default=4, action=Given,
                        help="episodes of --demos to record (>= 1)")
     demos.add_argument("--demo-params", nargs="*", default=[], metavar="KEY=VALUE",
                        help="the --demos baseline's parameters (e.g. kp=0.06)")
-    demos.add_argument("--bc-epochs", type=non_negative_int, default=100,
+    demos.add_argument("--bc-epochs", type=non_negative_int, default=100, action=Given,
                        help="behaviour-cloning epochs of the actor on the demonstrations")
-    demos.add_argument("--critic-warmup", type=non_negative_int, default=2000,
+    demos.add_argument("--critic-warmup", type=non_negative_int, default=2000, action=Given,
                        help="critic gradient steps on the demonstrations, actor held")
     return parser
 
@@ -138,9 +159,15 @@ def check_demonstrations(parser: argparse.ArgumentParser, args: argparse.Namespa
         extra = [option for option, value, default in (
             ("--demo-root", args.demo_root, None), ("--demo-params", args.demo_params, []))
             if value != default]
+        extra += [f"--{dest.replace('_', '-')}" for dest in ("bc_epochs", "critic_warmup",
+                                                             "demo_episodes")
+                  if dest in args.given]
         if extra:
             parser.error(f"{extra[0]} applies with --demos or --demo-dataset, given neither")
         return {}
+    if args.demos is None and "demo_episodes" in args.given:
+        parser.error("--demo-episodes is how many episodes --demos records: it applies with "
+                     "--demos, not with --demo-dataset (whose episodes are all read)")
     if len(given) == 2:
         parser.error("--demos and --demo-dataset: give one (record a baseline, or read a "
                      "dataset)")
@@ -221,6 +248,47 @@ def _arm_option(args: argparse.Namespace, env_id: str, preset: str) -> str:
     return f"--env {preset_env_id(task, preset)}"
 
 
+def check_curve_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """The tracking curve's options: the plateau rule's only with ``--until-plateau``, and that
+    only with ``--curve-freq``."""
+    if args.until_plateau and args.curve_freq == 0:
+        parser.error("--until-plateau stops on the tracking curve: give --curve-freq N (env "
+                     "steps between its evaluations, >= 1)")
+    if not args.until_plateau:
+        for dest in ("min_timesteps", "plateau_fraction", "plateau_improvement"):
+            if dest in args.given:
+                parser.error(f"--{dest.replace('_', '-')} applies with --until-plateau, which "
+                             f"is not given")
+
+
+def check_curve_budget(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                       timesteps: int) -> None:
+    """``--curve-freq``, ``--until-plateau`` and ``--min-timesteps`` against the run's
+    ``timesteps`` (``--timesteps``, or the config's ``n_timesteps``): a curve that would never
+    be written, or a plateau rule that could never stop the run, is refused."""
+    from train.tracking_curve import MIN_EVALUATIONS  # lazy: stable-baselines3 (see main)
+
+    budget = ("--timesteps" if args.timesteps is not None
+              else f"the config's n_timesteps, {'--conf-file' if args.conf_file else '--algo'}")
+    if args.curve_freq > timesteps:
+        parser.error(f"--curve-freq {args.curve_freq} is more than the run's {timesteps} env "
+                     f"steps ({budget}): no tracking curve would be written; give --curve-freq "
+                     f"<= {timesteps} or more --timesteps")
+    if not args.until_plateau:
+        return
+    if args.min_timesteps >= timesteps:
+        parser.error(f"--min-timesteps {args.min_timesteps} is not below the run's {timesteps} "
+                     f"env steps ({budget}): --until-plateau could never stop the run; give "
+                     f"--min-timesteps < {timesteps} or more --timesteps")
+    # a run started from a trained agent evaluates it once before the first step
+    evaluations = timesteps // args.curve_freq + (args.trained_agent is not None)
+    if evaluations < MIN_EVALUATIONS:
+        parser.error(f"--until-plateau needs {MIN_EVALUATIONS} tracking evaluations before it "
+                     f"may stop the run, and --curve-freq {args.curve_freq} makes "
+                     f"{evaluations} in its {timesteps} env steps ({budget}): give a smaller "
+                     f"--curve-freq or more --timesteps")
+
+
 def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
                    env_kwargs: dict, hyperparameters: dict):
     """Every check of a new training run before it starts; returns its :class:`TrainRequest`."""
@@ -228,6 +296,7 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
     from train.trainer import TrainRequest, resolve
 
     env_id = resolve_env_id(parser, args)
+    check_curve_options(parser, args)
     check_conf_file(parser, args.conf_file)
     if args.randomization_config is not None:
         check_file(parser, "--randomization-config", args.randomization_config,
@@ -248,11 +317,6 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         until_plateau=args.until_plateau,
         plateau_fraction=args.plateau_fraction, plateau_improvement=args.plateau_improvement,
         min_timesteps=args.min_timesteps)
-    if args.until_plateau and args.curve_freq == 0:
-        parser.error("--until-plateau stops on the tracking curve: give --curve-freq N (env "
-                     "steps between its evaluations, >= 1)")
-    if args.min_timesteps and not args.until_plateau:
-        parser.error("--min-timesteps applies with --until-plateau, which is not given")
     if args.curve_freq and not env_id.startswith("SoftArmTrack"):
         parser.error(f"--curve-freq evaluates tracking of a path: --env must be a track env "
                      f"(SoftArmTrack...), got {env_id!r}")
@@ -260,6 +324,7 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
         settings, _ = resolve(request)
     except ValueError as error:  # the config file's entry (the overrides passed above)
         fail(parser, "--conf-file" if args.conf_file else "--algo", error)
+    check_curve_budget(parser, args, settings.n_timesteps)
     randomization = ("--randomization-config" if args.randomization_config is not None
                      else "--randomize" if args.randomize else "--env-kwargs")
     overrides = {key: randomization if key == "randomization" else "--env-kwargs"

@@ -84,6 +84,14 @@ reach (:attr:`~soft_gym.robots.spec.ArmSpec.max_reach_m`), loads within
 not simulate. ``reset`` takes ``seed`` (``None`` or an integer >= 0) and ``options`` (``None`` or a
 dict with the only key ``"recalibrate"``, a bool).
 
+## Lifecycle
+``step()`` needs a ``reset()`` first: a new env, and a copy (below), refuses it with
+:class:`ResetNeededError` (gymnasium's ``ResetNeeded``, a ``RuntimeError`` too), whether it came
+from ``gymnasium.make`` or was made directly. After ``close()``, ``step()`` and ``reset()`` raise
+:class:`ClosedEnvError` (gymnasium's ``ClosedEnvironmentError``, a ``RuntimeError`` too): make a
+new env; ``close()`` again does nothing. A ``reset`` refused for a bad argument changes nothing (the
+episode goes on); one that fails on the way (a ``start_m`` out of reach) leaves the env un-reset.
+
 ## Copies
 ``pickle`` and ``copy.deepcopy`` make an independent env of the same configuration, rebuilt from
 its :class:`~soft_gym.envs.config.EnvConfig` (its own simulator: closing either leaves the other running). The copy
@@ -137,6 +145,14 @@ START_TOLERANCE_MM = 2.0
 
 RESET_OPTIONS = ("recalibrate",)
 """The keys ``reset(options=...)`` understands."""
+
+
+class ResetNeededError(gym.error.ResetNeeded, RuntimeError):
+    """``step()`` on an env (or a batch) that has not been reset since it was made or copied."""
+
+
+class ClosedEnvError(gym.error.ClosedEnvironmentError, RuntimeError):
+    """``step()`` or ``reset()`` on a closed env (or a batch, or a batch with a closed arm)."""
 
 
 class SoftArmEnv(gym.Env):
@@ -203,12 +219,17 @@ class SoftArmEnv(gym.Env):
         measurement: the last step's :class:`~soft_gym.sensing.measurement.Measurement`.
         estimate: the feedback source's last :class:`FeedbackEstimate`.
         step_count: control steps taken in the episode.
+        closed: whether :meth:`close` has been called.
+        ready: whether :meth:`step` may be called (reset since made or copied, not closed).
 
     Raises:
         ValueError: for any argument of a wrong type or value (see "Bad input" above), naming it.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+    closed = False
+    """Whether :meth:`close` has been called (``step`` and ``reset`` are then refused)."""
+    _ready = False  # reset since made or copied, and not closed: step() may run
 
     def __init__(self, preset: str | os.PathLike | ArmSpec = "wang2023", **kwargs: Any) -> None:
         config = kwargs.pop("config", None)
@@ -455,8 +476,12 @@ class SoftArmEnv(gym.Env):
                 source (``fused``, ``camera`` or ``fbg``).
 
         Raises:
-            ValueError: a ``seed`` or ``options`` of a wrong type or value, naming it.
+            ValueError: a ``seed`` or ``options`` of a wrong type or value, naming it (the env
+                is left as it was).
+            ClosedEnvError: the env is closed.
         """
+        if self.closed:
+            raise self._not_ready_error("reset")
         if seed is not None:
             seed = require_integer("seed", seed, 0)  # a Python int, as gymnasium wants
         if options is not None:
@@ -470,14 +495,15 @@ class SoftArmEnv(gym.Env):
                                  f"{unknown!r}")
             if "recalibrate" in options:
                 require_bool("options['recalibrate']", options["recalibrate"])
-        super().reset(seed=seed)
-        if options and options.get("recalibrate"):
-            if not self.feedback_source.calibrates:
+            if options.get("recalibrate") and not self.feedback_source.calibrates:
                 calibrating = [name for name in FEEDBACK_SOURCES
                                if FEEDBACK_SOURCES[name].calibrates]
                 raise ValueError("options['recalibrate'] needs a feedback source that "
                                  f"calibrates (feedback one of {calibrating}), this env has "
                                  f"{self.feedback!r}")
+        self._ready = False  # until this reset is through (a start_m out of reach stops it)
+        super().reset(seed=seed)
+        if options and options.get("recalibrate"):
             self._calibrate(use_cache=False)
         elif seed is not None:
             self.feedback_source.restore()
@@ -498,6 +524,7 @@ class SoftArmEnv(gym.Env):
         self._sense()
         self.step_count = 0
         self._last_action = np.zeros(self.arm.n_chambers)
+        self._ready = True
         return self._observation(), self._info()
 
     def _drive_to_start(self) -> np.ndarray:
@@ -529,6 +556,8 @@ class SoftArmEnv(gym.Env):
             self.sensors["image"].set_faults(make_faults(self._faults.get("image")) + draw.faults)
 
     def step(self, action):
+        if not self._ready:
+            raise self._not_ready_error("step")
         action = self.check_action(action)
         self.command(action)
         self.sim.step_physics(self.arm.control_period_s)
@@ -538,7 +567,7 @@ class SoftArmEnv(gym.Env):
         """The first half of :meth:`step`: command the pressures of an action checked by
         :meth:`check_action`; the physics (one ``control_period_s``) comes next, then
         :meth:`finish_step`. A batch of envs (:class:`~soft_gym.envs.vector.SoftArmVectorEnv`)
-        steps their arms' physics together in between."""
+        steps their arms' physics together in between (and checks :attr:`ready` first)."""
         if self.arm.cylinders is not None:  # volume actuation: a stroke per chamber
             self._command = None
             self.sim.set_cylinder_strokes((action + 1.0) / 2.0 * self.arm.cylinders.max_stroke_m)
@@ -593,7 +622,29 @@ class SoftArmEnv(gym.Env):
                              overlays=overlays)
 
     def close(self):
-        self.sim.close()
+        """Release the simulator; ``step`` and ``reset`` are refused from then on
+        (:class:`ClosedEnvError`). Closing again does nothing."""
+        if self.closed:
+            return
+        self.closed, self._ready = True, False
+        sim = getattr(self, "sim", None)  # None: the constructor stopped before making it
+        if sim is not None:
+            sim.close()
+
+    @property
+    def ready(self) -> bool:
+        """Whether :meth:`step` may be called: reset since the env was made or copied, and not
+        closed."""
+        return self._ready
+
+    def _not_ready_error(self, call: str) -> RuntimeError:
+        """Why ``call`` (``"step"`` or ``"reset"``) cannot run now, as the error to raise."""
+        if self.closed:
+            return ClosedEnvError(f"{call}() on a closed {type(self).__name__}: the env is closed "
+                                  f"(close() was called): make a new one")
+        return ResetNeededError(f"call reset() before step(): this {type(self).__name__} has not "
+                                f"been reset since it was made (a pickled or copied env starts "
+                                f"un-reset too)")
 
     def __reduce__(self):
         """Pickle and deep-copy as a new env of the same configuration (see "Copies")."""

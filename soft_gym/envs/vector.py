@@ -13,6 +13,11 @@ after its episode ended (that step's action is ignored, its reward is 0), ``"Sam
 at once and returns the last observation and info in ``info["final_obs"]`` /
 ``info["final_info"]``. ``reset(seed=s)`` seeds arm ``i`` with ``s + i`` (or takes one seed per
 arm). :class:`train.batched.Sb3VectorEnv` adapts it to stable-baselines3.
+
+As a single env, the batch refuses ``step`` before its arms are reset
+(:class:`~soft_gym.envs.soft_arm_env.ResetNeededError`), and ``step`` and ``reset`` once it or one
+of its arms is closed (:class:`~soft_gym.envs.soft_arm_env.ClosedEnvError`, naming the arm),
+before any arm moves; ``close()`` again does nothing.
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ from gymnasium.vector.utils import batch_space, concatenate, create_empty_array
 
 from soft_gym._validation import require_integer
 from soft_gym.engines.mujoco.stepping import step_arms
-from soft_gym.envs.soft_arm_env import SoftArmEnv
+from soft_gym.envs.soft_arm_env import ClosedEnvError, ResetNeededError, SoftArmEnv
 
 MAX_NUM_ENVS = 4096
 """The most arms one vector env holds (each a MuJoCo model of ~1 MB and an env)."""
@@ -152,6 +157,8 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
     # ------------------------------------------------------------------ gymnasium's API
     def reset(self, *, seed: int | Sequence[int] | None = None, options: dict | None = None):
         """Reset every arm; ``seed`` an integer (arm ``i`` gets ``seed + i``) or one per arm."""
+        if self.closed or any(env.closed for env in self.envs):
+            raise self._not_ready_error("reset")
         seeds = self._seeds(seed)
         observations, infos = [], {}
         for i, (env, arm_seed) in enumerate(zip(self.envs, seeds)):
@@ -180,7 +187,9 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
     def step_arms(self, actions) -> tuple[list, list[float], list[bool], list[bool], list[dict]]:
         """One step of every arm, as per-arm lists (observations, rewards, terminated,
         truncated, infos), with this env's autoreset; what :meth:`step` stacks and
-        :class:`train.batched.Sb3VectorEnv` reads."""
+        :class:`train.batched.Sb3VectorEnv` reads (it resets the arms itself)."""
+        if self.closed or not all(env.ready for env in self.envs):
+            raise self._not_ready_error("step")
         actions = np.asarray(actions)
         if actions.shape != self.action_space.shape:
             raise ValueError(f"actions must have shape {self.action_space.shape} "
@@ -210,6 +219,19 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         return tuple(list(column) for column in zip(*results))  # type: ignore[return-value]
 
     # ------------------------------------------------------------------ helpers
+    def _not_ready_error(self, call: str) -> RuntimeError:
+        """Why ``call`` (``"step"`` or ``"reset"``) cannot run now, as the error to raise."""
+        if self.closed:
+            return ClosedEnvError(f"{call}() on a closed {type(self).__name__}: the env is closed "
+                                  f"(close() was called): make a new one")
+        for i, env in enumerate(self.envs):
+            if env.closed:
+                return ClosedEnvError(f"{call}() on a {type(self).__name__} whose arm {i} is "
+                                      f"closed (envs[{i}].close() was called): make a new one")
+        unset = [i for i, env in enumerate(self.envs) if not env.ready]
+        return ResetNeededError(f"call reset() before step(): arms {unset} of this "
+                                f"{type(self).__name__} have not been reset since it was made")
+
     def _seeds(self, seed: int | Sequence[int] | None) -> list[int | None]:
         if seed is None:
             return [None] * self.num_envs

@@ -166,3 +166,40 @@ def test_cli_refuses_in_one_line_before_any_work(tmp_path, argv, option):
     lines = result.stderr.strip().splitlines()
     assert option in lines[-1] and lines[-1].startswith("usage") is False
     assert not any(tmp_path.iterdir())
+
+
+
+@pytest.mark.smoke
+@pytest.mark.parametrize("argv, option, needs", [
+    (["--bc-epochs", "5"], "--bc-epochs", "--demos or --demo-dataset"),
+    (["--critic-warmup", "10"], "--critic-warmup", "--demos or --demo-dataset"),
+    (["--demo-episodes", "2"], "--demo-episodes", "--demos"),
+    (["--demo-dataset", "soft-arm/demos/none-v0", "--demo-episodes", "2"], "--demo-episodes",
+     "--demos"),
+])
+def test_demonstration_options_without_demonstrations_are_refused(argv, option, needs, capsys,
+                                                                  tmp_path, monkeypatch):
+    """An option of the demonstrations given without them would be ignored: refused before any
+    work, naming it and what it needs."""
+    from tests.cli_errors import assert_one_line_error
+    from train.__main__ import main as train_main
+
+    def no_training(request):
+        raise AssertionError(f"trained instead of refusing: {request}")
+
+    monkeypatch.setattr("train.trainer.train", no_training)
+    assert_one_line_error(train_main, argv + ["--out", str(tmp_path / "out")], option, capsys,
+                          out=tmp_path / "out", also=needs)
+
+
+def test_demonstration_options_keep_their_defaults_and_apply_with_demos(tmp_path):
+    from train.__main__ import build_parser, check_training
+
+    parser = build_parser()
+    request = check_training(parser, parser.parse_args(["--out", str(tmp_path)]),
+                             {"feedback": "ground_truth"}, {})
+    assert (request.bc_epochs, request.critic_warmup, request.demo_episodes) == (100, 2000, 4)
+    args = parser.parse_args(["--demos", "cc_model", "--bc-epochs", "5", "--critic-warmup", "10",
+                              "--demo-episodes", "2", "--out", str(tmp_path)])
+    request = check_training(parser, args, {"feedback": "ground_truth"}, {})
+    assert (request.bc_epochs, request.critic_warmup, request.demo_episodes) == (5, 10, 2)

@@ -110,3 +110,54 @@ def test_a_run_writes_its_curve_keeps_the_best_model_and_stops_at_a_plateau(tmp_
 def test_bad_curve_options_are_one_line_errors(argv, option, capsys, tmp_path):
     assert_one_line_error(train_main, argv + ["--out", str(tmp_path / "out")], option, capsys,
                           out=tmp_path / "out")
+
+
+def _no_training(request):
+    raise AssertionError(f"trained instead of refusing: {request}")
+
+
+@pytest.mark.smoke
+@pytest.mark.parametrize("argv, option, also", [
+    # the plateau rule's options without the rule
+    (["--curve-freq", "100", "--plateau-fraction", "0.3"], "--plateau-fraction",
+     "--until-plateau"),
+    (["--curve-freq", "100", "--plateau-improvement", "0.1"], "--plateau-improvement",
+     "--until-plateau"),
+    # a rule that can never fire within the run's steps
+    (["--curve-freq", "16", "--until-plateau", "--min-timesteps", "1000", "--timesteps", "640"],
+     "--min-timesteps", "640"),
+    (["--curve-freq", "16", "--until-plateau", "--min-timesteps", "640", "--timesteps", "640"],
+     "--min-timesteps", "640"),
+    (["--curve-freq", "16", "--until-plateau", "--timesteps", "64"], "--until-plateau", "5"),
+    # a curve that is never written
+    (["--curve-freq", "100000", "--timesteps", "64"], "--curve-freq", "64"),
+    (["--curve-freq", "100001", "--conf-file", "train/configs/sac_ho2018_small_rectangle.yml",
+      "--preset", "ho2018"], "--curve-freq", "n_timesteps"),
+])
+def test_curve_options_that_cannot_act_are_refused(argv, option, also, capsys, tmp_path,
+                                                 monkeypatch):
+    """An option the run would ignore is refused before any work, naming it and what it needs:
+    the plateau rule's settings without --until-plateau, a rule that can never stop the run
+    (--min-timesteps not below the run's steps, or too few evaluations for the rule), and a
+    --curve-freq beyond the run's steps (no curve would be written)."""
+    monkeypatch.setattr("train.trainer.train", _no_training)
+    assert_one_line_error(train_main, argv + ["--out", str(tmp_path / "out")], option, capsys,
+                          out=tmp_path / "out", also=also)
+
+
+def test_curve_options_with_what_they_need_are_accepted(tmp_path):
+    """The same options given with what they need pass every check, and left out they keep
+    their defaults."""
+    from train.__main__ import build_parser, check_training
+
+    parser = build_parser()
+    args = parser.parse_args(["--curve-freq", "16", "--until-plateau", "--timesteps", "80",
+                              "--min-timesteps", "40", "--plateau-fraction", "0.3",
+                              "--plateau-improvement", "0.1", "--env-kwargs",
+                              "feedback=ground_truth", "--out", str(tmp_path)])
+    request = check_training(parser, args, {"feedback": "ground_truth"}, {})
+    assert (request.plateau_fraction, request.plateau_improvement) == (0.3, 0.1)
+    assert request.min_timesteps == 40 and request.curve_freq == 16
+    args = parser.parse_args(["--curve-freq", "16", "--timesteps", "80", "--out", str(tmp_path)])
+    request = check_training(parser, args, {"feedback": "ground_truth"}, {})
+    assert (request.plateau_fraction, request.plateau_improvement) == (0.2, 0.05)

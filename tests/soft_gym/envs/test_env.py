@@ -670,3 +670,87 @@ def test_complex_actions_are_refused_in_absolute_mode():
     with pytest.raises(ValueError, match="action must be real"):
         env.step(np.array([0.1 + 0.5j, 0.0, 0.0]))
     env.close()
+
+
+# ------------------------------------------------------------------------------- lifecycle
+ENGINES = ["pybullet", "mujoco"]
+
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_new_env_refuses_step_until_reset(engine):
+    """Made directly (no OrderEnforcing wrapper), the env itself refuses ``step`` before its
+    first ``reset`` with gymnasium's ``ResetNeeded`` (also a ``RuntimeError``) saying what to
+    call; after ``reset`` it steps."""
+    reset_needed = gym.error.ResetNeeded
+    env = SoftArmEnv(feedback="ground_truth", engine=engine)
+    action = np.zeros(env.action_space.shape, dtype=np.float32)
+    with pytest.raises(reset_needed, match=r"call reset\(\) before step\(\)") as refused:
+        env.step(action)
+    assert isinstance(refused.value, gym.error.ResetNeeded)
+    assert isinstance(refused.value, RuntimeError)
+    assert env.sim.time_s == 0.0 and env.step_count == 0  # nothing moved
+    env.reset(seed=0)
+    _, reward, *_ = env.step(action)
+    assert np.isfinite(reward)
+    env.close()
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("made", ["directly", "gym.make"])
+def test_a_closed_env_refuses_step_and_reset_and_closes_twice(engine, made):
+    """After ``close()``: ``step`` and ``reset`` raise one clear error (gymnasium's
+    ``ClosedEnvironmentError``, also a ``RuntimeError``) saying to make a new env, on either
+    engine (MuJoCo stepped on, PyBullet raised ``pybullet.error``); ``close()`` again is
+    harmless."""
+    closed_error = gym.error.ClosedEnvironmentError
+    env = (SoftArmEnv(feedback="ground_truth", engine=engine) if made == "directly"
+           else gym.make(REACH, feedback="ground_truth", engine=engine))
+    env.reset(seed=0)
+    action = np.zeros(env.action_space.shape, dtype=np.float32)
+    env.step(action)
+    env.close()
+    for call in (lambda: env.step(action), lambda: env.reset(seed=0), env.reset):
+        with pytest.raises(closed_error, match="closed.*make a new one") as refused:
+            call()
+        assert isinstance(refused.value, gym.error.ClosedEnvironmentError)
+        assert isinstance(refused.value, RuntimeError)
+    env.close()  # harmless
+    env.close()
+
+
+@pytest.mark.parametrize("copier", [lambda env: pickle.loads(pickle.dumps(env)), copy.deepcopy],
+                         ids=["pickle", "deepcopy"])
+@pytest.mark.parametrize("made", ["directly", "gym.make"])
+def test_a_copy_of_a_reset_env_is_un_reset(copier, made):
+    """A pickled or deep-copied env starts as a freshly made one (module docstring, "Copies"):
+    it refuses ``step`` until its own ``reset``, even when the original had been reset and
+    stepped (and gymnasium's wrapper, copied with it, believes it was)."""
+    reset_needed = gym.error.ResetNeeded
+    original = (SoftArmEnv(feedback="ground_truth") if made == "directly"
+                else gym.make(REACH, feedback="ground_truth"))
+    original.reset(seed=0)
+    action = np.zeros(original.action_space.shape, dtype=np.float32)
+    original.step(action)
+    duplicate = copier(original)
+    with pytest.raises(reset_needed, match=r"call reset\(\) before step\(\)"):
+        duplicate.step(action)
+    original.step(action)  # the original is untouched
+    duplicate.reset(seed=0)
+    duplicate.step(action)
+    original.close()
+    duplicate.close()
+
+
+def test_a_refused_reset_argument_leaves_the_episode_running():
+    """A ``reset`` refused for a bad argument changes nothing: the episode goes on."""
+    env = SoftArmEnv(feedback="ground_truth", engine="mujoco")
+    env.reset(seed=0)
+    action = np.zeros(env.action_space.shape, dtype=np.float32)
+    env.step(action)
+    for bad in ({"seed": -1}, {"options": {"recalibrate": True}}, {"options": {"nope": 1}}):
+        with pytest.raises(ValueError):
+            env.reset(**bad)
+    env.step(action)
+    assert env.step_count == 2
+    env.close()

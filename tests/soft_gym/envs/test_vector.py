@@ -150,3 +150,48 @@ def test_bad_actions_and_seeds_are_refused_before_any_arm_moves():
     assert [arm.sim.time_s for arm in env.envs] == times
     with pytest.raises(ValueError, match="seed must be an integer or 2 seeds"):
         env.reset(seed=[1, 2, 3])
+
+
+
+def test_the_batch_refuses_step_before_reset():
+    reset_needed = gym.error.ResetNeeded
+    env = gym.make_vec("SoftArmReach-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                       engine="mujoco", feedback="ground_truth")
+    zeros = np.zeros(env.action_space.shape, dtype=np.float32)
+    with pytest.raises(reset_needed, match=r"call reset\(\) before step\(\)"):
+        env.step(zeros)
+    assert [arm.sim.time_s for arm in env.unwrapped.envs] == [0.0, 0.0]
+    env.reset(seed=0)
+    env.step(zeros)
+    env.close()
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_closed_batch_refuses_step_and_reset_and_closes_twice(threads):
+    closed_error = gym.error.ClosedEnvironmentError
+    env = gym.make_vec("SoftArmReach-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                       threads=threads, engine="mujoco", feedback="ground_truth")
+    env.reset(seed=0)
+    zeros = np.zeros(env.action_space.shape, dtype=np.float32)
+    env.step(zeros)
+    env.close()
+    for call in (lambda: env.step(zeros), lambda: env.reset(seed=0)):
+        with pytest.raises(closed_error, match="closed.*make a new one"):
+            call()
+    env.close()  # harmless
+
+
+def test_a_batch_with_a_closed_arm_refuses_to_step_or_reset_before_any_arm_moves():
+    closed_error = gym.error.ClosedEnvironmentError
+    env = SoftArmVectorEnv(3, engine="mujoco", feedback="ground_truth")
+    env.reset(seed=0)
+    env.envs[1].close()
+    times = [arm.sim.time_s for arm in env.envs]
+    with pytest.raises(closed_error, match=r"arm 1 .*closed.*make a new one"):
+        env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+    assert [arm.sim.time_s for arm in env.envs] == times
+    with pytest.raises(closed_error, match=r"arm 1 .*closed.*make a new one"):
+        env.reset(seed=0)
+    assert [arm.sim.time_s for arm in env.envs] == times
+    env.close()
+    env.close()
