@@ -76,6 +76,26 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
                                    if segment.get("trained_agent")), None)}
 
 
+def training_feedbacks(path: str | Path) -> tuple[str, ...] | None:
+    """The feedback sources an agent was trained on, from the ``config.yaml`` of its run
+    (``path`` as :func:`training_budget`'s): its training env's ``feedback`` (``None`` in the
+    tuple where the env's default was used), then those of the envs it was trained on beside it
+    (``hyperparameters.arm_env_kwargs``, a run on several feedback sources at once), each once;
+    ``None`` where the run has no ``config.yaml``."""
+    config_file = _run_config_file(_run_directory(path) / "model.zip")
+    if config_file is None:
+        return None
+    config = _read_run_config(config_file)
+    base = (config.get("env_kwargs") or {}).get("feedback")
+    found = [base]
+    hyperparameters = config.get("hyperparameters")
+    extra = hyperparameters.get("arm_env_kwargs") if isinstance(hyperparameters, dict) else None
+    for kwargs in extra if isinstance(extra, list) else ():
+        if isinstance(kwargs, dict):
+            found.append(kwargs.get("feedback", base))
+    return tuple(dict.fromkeys(found))
+
+
 def _run_directory(path: str | Path) -> Path:
     """The run (or shipped agent's) directory of an agent's directory, model ``.zip``
     (a checkpoint's included) or shipped name."""

@@ -18,7 +18,12 @@ Outputs (under the suite's output directory)
   budget (steps, wall time, engine and envs, feedback, whether its tracking curve reached a
   plateau: :func:`agents.policies.sb3.training_budget`), and each arm a table of its best agent
   against its best baseline per condition (nominal, load, visual fault) with the verdict
-  whether an agent beats every baseline under a load or a visual fault.
+  whether an agent beats every baseline under a load or a visual fault. An agent judged on a
+  feedback source it was not trained on (its run's ``config.yaml``:
+  :func:`agents.policies.sb3.training_feedbacks`) is marked plainly: a "Feedback mismatch"
+  paragraph under its arm's heading, ``FEEDBACK MISMATCH: judged on X, trained on Y`` in its
+  rows' note and "(feedback mismatch)" beside it in the best-agent table
+  (:func:`feedback_mismatches`; also ``feedback_mismatches`` in ``suite.json``).
 * ``runs.csv``: one row per cell: labels, status, metrics (mm), wall time (s), reason.
 * ``suite.json``: provenance (suite name, file, its text and SHA-256, seeds, cycles, the
   versions and git revisions of the records, the report's bootstrap settings), counts, the
@@ -66,7 +71,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from agents.policies.sb3 import training_budget
+from agents.policies.sb3 import training_budget, training_feedbacks
 from eval.metrics import MM_PER_M
 from eval.palette import policy_color
 from eval.report import (error_peaks_mm, markdown_table, package_version, plot_error_time,
@@ -75,6 +80,7 @@ from eval.suite.grid import Cell, expand
 from eval.suite.spec import SuiteSpec
 from eval.suite.store import (RecordError, git_revision, library_versions, read_record,
                               read_steps)
+from soft_gym.envs.config import EnvConfig
 
 SCORE = "last_cycle_error_mm"
 """The metric of a run that the leaderboard ranks and the aggregates summarise (mm)."""
@@ -238,6 +244,48 @@ def agent_budgets(spec: SuiteSpec) -> dict[str, dict[str, dict[str, Any] | None]
     return budgets
 
 
+ENV_DEFAULT_FEEDBACK: str = EnvConfig.feedback
+"""The feedback source of an env that sets none (the env's default)."""
+
+
+def feedback_mismatches(spec: SuiteSpec, cells: Sequence[Cell] | None = None
+                        ) -> list[dict[str, Any]]:
+    """The trained agents a suite judges on a feedback source they were not trained on: one
+    entry per arm, condition and agent (``preset``, ``condition``, ``policy``: its label,
+    ``judged``: the feedback of its runs, ``trained``: those of its training,
+    :func:`agents.policies.sb3.training_feedbacks`), in the suite's order. An agent without a
+    readable run config is left out (its training feedback is unknown)."""
+    cells = list(expand(spec) if cells is None else cells)
+    trained_by_name: dict[str, tuple[str, ...] | None] = {}
+    found: dict[tuple[str, str, str], dict[str, Any]] = {}
+    for cell in cells:
+        name = cell.config["policy"]
+        if not name.startswith("sb3:"):
+            continue
+        if name not in trained_by_name:
+            try:
+                feedbacks = training_feedbacks(name[len("sb3:"):])
+            except ValueError:
+                feedbacks = None
+            trained_by_name[name] = None if feedbacks is None else tuple(
+                ENV_DEFAULT_FEEDBACK if f is None else f for f in feedbacks)
+        trained = trained_by_name[name]
+        judged = cell.config["env_kwargs"].get("feedback") or ENV_DEFAULT_FEEDBACK
+        if trained is None or judged in trained:
+            continue
+        labels = cell.labels
+        found.setdefault((labels["preset"], labels["condition"], labels["policy"]), {
+            "preset": labels["preset"], "condition": labels["condition"],
+            "policy": labels["policy"], "judged": judged, "trained": list(trained)})
+    return list(found.values())
+
+
+def mismatch_text(mismatch: Mapping[str, Any]) -> str:
+    """A mismatch (:func:`feedback_mismatches`) in a few words, for the leaderboard's note."""
+    return (f"FEEDBACK MISMATCH: judged on {mismatch['judged']}, trained on "
+            f"{' + '.join(mismatch['trained'])}")
+
+
 def budget_text(budget: Mapping[str, Any] | None) -> str:
     """A budget in a few words: ``70k steps, 8 min, mujoco x4, encoder_cc, plateau``."""
     if budget is None:
@@ -269,6 +317,7 @@ def agents_against_baselines(spec: SuiteSpec, boards: Mapping[tuple[str, str], l
     error (mm), their ratio (agent / baseline) and whether the agent beats every baseline
     (``None`` where either side has no finished run)."""
     table: dict[str, list[dict[str, Any]]] = {}
+    mismatched = {(m["preset"], m["condition"], m["policy"]) for m in feedback_mismatches(spec)}
     for arm in spec.arms:
         agent_labels = {policy.label for policy in arm.policies if policy.is_agent}
         rows = []
@@ -287,6 +336,8 @@ def agents_against_baselines(spec: SuiteSpec, boards: Mapping[tuple[str, str], l
                 else math.nan,
                 "best_agent": best_agent and best_agent["policy"],
                 "best_agent_mm": best_agent["last_cycle_error_mm"] if best_agent else math.nan,
+                "best_agent_feedback_mismatch": bool(best_agent) and (
+                    arm.preset, condition, best_agent["policy"]) in mismatched,
                 "ratio": (best_agent["last_cycle_error_mm"] / best_baseline["last_cycle_error_mm"]
                           if both and best_baseline["last_cycle_error_mm"] > 0 else math.nan),
                 "agent_beats_every_baseline": (best_agent["last_cycle_error_mm"]
@@ -303,7 +354,8 @@ def _agents_section(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     shown = [{"condition": row["condition"], "kind": row["kind"],
               "best baseline": row["best_baseline"] or "—",
               "baseline (mm)": _fmt(row["best_baseline_mm"]),
-              "best agent": row["best_agent"] or "—",
+              "best agent": (row["best_agent"] or "—") + (
+                  " (feedback mismatch)" if row.get("best_agent_feedback_mismatch") else ""),
               "agent (mm)": _fmt(row["best_agent_mm"]),
               "agent / baseline": _fmt(row["ratio"]),
               "agent beats every baseline": {True: "yes", False: "no", None: "—"}[
@@ -461,7 +513,9 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
               for status in ("done", "n/a", "missing", "bad")}
     budgets = agent_budgets(spec)
     versus = agents_against_baselines(spec, boards)
-    text = leaderboard_markdown(spec, rows, boards, per_arm, counts, budgets, versus)
+    mismatches = feedback_mismatches(spec, cells)
+    text = leaderboard_markdown(spec, rows, boards, per_arm, counts, budgets, versus,
+                                mismatches)
     (out / "leaderboard.md").write_text(text, encoding="utf-8")
     _write_runs_csv(out / "runs.csv", rows)
     record_versions = [r["versions"] for r in rows if r.get("versions")]
@@ -490,6 +544,7 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
         "arms": per_arm,
         "agent_budgets": budgets,
         "agents_against_baselines": versus,
+        "feedback_mismatches": mismatches,
     })
     if plots:
         _plot_aggregates(out / "aggregate_iqm.png", per_arm)
@@ -518,11 +573,16 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
                          per_arm: Mapping[str, Mapping[str, Any]],
                          counts: Mapping[str, int],
                          budgets: Mapping[str, Mapping[str, Any]] | None = None,
-                         versus: Mapping[str, Sequence[Mapping[str, Any]]] | None = None) -> str:
+                         versus: Mapping[str, Sequence[Mapping[str, Any]]] | None = None,
+                         mismatches: Sequence[Mapping[str, Any]] | None = None) -> str:
     """The text of ``leaderboard.md``; ``budgets`` (:func:`agent_budgets`) fill the agents'
     training column, ``versus`` (:func:`agents_against_baselines`) each arm's comparison of its
-    best agent with its best baseline."""
+    best agent with its best baseline, ``mismatches`` (:func:`feedback_mismatches`, default:
+    the suite's) mark each agent judged on a feedback source it was not trained on, in a
+    paragraph under its arm's heading and in its rows' note."""
     budgets = agent_budgets(spec) if budgets is None else budgets
+    mismatches = feedback_mismatches(spec) if mismatches is None else mismatches
+    mismatched = {(m["preset"], m["condition"], m["policy"]): m for m in mismatches}
     lines = [f"# Suite {spec.name}", ""]
     if spec.description:
         lines += [spec.description.strip(), ""]
@@ -544,6 +604,21 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
                   f"condition(s), {arm.cycles} cycle(s) per run, feedback "
                   f"{arm.feedback or 'the env default'} unless a condition sets it"
                   + (f", engine {arm.env['engine']}" if "engine" in arm.env else "") + ".", ""]
+        arm_mismatches = [m for m in mismatches if m["preset"] == preset]
+        if arm_mismatches:
+            by_policy: dict[str, list[Mapping[str, Any]]] = {}
+            for m in arm_mismatches:
+                by_policy.setdefault(m["policy"], []).append(m)
+            lines += ["**Feedback mismatch**: "
+                      + "; ".join(f"{policy} was trained on {' + '.join(ms[0]['trained'])} "
+                                  f"feedback and is judged here on "
+                                  + ", ".join(
+                                      judged + " (" + ", ".join(m["condition"] for m in ms
+                                                                if m["judged"] == judged) + ")"
+                                      for judged in dict.fromkeys(m["judged"] for m in ms))
+                                  for policy, ms in by_policy.items())
+                      + ". Its scores there measure the feedback as much as the agent; they "
+                        "are marked in the note.", ""]
         aggregate_rows = []
         for policy, stats in sorted(info["aggregates"].items(),
                                     key=lambda item: item[1]["iqm_mm"]):
@@ -581,7 +656,10 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
                        "runs": f"{entry['runs']}/{entry['of']}",
                        "training": budget_text(arm_budgets[entry["policy"]])
                        if entry["policy"] in arm_budgets else "",
-                       "note": entry["note"] or ("n/a" if entry["status"] == "n/a" else "")}
+                       "note": "; ".join(filter(None, (
+                           mismatch_text(mismatched[(preset, condition, entry["policy"])])
+                           if (preset, condition, entry["policy"]) in mismatched else "",
+                           entry["note"] or ("n/a" if entry["status"] == "n/a" else ""))))}
                 if len(arm.paths) > 1:
                     for path in arm.paths:
                         row[f"{path} (mm)"] = _fmt(entry["per_path"].get(path, math.nan))

@@ -506,3 +506,54 @@ def test_a_training_budget_sums_the_segments_of_a_resumed_run(tmp_path):
         training_budget(tmp_path)
     (tmp_path / "untrained").mkdir()
     assert training_budget(tmp_path / "untrained") is None
+
+
+def _trained_feedbacks_from_run_files(agent: str) -> set[str]:
+    """An agent's training feedback read straight from its run's config.yaml (its env's
+    feedback, the env default where unset, and those of the envs trained beside it)."""
+    import yaml
+
+    from soft_gym.envs.config import EnvConfig
+
+    root = Path(__file__).resolve().parents[3]
+    directory = root / "agents" / "trained" / agent
+    if not directory.is_dir():
+        directory = root / agent
+    config = yaml.safe_load((directory / "config.yaml").read_text())
+    base = config["env_kwargs"].get("feedback", EnvConfig.feedback)
+    extra = (config.get("hyperparameters") or {}).get("arm_env_kwargs") or []
+    return {base} | {kwargs.get("feedback", base) for kwargs in extra}
+
+
+@pytest.mark.parametrize("name", sorted(suite.bundled_suites()))
+def test_every_bundled_suite_marks_each_agent_judged_off_its_training_feedback(name, tmp_path):
+    """Every agent of a bundled suite is judged on the feedback it was trained on, or the report
+    marks the mismatch: feedback_mismatches lists exactly the (arm, condition, agent) whose runs'
+    feedback is not among those of the agent's training (read from its run files here), and
+    the leaderboard says so under the arm and in each such row."""
+    from soft_gym.envs.config import EnvConfig
+
+    spec = suite.load_suite(name)
+    expected = set()
+    for cell in suite.expand(spec):
+        if not cell.config["policy"].startswith("sb3:"):
+            continue
+        judged = cell.config["env_kwargs"].get("feedback", EnvConfig.feedback)
+        trained = _trained_feedbacks_from_run_files(cell.config["policy"][len("sb3:"):])
+        if judged not in trained:
+            labels = cell.labels
+            expected.add((labels["preset"], labels["condition"], labels["policy"], judged))
+    found = report.feedback_mismatches(spec)
+    assert {(m["preset"], m["condition"], m["policy"], m["judged"]) for m in found} == expected
+    if name == "small":  # the main job's zhao2021 agent: trained on strain_sr, judged on truth
+        assert ("zhao2021", "nominal", "sac_zhao2021_track", "ground_truth") in expected
+    text = report.write_report(spec, tmp_path / "out", reps=10, profile_reps=10, plots=False)
+    for preset, condition, policy, judged in expected:
+        section = text.split(f"### {preset}: {condition}\n", 1)[1].split("\n#", 1)[0]
+        row = next(line for line in section.splitlines() if f"| {policy} |" in line)
+        assert f"FEEDBACK MISMATCH: judged on {judged}" in row
+    for preset in {m[0] for m in expected}:
+        heading = text.split(f"## {preset}\n", 1)[1].split("\n## ", 1)[0]
+        assert "**Feedback mismatch**" in heading
+    if not expected:
+        assert "FEEDBACK MISMATCH" not in text and "**Feedback mismatch**" not in text
