@@ -31,7 +31,9 @@ Outputs (under the suite's output directory)
 * ``aggregate_iqm.png``: per arm and policy, the IQM of ``e`` with its 95 % CI and the mean
   (with one seed there is no interval: the plot and tables say "1 seed: no interval").
 * ``performance_profiles.png``: per arm, the fraction of runs with ``e <= tau`` over a grid of
-  ``tau`` (mm), with 95 % CI bands.
+  ``tau``, the error threshold (mm), with 95 % CI bands; only for the policies with at least
+  :data:`PROFILE_MIN_RUNS` scores (runs x tasks) on the arm: the panel and the leaderboard name
+  the others and say why (``profiles_left_out`` in ``suite.json``).
 * ``plots/error_<arm>_<path>_<condition>.png``: tracking error and path deviation against time
   of every policy, first seed, on one y-scale per arm;
   ``plots/trajectory_<arm>_<path>_<condition>.png``: their tips over
@@ -63,7 +65,7 @@ import csv
 import math
 import os
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -73,7 +75,7 @@ from matplotlib.figure import Figure
 
 from agents.policies.sb3 import training_budget, training_feedbacks
 from eval.metrics import MM_PER_M
-from eval.palette import policy_color
+from eval.palette import policy_colors
 from eval.report import (error_peaks_mm, markdown_table, package_version, plot_error_time,
                          save_figure, write_json)
 from eval.suite.grid import Cell, expand
@@ -93,6 +95,15 @@ PROFILE_REPS = 2_000
 
 PROFILE_POINTS = 101
 """Thresholds ``tau`` of a performance profile: ``linspace(0, 1.05 max e, PROFILE_POINTS)``."""
+
+PROFILE_MIN_RUNS = 10
+"""The fewest scores (runs x tasks) of a policy on an arm for its performance profile to be drawn:
+with fewer the profile is a staircase of a few steps (two runs: 0, 1/2, 1) and its bootstrap band
+says nothing, so the policy is left out of the plot and the report says why."""
+
+PROFILE_AXIS = "tau: error threshold (mm)"
+"""The x axis of a performance profile, in words: a run counts at ``tau`` when its last-cycle
+error is at most ``tau`` millimetres."""
 
 _CSV_METRICS = ("last_cycle_error_mm", "mean_error_mm", "max_error_mm", "final_error_mm",
                 "path_deviation_mm", "last_cycle_path_deviation_mm", "feedback_error_mm",
@@ -500,13 +511,19 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
     for index, preset in enumerate(arms):
         matrices, tasks, excluded = score_matrices(rows, preset)
         taus = profile_taus(matrices)
+        profiled = {policy: matrix for policy, matrix in matrices.items()
+                    if matrix.size >= PROFILE_MIN_RUNS}
         per_arm[preset] = {
             "tasks": [list(task) for task in tasks],
             "aggregates": aggregate_scores(matrices, reps=reps, seed=seed + index),
             "excluded": excluded,
             "profile_taus_mm": taus.tolist(),
-            "profiles": performance_profiles(matrices, taus, reps=profile_reps,
+            "profile_min_runs": PROFILE_MIN_RUNS,
+            "profiles": performance_profiles(profiled, taus, reps=profile_reps,
                                              seed=seed + index),
+            "profiles_left_out": {
+                policy: f"{matrix.size} runs x tasks, fewer than {PROFILE_MIN_RUNS}"
+                for policy, matrix in matrices.items() if policy not in profiled},
             "scores_mm": {policy: matrix.tolist() for policy, matrix in matrices.items()},
         }
     counts = {status: sum(r["status"] == status for r in rows)
@@ -547,9 +564,10 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
         "feedback_mismatches": mismatches,
     })
     if plots:
-        _plot_aggregates(out / "aggregate_iqm.png", per_arm)
-        _plot_profiles(out / "performance_profiles.png", per_arm)
-        _plot_first_seed(out / "plots", cells, rows, out, spec.seeds[0])
+        colors = suite_colors(spec)
+        _plot_aggregates(out / "aggregate_iqm.png", per_arm, colors)
+        _plot_profiles(out / "performance_profiles.png", per_arm, colors)
+        _plot_first_seed(out / "plots", cells, rows, out, spec.seeds[0], colors)
     return text
 
 
@@ -639,6 +657,14 @@ def leaderboard_markdown(spec: SuiteSpec, rows: Sequence[Mapping[str, Any]],
                       markdown_table(aggregate_rows, columns=[
                           "policy", "IQM (mm)", "IQM 95% CI", "mean (mm)", "mean 95% CI",
                           "median (mm)", "runs x tasks"])]
+        if info.get("profiles_left_out"):
+            left_out = info["profiles_left_out"]
+            lines += [("No performance profile drawn for " if not info["profiles"] else
+                       "Left out of the performance profiles: ")
+                      + ", ".join(f"{policy} ({reason})" for policy, reason in left_out.items())
+                      + f": a profile needs at least {PROFILE_MIN_RUNS} "
+                        "scores (seeds x paths x conditions) to be more than a few steps; run "
+                        "more seeds (the suite's seeds) for one.", ""]
         if versus is not None:
             lines += _agents_section(versus.get(preset, []))
         arm_budgets = budgets.get(preset, {})
@@ -701,10 +727,16 @@ def _figure(width_in: float, height_in: float, nrows: int, ncols: int = 1):
     return figure, axes
 
 
-def _colors(policies: Mapping[str, Any]) -> dict[str, str]:
-    """Each policy's colour, keyed by its name (:func:`eval.palette.policy_color`: the same in
-    every plot and panel)."""
-    return {policy: policy_color(policy) for policy in policies}
+def _colors(policies: Iterable[str]) -> dict[str, str]:
+    """The colours of policies drawn together (:func:`eval.palette.policy_colors`: each keyed by
+    its name, the same in every plot and panel, distinct within the set)."""
+    return policy_colors(policies)
+
+
+def suite_colors(spec: SuiteSpec) -> dict[str, str]:
+    """The colour of every policy label of a suite, drawn together in its report: one set, so a
+    suite's own label keeps its colour in every panel and plot."""
+    return _colors(policy.label for arm in spec.arms for policy in arm.policies)
 
 
 NO_INTERVAL = "1 seed: no interval"
@@ -724,7 +756,8 @@ def _interval_text(stats: Mapping[str, Any], name: str) -> str:
     return "[" + ", ".join(_fmt(v) for v in stats[f"{name}_ci_mm"]) + "]"
 
 
-def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> None:
+def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]],
+                     colors: Mapping[str, str] | None = None) -> None:
     """Per arm and policy: the IQM (dot) with its 95 % CI (bar) and the mean (cross)."""
     arms = [preset for preset, info in per_arm.items() if info["aggregates"]]
     if not arms:
@@ -732,14 +765,14 @@ def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> No
     heights = [max(1, len(per_arm[preset]["aggregates"])) for preset in arms]
     figure, axes = _figure(7.0, 0.9 + 0.38 * sum(heights) + 0.5 * len(arms), len(arms))
     for ax, preset in zip(axes[:, 0], arms):
-        colors = _colors(per_arm[preset]["aggregates"])
+        shown = _colors(per_arm[preset]["aggregates"]) if colors is None else colors
         stats = sorted(per_arm[preset]["aggregates"].items(), key=lambda item: item[1]["iqm_mm"])
         for y, (policy, values) in enumerate(stats):
             if _has_interval(values):
                 low, high = values["iqm_ci_mm"]
-                ax.plot([low, high], [y, y], "-", color=colors[policy], lw=5, alpha=0.45,
+                ax.plot([low, high], [y, y], "-", color=shown[policy], lw=5, alpha=0.45,
                         solid_capstyle="butt")
-            ax.plot(values["iqm_mm"], y, "o", color=colors[policy], ms=6)
+            ax.plot(values["iqm_mm"], y, "o", color=shown[policy], ms=6)
             ax.plot(values["mean_mm"], y, "x", color="k", ms=6)
         ax.set_yticks(range(len(stats)), [policy for policy, _ in stats])
         ax.set_ylim(len(stats) - 0.3, -0.7)  # the best on top
@@ -754,33 +787,52 @@ def _plot_aggregates(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> No
     save_figure(figure, path)
 
 
-def _plot_profiles(path: Path, per_arm: Mapping[str, Mapping[str, Any]]) -> None:
-    """Per arm: the fraction of runs with last-cycle error <= tau, with 95 % CI bands."""
-    arms = [preset for preset, info in per_arm.items() if info["profiles"]]
+def _plot_profiles(path: Path, per_arm: Mapping[str, Mapping[str, Any]],
+                   colors: Mapping[str, str] | None = None) -> None:
+    """Per arm: the fraction of runs with last-cycle error <= tau, with 95 % CI bands, for the
+    policies with at least :data:`PROFILE_MIN_RUNS` scores; a panel names those left out and
+    says why (and says so in place of the curves where none has enough)."""
+    arms = [preset for preset, info in per_arm.items()
+            if info["profiles"] or info.get("profiles_left_out")]
     if not arms:
         return
     ncols = 2 if len(arms) > 1 else 1
     nrows = math.ceil(len(arms) / ncols)
-    figure, axes = _figure(5.0 * ncols, 3.6 * nrows, nrows, ncols)
+    figure, axes = _figure(5.0 * ncols, 3.8 * nrows, nrows, ncols)
     for k, ax in enumerate(axes.ravel()):
         if k >= len(arms):
             ax.set_visible(False)
             continue
         info = per_arm[arms[k]]
         taus = np.asarray(info["profile_taus_mm"])
-        colors = _colors(info["profiles"])
+        shown = _colors(info["profiles"]) if colors is None else colors
         for policy, profile in info["profiles"].items():
-            color = colors[policy]
+            color = shown[policy]
             ax.step(taus, profile["fraction"], where="post", color=color, lw=1.4, label=policy)
             ax.fill_between(taus, profile["ci_low"], profile["ci_high"], step="post",
                             color=color, alpha=0.18, lw=0)
+        left_out = info.get("profiles_left_out") or {}
+        minimum = info.get("profile_min_runs", PROFILE_MIN_RUNS)
+        if left_out:
+            runs = sorted({int(reason.split()[0]) for reason in left_out.values()
+                           if reason.split()[0].isdigit()})
+            counts = "/".join(str(n) for n in runs) or "too few"
+            text = (f"no profile: {counts} runs x tasks per policy,\nfewer than the "
+                    f"{minimum} a profile needs" if not info["profiles"] else
+                    f"left out ({counts} runs x tasks, fewer than {minimum}):\n"
+                    + ", ".join(left_out))
+            ax.text(0.02, 0.97 if not info["profiles"] else 0.03, text,
+                    transform=ax.transAxes, fontsize=7, va="top" if not info["profiles"]
+                    else "bottom", ha="left", wrap=True)
         ax.set_ylim(-0.02, 1.02)
-        ax.set_xlim(taus[0], taus[-1])
-        ax.set_xlabel("tau: last-cycle error (mm)")
-        ax.set_ylabel("fraction of runs with error <= tau")
+        if len(taus) > 1 and taus[-1] > taus[0]:
+            ax.set_xlim(taus[0], taus[-1])
+        ax.set_xlabel(PROFILE_AXIS)
+        ax.set_ylabel("fraction of runs with last-cycle\nerror <= tau")
         ax.set_title(arms[k], fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="lower right")
+        if info["profiles"]:
+            ax.legend(fontsize=7, loc="lower right")
     save_figure(figure, path)
 
 
@@ -789,7 +841,7 @@ def _file_part(text: str) -> str:
 
 
 def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapping[str, Any]],
-                     out: Path, seed: int) -> None:
+                     out: Path, seed: int, colors: Mapping[str, str] | None = None) -> None:
     """Error against time and trajectories of every policy, per arm/path/condition, one seed."""
     status = {row["key"]: row["status"] for row in rows}
     groups: dict[tuple[str, str, str], dict[str, str]] = {}
@@ -812,9 +864,11 @@ def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapp
     for (preset, path, condition), records in loaded.items():
         stem = f"{_file_part(preset)}_{_file_part(path)}_{_file_part(condition)}"
         title = f"{preset} {path}, {condition} (seed {seed})"
+        shown = _colors(records) if colors is None else colors
         plot_error_time(directory / f"error_{stem}.png", records, title,
+                        colors={policy: shown[policy] for policy in records},
                         ymax_mm=peaks[preset])
-        _plot_trajectories(directory / f"trajectory_{stem}.png", records, title)
+        _plot_trajectories(directory / f"trajectory_{stem}.png", records, title, shown)
 
 
 def _steps_or_none(out: Path, key: str) -> dict[str, np.ndarray] | None:
@@ -826,7 +880,7 @@ def _steps_or_none(out: Path, key: str) -> dict[str, np.ndarray] | None:
 
 
 def _plot_trajectories(path: Path, records: Mapping[str, Mapping[str, np.ndarray]],
-                       title: str) -> None:
+                       title: str, colors: Mapping[str, str] | None = None) -> None:
     """Every policy's true tip over the path, x-y plane (mm)."""
     figure, axes = _figure(6.4, 5.4, 1)
     ax = axes[0, 0]
@@ -835,9 +889,10 @@ def _plot_trajectories(path: Path, records: Mapping[str, Mapping[str, np.ndarray
         line = np.asarray(first["polyline_m"], dtype=float) * MM_PER_M
         closed = np.vstack((line, line[:1]))
         ax.plot(closed[:, 0], closed[:, 1], color="0.6", lw=3, alpha=0.6, label="path")
+    shown = _colors(records) if colors is None else colors
     for policy, record in records.items():
         tip = np.asarray(record["tip_m"], dtype=float) * MM_PER_M
-        ax.plot(tip[:, 0], tip[:, 1], "-", color=policy_color(policy), lw=1.1, label=policy)
+        ax.plot(tip[:, 0], tip[:, 1], "-", color=shown[policy], lw=1.1, label=policy)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
@@ -847,8 +902,8 @@ def _plot_trajectories(path: Path, records: Mapping[str, Mapping[str, np.ndarray
     save_figure(figure, path)
 
 
-__all__ = ["DEFAULT_REPS", "PROFILE_REPS", "SCORE", "agent_budgets",
-           "agents_against_baselines", "aggregate_scores", "budget_text", "collect_rows",
-           "condition_kind", "fraction_within", "leaderboard_markdown",
-           "leaderboards", "performance_profiles", "profile_taus", "require_rliable",
-           "score_matrices", "write_report"]
+__all__ = ["DEFAULT_REPS", "PROFILE_AXIS", "PROFILE_MIN_RUNS", "PROFILE_REPS", "SCORE",
+           "agent_budgets", "agents_against_baselines", "aggregate_scores", "budget_text",
+           "collect_rows", "condition_kind", "feedback_mismatches", "fraction_within",
+           "leaderboard_markdown", "leaderboards", "mismatch_text", "performance_profiles",
+           "profile_taus", "require_rliable", "score_matrices", "suite_colors", "write_report"]

@@ -15,7 +15,8 @@ import eval.__main__ as eval_main
 import eval.report
 from agents.policies import BASELINES, shipped_agents
 from eval import suite
-from eval.palette import PALETTE, named_policies, policy_color, policy_label
+from eval.palette import (MIN_DELTA_E, PALETTE, agent_family, delta_e, lab, named_policies,
+                          policy_color, policy_colors, policy_label)
 from eval.report import error_peaks_mm, plot_error_time
 
 
@@ -27,6 +28,8 @@ class _Axes:
                       for line in ax.get_lines()]
         self.ylim = ax.get_ylim()
         self.title = ax.get_title()
+        self.xlabel = ax.get_xlabel()
+        self.texts = [text.get_text() for text in ax.texts]
 
 
 def _capture(monkeypatch, module) -> list[list[_Axes]]:
@@ -60,7 +63,17 @@ def test_every_named_policy_has_its_own_colour_and_a_name_keeps_its_colour():
     assert list(named[:len(BASELINES)]) == list(BASELINES)
     assert set(named[len(BASELINES):]) == set(shipped_agents()) - set(BASELINES)
     colours = [policy_color(name) for name in named]
-    assert len(set(colours)) == len(colours)
+    # a baseline has a colour of its own; an agent its family's (the same algorithm on another
+    # arm, never drawn beside it), none of them a baseline's
+    baseline_colours = colours[:len(BASELINES)]
+    assert len(set(baseline_colours)) == len(BASELINES)
+    agents = named[len(BASELINES):]
+    for first in agents:
+        assert policy_color(first) not in baseline_colours
+        for second in agents:
+            assert (policy_color(first) == policy_color(second)) == (
+                agent_family(first) == agent_family(second)), (first, second)
+    assert agent_family("ppo_lstm_wang2023_fused") == "ppo_lstm_fused"
     assert policy_color("sb3:agents/trained/sac_wang2023_track") == \
         policy_color("sac_wang2023_track") == policy_color("sb3:sac_wang2023_track")
     assert policy_label("sb3:/some/run/dir") == "dir"
@@ -165,3 +178,99 @@ def test_the_benchmark_plot_title_names_the_load_and_the_occlusion_window():
     args = type("Args", (), {"title": eval_main.benchmark_title(), "preset": "wang2023",
                              "path": "circle"})()
     assert eval_main._track_title(args, {"a": {"time_s": np.array([0.05, 61.9])}}) == title
+
+
+DELTA_E = 20.0
+"""The least CIE76 delta-E between two policies drawn together (one arm of a suite)."""
+
+
+def test_lab_conversion_matches_reference_values():
+    """The small sRGB -> CIE L*a*b* (D65) conversion behind delta_e, on known values."""
+    assert lab("#ffffff") == pytest.approx([100.0, 0.0, 0.0], abs=0.05)
+    assert lab("#000000") == pytest.approx([0.0, 0.0, 0.0], abs=0.05)
+    assert lab("#ff0000") == pytest.approx([53.24, 80.09, 67.20], abs=0.05)
+    assert lab("#0000ff") == pytest.approx([32.30, 79.19, -107.86], abs=0.05)
+    assert delta_e("#ff0000", "#ff0000") == 0.0
+
+
+def test_the_palette_has_no_two_close_colours_and_no_light_shades():
+    """Every two colours of the palette differ by MIN_DELTA_E (>= DELTA_E), and it holds none of
+    tab20's light shades (the light orange once drawn beside local_ik_asdm's orange)."""
+    import itertools
+
+    from matplotlib.colors import to_hex
+    from matplotlib import colormaps
+
+    assert MIN_DELTA_E >= DELTA_E
+    for first, second in itertools.combinations(PALETTE, 2):
+        assert delta_e(first, second) >= MIN_DELTA_E, (first, second)
+    light = {to_hex(colour) for colour in colormaps["tab20"].colors[1::2]}
+    assert not light & set(PALETTE)
+    assert policy_color("local_ik_asdm") != policy_color("sac_zhao2021_track")
+
+
+@pytest.mark.parametrize("name", sorted(suite.bundled_suites()))
+def test_policies_drawn_together_in_a_bundled_suite_have_distinct_colours(name):
+    """Every pair of policies of one arm of a bundled suite (drawn together in each of its plots
+    and panels) differs by at least DELTA_E in CIE76 delta-E, in the colours the suite's report
+    draws them with."""
+    from eval.suite import report
+
+    spec = suite.load_suite(name)
+    colours = report.suite_colors(spec)
+    for arm in spec.arms:
+        labels = [policy.label for policy in arm.policies]
+        for i, first in enumerate(labels):
+            for second in labels[i + 1:]:
+                difference = delta_e(colours[first], colours[second])
+                assert difference >= DELTA_E, (name, arm.preset, first, second, difference)
+        # and so do the colours each plot of the arm picks for its own set
+        own = policy_colors(labels)
+        assert len(set(own.values())) == len(labels)
+
+
+def test_a_suites_own_labels_take_free_colours_and_keep_them():
+    """Two labels outside the registries hashed onto one spare colour are moved apart; the named
+    policies keep their colours; the same set gives the same colours."""
+    labels = ["lwpr_rwr", "run_a", "run_b", "run_c", "run_d", "run_e"]
+    colours = policy_colors(labels)
+    assert colours["lwpr_rwr"] == policy_color("lwpr_rwr")
+    assert len(set(colours.values())) == len(labels)
+    assert colours == policy_colors(labels)
+
+
+@pytest.mark.parametrize("seeds", [[0], [0, 1, 2, 3, 4]])
+def test_performance_profiles_need_enough_runs_and_name_their_axis(seeds, tmp_path, monkeypatch):
+    """The profile's x axis says what tau is (the error threshold, mm); a policy with fewer than
+    PROFILE_MIN_RUNS scores on an arm (one seed x two conditions: 2) gets no profile, and the
+    panel and the leaderboard say why; with five seeds (10 scores) both profiles are drawn."""
+    pytest.importorskip("rliable")
+    from eval.suite import report
+
+    path = tmp_path / "plots.yaml"
+    path.write_text(textwrap.dedent(SPEC))
+    spec = suite.load_suite(path).with_seeds(seeds)
+    out = tmp_path / "out"
+    for k, cell in enumerate(suite.expand(spec)):
+        error = 1.0 + 0.1 * k
+        suite.write_record(out, {
+            "key": cell.key, "suite": spec.name, "labels": cell.labels, "config": cell.config,
+            "wall_s": 1.0, "versions": {}, "git_revision": "abc", "steps": None,
+            "status": "done", "reason": None,
+            "metrics": {"last_cycle_error_mm": error, "mean_error_mm": error,
+                        "max_error_mm": error, "path_deviation_mm": error}})
+    figures = _capture(monkeypatch, report)
+    text = report.write_report(spec, out, reps=20, profile_reps=20)
+    profile = next(axes[0] for axes in figures if axes[0].xlabel == report.PROFILE_AXIS)
+    assert "error threshold (mm)" in report.PROFILE_AXIS
+    runs = len(seeds) * 2
+    drawn = {label for label, _, _ in profile.lines}
+    if runs < report.PROFILE_MIN_RUNS:
+        assert not drawn & {"cc_model", "hybrid_gpr"}
+        assert any(f"{runs} runs x tasks" in t and f"fewer than the {report.PROFILE_MIN_RUNS}"
+                   in t for t in profile.texts)
+        assert (f"No performance profile drawn for cc_model ({runs} runs x tasks, fewer than "
+                f"{report.PROFILE_MIN_RUNS})") in text
+    else:
+        assert {"cc_model", "hybrid_gpr"} <= drawn and not profile.texts
+        assert "performance profile" not in text
