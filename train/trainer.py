@@ -110,6 +110,11 @@ class TrainRequest:
         plateau_fraction: the plateau rule's share of the latest steps (0.2).
         plateau_improvement: the plateau rule's relative improvement (0.05).
         min_timesteps: env steps before the plateau rule may stop training.
+        save_replay_buffer: also save an off-policy run's replay buffer
+            (:data:`REPLAY_BUFFER_FILE`, all of its ``buffer_size`` transitions preallocated:
+            tens of MB, 45 MB for SAC on the track envs) beside the model, so that ``resume``
+            continues with the transitions gathered so far; without it a resumed run starts with
+            an empty buffer. A resumed run that had one saved keeps saving it.
     """
 
     algo: str = "sac"
@@ -142,6 +147,7 @@ class TrainRequest:
     plateau_fraction: float = PLATEAU_FRACTION
     plateau_improvement: float = PLATEAU_IMPROVEMENT
     min_timesteps: int = 0
+    save_replay_buffer: bool = False
 
     @property
     def uses_demonstrations(self) -> bool:
@@ -239,8 +245,12 @@ def train(request: TrainRequest) -> Path:
             raise ValueError(f"resume {str(run_dir)!r} holds no {' or '.join(missing)}: give "
                              f"the run directory of an earlier training")
         saved = yaml.safe_load((run_dir / "config.yaml").read_text())
+        # the buffer goes on being saved where it was, or where this resume asks for it
+        keep_buffer = (bool(saved["request"].get("save_replay_buffer"))
+                       or request.save_replay_buffer or (run_dir / REPLAY_BUFFER_FILE).is_file())
         request = TrainRequest(**{**saved["request"], "resume": str(run_dir),
-                                  "timesteps": request.timesteps, "progress": request.progress})
+                                  "timesteps": request.timesteps, "progress": request.progress,
+                                  "save_replay_buffer": keep_buffer})
         settings, hyperparameters = resolve(request)
     else:
         settings, hyperparameters = resolve(request)
@@ -249,6 +259,9 @@ def train(request: TrainRequest) -> Path:
         if (run_dir / "config.yaml").exists():
             raise ValueError(f"run directory {str(run_dir)!r} already holds a run: pick another "
                              "run_name or pass resume")
+    if request.save_replay_buffer and request.algo not in OFF_POLICY:
+        raise ValueError(f"save_replay_buffer: {request.algo} keeps no replay buffer (only "
+                         f"{list(OFF_POLICY)} do)")
     run_dir.mkdir(parents=True, exist_ok=True)
     algo_cls = algorithm_class(request.algo)
     start = None
@@ -282,6 +295,10 @@ def train(request: TrainRequest) -> Path:
         model = algo_cls.load(str(run_dir / MODEL_FILE), env=env)
         if request.algo in OFF_POLICY and (run_dir / REPLAY_BUFFER_FILE).exists():
             model.load_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
+        elif request.algo in OFF_POLICY:
+            print(f"resume: {str(run_dir)!r} holds no {REPLAY_BUFFER_FILE} (the run was trained "
+                  "without --save-replay-buffer): continuing with an empty replay buffer",
+                  flush=True)
     elif start is not None:
         model = load_trained_model(start, algo_cls, env, model_kwargs(settings, env),
                                    request.seed)
@@ -341,7 +358,7 @@ def train(request: TrainRequest) -> Path:
     model.save(str(run_dir / MODEL_FILE))
     if settings.normalize is not None:
         model.get_vec_normalize_env().save(str(run_dir / NORMALIZATION_FILE))
-    if request.algo in OFF_POLICY:
+    if request.algo in OFF_POLICY and request.save_replay_buffer:
         model.save_replay_buffer(str(run_dir / REPLAY_BUFFER_FILE))
     summary = {"timesteps": int(model.num_timesteps), "wall_s": round(elapsed, 1),
                "env_steps_per_s": round(callbacks[0].steps / max(elapsed, 1e-9), 1),

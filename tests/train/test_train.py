@@ -156,15 +156,58 @@ def test_smoke_training_saves_a_model_that_loads_back_identically(tmp_path, algo
 
 
 def test_resume_continues_the_step_count(tmp_path):
+    """A run saved with save_replay_buffer resumes with its buffer (and keeps saving it)."""
     common = dict(env_kwargs=FAST_ENV, hyperparameters={"learning_starts": 100}, out_dir=str(tmp_path),
                   eval_freq=0, checkpoint_freq=0, progress=False)
-    run_dir = train(TrainRequest(algo="sac", timesteps=400, **common))
-    train(TrainRequest(resume=str(run_dir), timesteps=300, progress=False))
+    run_dir = train(TrainRequest(algo="sac", timesteps=400, save_replay_buffer=True, **common))
+    buffer = run_dir / "replay_buffer.pkl"
+    assert buffer.is_file()
     from stable_baselines3 import SAC
+
+    loaded = []
+    original = SAC.load_replay_buffer
+
+    def load_replay_buffer(self, path, *args, **kwargs):
+        original(self, path, *args, **kwargs)
+        loaded.append(self.replay_buffer.size())
+
+    SAC.load_replay_buffer = load_replay_buffer
+    try:
+        train(TrainRequest(resume=str(run_dir), timesteps=300, progress=False))
+    finally:
+        SAC.load_replay_buffer = original
+    assert loaded == [400]  # the first run's transitions, restored
+    assert buffer.is_file()
+    assert yaml.safe_load((run_dir / "config.yaml").read_text())["request"]["save_replay_buffer"]
 
     assert SAC.load(run_dir / "model.zip").num_timesteps == 700
     history = yaml.safe_load((run_dir / "training.yaml").read_text())
     assert [entry["timesteps"] for entry in history] == [400, 700]
+
+
+def test_a_sac_run_saves_no_replay_buffer_unless_asked_and_resumes_without_one(tmp_path,
+                                                                              capsys):
+    """The replay buffer (tens of MB) is saved only with save_replay_buffer; a run without one
+    still resumes (with an empty buffer, saying so) and still saves none; an on-policy
+    algorithm refuses the option."""
+    run_dir = train(TrainRequest(algo="sac", env_kwargs=FAST_ENV, timesteps=200,
+                                 hyperparameters={"learning_starts": 100}, out_dir=str(tmp_path),
+                                 eval_freq=0, checkpoint_freq=0, progress=False))
+    assert (run_dir / "model.zip").is_file()
+    assert not list(run_dir.rglob("*replay_buffer*"))
+    train(TrainRequest(resume=str(run_dir), timesteps=150, progress=False))
+    assert "continuing with an empty replay buffer" in capsys.readouterr().out
+    from stable_baselines3 import SAC
+
+    assert SAC.load(run_dir / "model.zip").num_timesteps == 350
+    assert not list(run_dir.rglob("*replay_buffer*"))
+    with pytest.raises(ValueError, match="keeps no replay buffer"):
+        train(TrainRequest(algo="ppo", env_kwargs=FAST_ENV, timesteps=64,
+                           save_replay_buffer=True, out_dir=str(tmp_path), progress=False))
+    with pytest.raises(SystemExit):
+        train_main(["--algo", "ppo", "--save-replay-buffer", "--timesteps", "64",
+                    "--out", str(tmp_path)])
+    assert "--save-replay-buffer" in capsys.readouterr().err
 
 
 def test_checkpoints_load_with_their_own_normalization_or_are_refused(tmp_path):
