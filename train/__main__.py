@@ -383,7 +383,8 @@ def main(argv: list[str] | None = None) -> None:
             parser.error("--resume needs --timesteps (how many more steps to train)")
         if args.demos is not None or args.demo_dataset is not None:
             parser.error("--demos and --demo-dataset start a new run; --resume continues one "
-                         "(its replay buffer already holds the demonstrations)")
+                         "(its replay buffer, where it saved one with --save-replay-buffer, "
+                         "holds the demonstrations)")
         if args.trained_agent is not None:
             parser.error("--trained-agent starts a new run; --resume continues one (from its "
                          "own model)")
