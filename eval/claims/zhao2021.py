@@ -65,8 +65,7 @@ def _run_sway(seed: int, quick: bool, workers: int, progress: bool) -> dict[str,
 
 
 def _run_circle(seed: int, quick: bool, workers: int, progress: bool) -> dict[str, Any]:
-    only_heavy = {"masses_kg": experiments.CIRCLE_LOADS_KG[-1:]} if quick else {}
-    runs = experiments.run_circle(asdict(_config(seed, quick)), seed, progress, **only_heavy)
+    runs = experiments.run_circle(asdict(_config(seed, quick)), seed, progress)
     return {label: {key: run[key] for key in ("points_reached", "path_error_mean_mm",
                                               "recovery_steps")}
             for label, run in runs.items()}
@@ -95,7 +94,7 @@ EXPERIMENTS = (
                     cpu_minutes=(0.5, 0.8)),
     ClaimExperiment("zhao2021.circle", "zhao2021",
                     "ASDM round the 100 mm circle (24 points) free, and with 263 g on the tip "
-                    "from step 29 to 60", f"{_QUICK}, the 263 g run only",
+                    "from step 29 to 60", _QUICK,
                     _run_circle, shares=_MODELS, cpu_minutes=(0.3, 1.3)),
 )
 

@@ -79,3 +79,12 @@ def test_zou2022_table4_quick_is_judged_without_a_leaking_test_set(tmp_path, mon
     assert summary["table4_ratio_vs_ases"] > 0
     assert f"RMSE vs ASES {summary['table4_ratio_vs_ases']:.2f} x" in \
         entry["seeds"][0]["measured"]
+
+
+@pytest.mark.slow
+def test_the_quick_ledger_judges_every_claim_it_can_run(tmp_path):
+    """Every claim's check reads its experiment's quick summary (about 8 minutes on 2 cores)."""
+    ledger = run_ledger(seeds=[0], quick=True, out=tmp_path, workers=2, progress=False)
+    for entry in ledger["claims"]:
+        assert entry["verdict"] in VERDICTS, (entry["key"], entry["verdict"])
+        assert entry["experiment"] is None or [s["seed"] for s in entry["seeds"]] == [0]
