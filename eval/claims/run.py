@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -32,7 +33,7 @@ from eval.claims.ledger import NOT_RUN, Claim, ClaimExperiment, Outcome, combine
 from eval.report import to_jsonable, write_json
 from eval.suite.grid import canonical_json
 from eval.suite.run import one_compute_thread, process_map
-from eval.suite.store import RecordError, git_revision, library_versions
+from eval.suite.store import RecordError, git_revision, library_versions, read_json_object
 
 RECORD_FORMAT = 2
 """The layout of a record file (2: with its ``sha256`` digest and the experiment's summary
@@ -85,15 +86,9 @@ def read_record(path: Path, experiment: str, seed: int, quick: bool,
         RecordError: (a ``ValueError``) naming the path and what is wrong.
     """
     path = Path(path)
-    if not path.exists():
+    if not os.path.lexists(path):
         return None
-    try:
-        record = json.loads(path.read_bytes().decode("utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise RecordError(path, f"not readable JSON (truncated or damaged: "
-                                f"{type(error).__name__}: {error})") from None
-    if not isinstance(record, dict):
-        raise RecordError(path, f"must hold a JSON object, got {type(record).__name__}")
+    record = read_json_object(path)
     if record.get("format") != RECORD_FORMAT:
         raise RecordError(path, f"format {record.get('format')!r}, not {RECORD_FORMAT} (written "
                                 "before records carried a digest)")

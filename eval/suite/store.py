@@ -155,6 +155,25 @@ def _load_arrays(path: Path) -> dict[str, np.ndarray]:
                                 f"{type(error).__name__}: {error})") from None
 
 
+def read_json_object(path: Path) -> dict[str, Any]:
+    """The JSON object a record file at ``path`` holds.
+
+    Raises:
+        RecordError: naming ``path``: not a regular file, not readable UTF-8 JSON (truncated or
+            damaged), or JSON that is not an object.
+    """
+    if not path.is_file():
+        raise RecordError(path, "not a regular file")
+    try:
+        record = json.loads(path.read_bytes().decode("utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as error:
+        raise RecordError(path, f"not readable JSON (truncated or damaged: "
+                                f"{type(error).__name__}: {error})") from None
+    if not isinstance(record, dict):
+        raise RecordError(path, f"must hold a JSON object, got {type(record).__name__}")
+    return record
+
+
 def _check_metrics(path: Path, metrics: Any) -> None:
     if not isinstance(metrics, Mapping):
         raise RecordError(path, f"status 'done' without metrics (got {_short(metrics)})")
@@ -186,15 +205,7 @@ def read_record(out: str | os.PathLike, key: str) -> dict[str, Any] | None:
     path = record_path(out, key)
     if not os.path.lexists(path):
         return None
-    if not path.is_file():
-        raise RecordError(path, "not a regular file")
-    try:
-        record = json.loads(path.read_bytes().decode("utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise RecordError(path, f"not readable JSON (truncated or damaged: "
-                                f"{type(error).__name__}: {error})") from None
-    if not isinstance(record, dict):
-        raise RecordError(path, f"must hold a JSON object, got {type(record).__name__}")
+    record = read_json_object(path)
     if record.get("key") != key:
         raise RecordError(path, f"holds the record of cell {_short(record.get('key'))}, not "
                                 f"{key!r} (copied over another record?)")
