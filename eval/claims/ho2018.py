@@ -159,12 +159,11 @@ def _online_keeps_stable(summary: dict) -> Outcome:
 
 
 def _forward_model(summary: dict) -> Outcome:
-    outcome = judged([FORWARD_TEST_RMSE.part("forward test RMSE of dp",
-                                             summary["forward_rmse_mm"]["test"])])
-    return Outcome(outcome.verdict, outcome.measured + (
-        f" on {summary['n_test']} test transitions (predicting no motion "
-        f"{summary['zero_dp_rmse_mm']['test']:.2f} mm; the EM readings' own floor "
-        f"{summary['em_noise_floor_mm']:.2f} mm)"))
+    return judged([FORWARD_TEST_RMSE.part("forward test RMSE of dp",
+                                          summary["forward_rmse_mm"]["test"])],
+                  f" on {summary['n_test']} test transitions (predicting no motion "
+                  f"{summary['zero_dp_rmse_mm']['test']:.2f} mm; the EM readings' own floor "
+                  f"{summary['em_noise_floor_mm']:.2f} mm)")
 
 
 def _inverse_model(summary: dict) -> Outcome:

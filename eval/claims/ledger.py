@@ -217,13 +217,15 @@ def bar(label: str, verdict: Verdict, shown: str) -> Part:
     return verdict, f"{label} {shown} ({SHORT[verdict]})"
 
 
-def judged(parts: Sequence[Part]) -> Outcome:
+def judged(parts: Sequence[Part], note: str = "") -> Outcome:
     """A claim judged part by part (per path, load, configuration, or a disturbance and the
     claim about it): the claim takes the worst part's verdict, and its measured line names
-    every part with its value and verdict."""
+    every part with its value and verdict, then ``note`` (numbers shown beside them, judged
+    by none)."""
     if not parts:
         raise ValueError("judged needs at least one part, got none")
-    return Outcome(worst([verdict for verdict, _ in parts]), "; ".join(text for _, text in parts))
+    return Outcome(worst([verdict for verdict, _ in parts]),
+                   "; ".join(text for _, text in parts) + note)
 
 
 SHORT = {"reproduced": "in band", "partly": "partly", "not reproduced": "missed"}

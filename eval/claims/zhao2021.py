@@ -175,8 +175,7 @@ def _asdm_fewest(summary: dict) -> Outcome:
         fixed = steps[label]
         ratio = (None if asdm is None else 0.0 if fixed is None else asdm / fixed)
         parts.append(effect.part(f"ASDM {asdm} / {label} {fixed} steps", ratio))
-    outcome = judged(parts)
-    return Outcome(outcome.verdict, outcome.measured + _moved(summary))
+    return judged(parts, _moved(summary))
 
 
 def _d8_oscillates(summary: dict) -> Outcome:
@@ -193,8 +192,7 @@ def _reached(label: str, steps: int | None) -> Part:
 
 def _loads_reached(summary: dict) -> Outcome:
     steps = _steps(summary)
-    outcome = judged([_reached(label, steps[label]) for label in P2P_LOADED])
-    return Outcome(outcome.verdict, outcome.measured + _moved(summary))
+    return judged([_reached(label, steps[label]) for label in P2P_LOADED], _moved(summary))
 
 
 def _sway(summary: dict) -> Outcome:
@@ -212,9 +210,8 @@ def _all_points(label: str, reached: int) -> Part:
 
 def _free_circle(summary: dict) -> Outcome:
     run = summary["free"]
-    outcome = judged([_all_points("free circle", run["points_reached"])])
-    return Outcome(outcome.verdict, outcome.measured + f"; path error "
-                                                       f"{run['path_error_mean_mm']:.1f} mm")
+    return judged([_all_points("free circle", run["points_reached"])],
+                  f"; path error {run['path_error_mean_mm']:.1f} mm")
 
 
 def _heavy_circle(summary: dict) -> Outcome:

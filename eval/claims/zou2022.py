@@ -9,8 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from eval.claims.ledger import (Claim, ClaimExperiment, Effect, Outcome, bar, criteria, judged,
-                                numbers)
+from eval.claims.ledger import Claim, ClaimExperiment, Effect, Outcome, bar, judged, numbers
 from eval.papers import zou2022 as experiments
 from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
 
@@ -95,16 +94,15 @@ def _table3(summary: dict) -> Outcome:
              for axis, ours, true in zip(AXES, rmse, truth)]
     parts.append(bar("test samples sharing a training command",
                      "reproduced" if shared == 0.0 else "partly", f"{100 * shared:.1f} %"))
-    outcome = judged(parts)
-    return Outcome(outcome.verdict, outcome.measured + f"; {summary['n_test']} test samples")
+    return judged(parts, f"; {summary['n_test']} test samples")
 
 
 def _table3_mae(summary: dict) -> Outcome:
-    outcome = judged([TABLE3_MAE[axis].part(f"MAE {axis} (vs the truth {true:.2f} mm)", ours)
-                      for axis, ours, true in zip(AXES, summary["table3_mae_vs_ases_mm"],
-                                                  summary["table3_mae_vs_truth_mm"])])
-    return Outcome(outcome.verdict, outcome.measured + "; the labels themselves "
-                   f"{summary['labels_vs_truth_rmse_mm']:.2f} mm RMSE from the true shape")
+    return judged([TABLE3_MAE[axis].part(f"MAE {axis} (vs the truth {true:.2f} mm)", ours)
+                   for axis, ours, true in zip(AXES, summary["table3_mae_vs_ases_mm"],
+                                               summary["table3_mae_vs_truth_mm"])],
+                  f"; the labels themselves {summary['labels_vs_truth_rmse_mm']:.2f} mm RMSE "
+                  "from the true shape")
 
 
 def _fig16(summary: dict) -> Outcome:
@@ -118,12 +116,11 @@ def _fig16(summary: dict) -> Outcome:
 
 
 def _table4(summary: dict) -> Outcome:
-    outcome = judged([TABLE4_RATIO.part("RSES / DNN end-point RMSE vs ASES",
-                                        summary["table4_ratio_vs_ases"])])
-    return Outcome(outcome.verdict, outcome.measured + (
-        f" (RSES {numbers(summary['table4_rses_tip_rmse_mm'])} mm, DNN "
-        f"{numbers(summary['table4_dnn_tip_rmse_mm'])} mm; vs the truth "
-        f"{summary['table4_ratio_vs_truth']:.2f})"))
+    return judged([TABLE4_RATIO.part("RSES / DNN end-point RMSE vs ASES",
+                                     summary["table4_ratio_vs_ases"])],
+                  f" (RSES {numbers(summary['table4_rses_tip_rmse_mm'])} mm, DNN "
+                  f"{numbers(summary['table4_dnn_tip_rmse_mm'])} mm; vs the truth "
+                  f"{summary['table4_ratio_vs_truth']:.2f})")
 
 
 LABELS_TOO_CLEAN = (

@@ -18,7 +18,7 @@ from soft_gym.envs.soft_arm_env import SoftArmEnv
 from soft_gym.robots import PRESETS, load_preset, save_preset
 from soft_gym.robots.arm_file import ARM_FILE_FORMAT, arm_from_preset, is_arm_file
 from soft_gym.robots.presets import CYLINDERS, volume_actuated
-from soft_gym.robots.spec import ArmSpec, SegmentSpec
+from soft_gym.robots.spec import ArmSpec
 
 pytestmark = pytest.mark.smoke
 
@@ -169,7 +169,8 @@ BAD_FILES = {  # case -> (the file's text from a good one, what the message name
     "unknown field": (lambda t: t.replace("  n_links: 4", "  n_linkz: 4"),
                       ["unknown field 'segments[0].n_linkz'", "fields of SegmentSpec are",
                        "'n_links'"]),
-    "unknown top-level field": (lambda t: t.replace("mount: hanging", "mount: hanging\ncolour: red"),
+    "unknown top-level field": (lambda t: t.replace("mount: hanging",
+                                                    "mount: hanging\ncolour: red"),
                                 ["unknown field 'colour'", "fields of ArmSpec are"]),
     "wrong type": (lambda t: t.replace("  n_links: 4", "  n_links: 4.5"),
                    ["segments[0].n_links must be an integer", "got 4.5 (float)"]),
@@ -211,7 +212,8 @@ BAD_FILES = {  # case -> (the file's text from a good one, what the message name
     "segment not a mapping": (lambda t: _segments(t, "segments:\n- 0.09\n"),
                               ["segments[0] must be a mapping of SegmentSpec fields",
                                "got 0.09 (float)"]),
-    "missing segment field": (lambda t: t.replace("- length_m: 0.09\n  outer_radius_m", "- outer_radius_m"),
+    "missing segment field": (lambda t: t.replace("- length_m: 0.09\n  outer_radius_m",
+                                                  "- outer_radius_m"),
                               ["field 'segments[0].length_m' is missing",
                                "every field of SegmentSpec"]),
     "missing field with a default": (lambda t: t.replace("  poisson_ratio: 0.48\n", ""),
