@@ -1,4 +1,4 @@
-"""Fits per second of the zhao2021 backbone fit, eqs. (7)-(10) (soft_gym.sensing.zhao2021.backbone_fit).
+"""Fits per second of the zhao2021 backbone fit, eqs. (7)-(10) (soft_gym.papers.zhao2021.backbone_fit).
 
 The shape-reconstruction pipeline of Zhao et al. 2021 runs six key-point networks and this fit per
 estimate and must reach >= 50 estimates/s on one core, so the fit's budget is 10 ms per call. The
@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from soft_gym._cli import HelpFormatter  # noqa: E402
 from soft_gym.kinematics import cc_backbone, lengths_from_curvature  # noqa: E402
-from soft_gym.sensing.zhao2021.backbone_fit import (BACKBONE_CURVES, fit_backbone,  # noqa: E402
+from soft_gym.papers.zhao2021.backbone_fit import (BACKBONE_CURVES, fit_backbone,  # noqa: E402
                                                     mean_backbone_error_m)
 
 SEGMENT_M = 0.15

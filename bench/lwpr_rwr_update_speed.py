@@ -4,7 +4,7 @@ Ho et al. 2018 learn online at about 23 Hz: every update adds the last transitio
 forward models and refits the reward-weighted local inverses over the first-in-first-out window
 (425 samples in the static experiment, 550 in the filling one). This script runs the
 ``lwpr_rwr`` controller online on the ho2018 arm (EM feedback, pre-trained as
-:mod:`eval.papers.ho2018`'s static experiment, from the calibration cache after the first run)
+:mod:`eval.papers.ho2018.experiments`'s static experiment, from the calibration cache after the first run)
 tracking random reachable targets, and times every ``update`` call that learns a transition
 once the window has filled (``time.perf_counter``; calls that learn nothing, between decisions
 or for a transition below the minimum step, are not counted). The report gives the mean, 95th percentile and maximum milliseconds per learning update,

@@ -41,9 +41,9 @@ import numpy as np
 import soft_gym  # noqa: F401
 from soft_gym._cli import HelpFormatter, positive_int
 from soft_gym.robots import get_preset
-from soft_gym.sensing.wang2023.elm import OSELM
-from soft_gym.sensing.wang2023.exploration import spiral_fractions
-from soft_gym.sensing.wang2023.vision_pose import VisionPoseEstimator
+from soft_gym.papers.wang2023.elm import OSELM
+from soft_gym.papers.wang2023.exploration import spiral_fractions
+from soft_gym.papers.wang2023.vision_pose import VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber
 from soft_gym.engines.pybullet.simulator import ArmSimulator

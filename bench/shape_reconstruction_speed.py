@@ -1,5 +1,5 @@
 """Estimates per second of zhao2021's whole shape reconstruction: six SFE-PD networks and the
-backbone fit (soft_gym.sensing.zhao2021.shape_reconstruction), against the target of >= 50 per second on
+backbone fit (soft_gym.papers.zhao2021.shape_reconstruction), against the target of >= 50 per second on
 one core (the paper: 0.37 s per estimate).
 
 A small model is trained on the zhao2021 arm (or taken from the calibration cache), then the
@@ -35,10 +35,10 @@ def main(argv: list[str] | None = None) -> None:
     import torch
 
     from soft_gym.robots.presets import get_preset
-    from soft_gym.sensing.zhao2021.backbone_fit import fit_backbone
-    from soft_gym.sensing.zhao2021.sfe_pd import sequences
-    from soft_gym.procedures.zhao2021_exploration import cached_reconstruction, exploration_of
-    from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
+    from soft_gym.papers.zhao2021.backbone_fit import fit_backbone
+    from soft_gym.papers.zhao2021.sfe_pd import sequences
+    from soft_gym.papers.zhao2021.exploration import cached_reconstruction, exploration_of
+    from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
     from soft_gym.sensors.strain_gauge import StrainGauges
 
     torch.set_num_threads(1)

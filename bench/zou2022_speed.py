@@ -2,10 +2,10 @@
 stereo pair in at most 30 ms, the DNN in under 0.1 ms per estimate (the paper's CC kinematics
 took ~9 ms; its ZED ran ASES offline).
 
-ASES (soft_gym.sensing.zou2022.stereo_shape): frame pairs of the zou2022 arm are rendered in
+ASES (soft_gym.papers.zou2022.stereo_shape): frame pairs of the zou2022 arm are rendered in
 ``--poses`` random settled poses, then each pair is processed ``--repeats`` times (Gaussian
 filter, HSV mask, contour, the SOM of both images, triangulation); the DNN
-(soft_gym.sensing.zou2022.shape_dnn): a Table 2 network (trained for a few epochs on CC shapes: the speed
+(soft_gym.papers.zou2022.shape_dnn): a Table 2 network (trained for a few epochs on CC shapes: the speed
 does not depend on the weights) predicts ``--repeats`` single readings through its numpy path,
 as the ``encoder_dnn`` source does each env step. Prints milliseconds per estimate (median, 95th
 percentile, maximum). OpenCV and torch run on one thread.
@@ -50,9 +50,9 @@ def main(argv: list[str] | None = None) -> None:
     import torch
 
     from soft_gym.robots.presets import get_preset
-    from soft_gym.sensing.zou2022.cc_shape import cc_shape_points
-    from soft_gym.sensing.zou2022.shape_dnn import ShapeDNN, default_stereo
-    from soft_gym.sensing.zou2022.stereo_shape import estimate_stereo_shape
+    from soft_gym.papers.zou2022.cc_shape import cc_shape_points
+    from soft_gym.papers.zou2022.shape_dnn import ShapeDNN, default_stereo
+    from soft_gym.papers.zou2022.stereo_shape import estimate_stereo_shape
     from soft_gym.engines.pybullet.simulator import ArmSimulator
 
     cv2.setNumThreads(1)

@@ -60,17 +60,17 @@ from eval import compare as compare_module
 from eval import runner  # runner.run_many, looked up at each call (tests stand in for it)
 from eval import datasets as datasets_module
 from eval import suite as suite_module
-from eval.claims import CLAIMS, PAPERS
+from eval.claims import CLAIMS, claim_papers
 from eval.datasets import write as dataset_write
 from eval.claims.report import ledger_table, summary_line, write_ledger
 from eval.claims.run import run_ledger, select_claims
 from eval.metrics import add_improvement, improvement, summarize, summary_table
-from eval.papers import estimation as estimation_module
-from eval.papers import ho2018 as ho2018_module
-from eval.papers import zhao2021 as zhao2021_module
-from eval.papers import zou2022 as zou2022_module
-from eval.papers import zou2022_levers
-from eval.papers.estimation import EXPERIMENTS, run_experiments
+import eval.papers.wang2023.estimation as estimation_module
+import eval.papers.ho2018.experiments as ho2018_module
+import eval.papers.zhao2021.experiments as zhao2021_module
+import eval.papers.zou2022.experiments as zou2022_module
+import eval.papers.zou2022.levers as zou2022_levers
+from eval.papers.wang2023.estimation import EXPERIMENTS, run_experiments
 from eval.palette import policy_color, policy_label
 from eval.report import (markdown_table, plot_error_time, plot_trajectory, write_records_csv,
                          write_results_json)
@@ -82,9 +82,9 @@ from soft_gym._cli import (HelpFormatter, check_environment, check_output_dir, f
 from soft_gym._validation import SEED_MAX
 from soft_gym.engines import DEFAULT_ENGINE, ENGINES
 from soft_gym.envs.observations import OBSERVATION_PARTS
-from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
-from soft_gym.sensing.zhao2021.backbone_fit import BACKBONE_CURVES
-from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
+from soft_gym.papers.zou2022.shape_dnn import ShapeDNNConfig
+from soft_gym.papers.zhao2021.backbone_fit import BACKBONE_CURVES
+from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
 
 
 DEFAULT_WORKERS = max(1, min(2, os.cpu_count() or 1))
@@ -610,7 +610,7 @@ def _claims_parser(sub) -> argparse.ArgumentParser:
     claims = sub.add_parser("claims", help="the papers' claims as a ledger: reproduced, partly "
                             "or not, per seed", description=textwrap.fill(CLAIMS_DESCRIPTION, 96),
                             formatter_class=HelpFormatter)
-    claims.add_argument("--papers", nargs="+", default=list(PAPERS), choices=list(PAPERS),
+    claims.add_argument("--papers", nargs="+", default=list(claim_papers()), choices=list(claim_papers()),
                         help="whose claims")
     claims.add_argument("--claims", nargs="+", default=None, metavar="KEY",
                         help=f"only these claims (of {len(CLAIMS)}: " + ", ".join(CLAIMS) + ")")
@@ -646,7 +646,7 @@ def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         parser.error("--resume runs the missing experiments; --report-only runs none: give one")
     backend = _ray_backend(parser, args, "eval.claims.ray_backend")
     if args.docs and (args.quick or args.claims is not None
-                      or list(args.papers) != list(PAPERS)):
+                      or list(args.papers) != list(claim_papers())):
         parser.error("--docs writes the full ledger: every paper and claim, without --quick")
     if args.docs:
         check_output_dir(parser, "--docs", DOCS_LEDGER.parent)
@@ -677,7 +677,7 @@ def _run_claims(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
 def _claims_command(args: argparse.Namespace) -> str:
     """The command line that makes this ledger (for its header)."""
     parts = ["python -m eval claims"]
-    if list(args.papers) != list(PAPERS):
+    if list(args.papers) != list(claim_papers()):
         parts.append("--papers " + " ".join(args.papers))
     if args.claims is not None:
         parts.append("--claims " + " ".join(args.claims))

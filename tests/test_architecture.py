@@ -249,6 +249,58 @@ def test_sensing_and_tasks_never_import_a_simulator():
                        "soft_gym/procedures/ and hand its result down:\n" + "\n".join(wrong))
 
 
+SIMULATOR_MODULES = (ENGINE_PACKAGE, "soft_gym.simulator", "soft_gym.procedures", "soft_gym.envs")
+"""What drives a simulator: an estimator imports none of them, directly or through another
+module."""
+
+
+def _reached_from(start: str, graph: dict[str, dict[str, Import]]) -> dict[str, list[str]]:
+    """Every repository module ``start`` imports, directly or not: module -> the import chain."""
+    chains = {start: [start]}
+    frontier = [start]
+    while frontier:
+        module = frontier.pop()
+        for target in graph.get(module, {}):
+            if target not in chains:
+                chains[target] = chains[module] + [target]
+                frontier.append(target)
+    return chains
+
+
+def _paper_estimator_modules() -> dict[str, set[str]]:
+    """Each registered paper's feedback-source modules, by paper key."""
+    from soft_gym.papers import PAPERS
+
+    return {key: {source.__module__ for source in paper.feedback_sources}
+            for key, paper in PAPERS.items()}
+
+
+@pytest.mark.parametrize("paper", sorted(_paper_estimator_modules()))
+def test_a_papers_estimators_never_reach_a_simulator(paper):
+    """Checked per paper folder: from the paper's feedback sources, no chain of imports reaches
+    what drives a simulator; its calibration procedures (which may) are handed in by the paper's
+    registration instead."""
+    graph = _graph()
+    wrong = []
+    for start in sorted(_paper_estimator_modules()[paper]):
+        for module, chain in _reached_from(start, graph).items():
+            if module.startswith(SIMULATOR_MODULES):
+                wrong.append(" -> ".join(chain))
+    assert not wrong, (f"{paper}'s estimators reach a simulator (move what drives one into the "
+                       f"paper's calibration procedure):\n" + "\n".join(wrong))
+
+
+def test_every_paper_folder_is_a_registered_paper_with_its_estimators_inside():
+    from soft_gym.papers import PAPERS
+
+    folders = sorted(path.name for path in (ROOT / "soft_gym" / "papers").iterdir()
+                     if (path / "__init__.py").exists())
+    assert folders == sorted(PAPERS)
+    for key, modules in _paper_estimator_modules().items():
+        assert all(module.startswith(f"soft_gym.papers.{key}.") for module in modules), modules
+        assert PAPERS[key].evaluation in (None, f"eval.papers.{key}")
+
+
 def test_only_the_engine_package_imports_a_physics_engine():
     wrong = [f"{found.path.relative_to(ROOT)}:{found.line} imports {found.name}"
              for found in _all_imports()

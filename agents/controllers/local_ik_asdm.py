@@ -19,7 +19,7 @@ is one command held for ``settle_s`` (1 s, 20 env steps at the usual 0.05 s cont
 :meth:`predict` returns the held command between decisions.
 
 The network is trained on the same random exploration as the shape reconstruction
-(:func:`soft_gym.procedures.zhao2021_exploration.cached_reconstruction`, on a private copy of the arm
+(:func:`soft_gym.papers.zhao2021.exploration.cached_reconstruction`, on a private copy of the arm
 with the env's gauge model; cached on disk), from pairs of consecutive samples with the ground
 truth tip of the exploration (the paper's RGB-D camera). With ``dataset=`` (the id of
 ``python -m eval datasets``'s ``soft-arm/zhao2021/exploration-v0``, ``dataset_root=`` its root)
@@ -54,9 +54,9 @@ from soft_gym._validation import (require_in_range, require_integer, require_lea
                                   require_positive, require_seed)
 from soft_gym.robots.actuation import Actuation
 from soft_gym.sensing.calibration_cache import cached, sensor_description
-from soft_gym.sensing.zhao2021.shape_exploration import GAUGE_SETTINGS
-from soft_gym.procedures.zhao2021_exploration import exploration_digest, exploration_of
-from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
+from soft_gym.papers.zhao2021.shape_exploration import GAUGE_SETTINGS
+from soft_gym.papers.zhao2021.exploration import exploration_digest, exploration_of
+from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
 from soft_gym.sensors.strain_gauge import StrainGauges
 
 _MM = 1000.0
@@ -88,7 +88,7 @@ class LocalIKASDMController(BaselinePolicy):
             most 1000 iterations, Adam at 0.001).
         skip: the network adds ``A_n`` to its output layer (:class:`LocalIKNetwork`).
         exploration: options of the exploration data set
-            (:class:`~soft_gym.sensing.zhao2021.shape_reconstruction.ReconstructionConfig`, e.g.
+            (:class:`~soft_gym.papers.zhao2021.shape_reconstruction.ReconstructionConfig`, e.g.
             ``{"n_free": 400, "n_loaded": 200}`` for a quick model); default the paper's 6000.
         seed: seeds the network's training.
         cache: keep the trained network on disk and reuse it.

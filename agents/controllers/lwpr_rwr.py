@@ -417,7 +417,7 @@ class LWPRRWRController(BaselinePolicy):
         20 % is kept (ho2018 Fig. 4).
 
         :param on_epoch: called after each epoch with the model and the indices of the training
-            and test transitions (e.g. :func:`eval.papers.ho2018.run_pretraining_check`); it must
+            and test transitions (e.g. :func:`eval.papers.ho2018.experiments.run_pretraining_check`); it must
             not change the model.
         """
         p, u, du, dp = data

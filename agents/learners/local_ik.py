@@ -37,7 +37,7 @@ from tqdm.auto import tqdm
 
 from soft_gym._model_files import read_model_state, write_model_state
 from soft_gym._validation import require_integer, require_learning_rate, require_positive
-from soft_gym.sensing.zhao2021.sfe_pd import Normaliser
+from soft_gym.papers.zhao2021.sfe_pd import Normaliser
 
 _FORMAT = "soft-arm-gym local-ik 1"
 HIDDEN_LAYERS = (7, 5)

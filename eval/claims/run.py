@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from eval.claims import CLAIMS, EXPERIMENTS, PAPERS
+from eval.claims import CLAIMS, EXPERIMENTS, claim_papers
 from eval.claims.ledger import NOT_RUN, Claim, ClaimExperiment, Outcome, combine
 from eval.report import to_jsonable, write_json
 from eval.suite.grid import canonical_json
@@ -44,10 +44,11 @@ def select_claims(papers: Sequence[str] | None = None,
                   claims: Sequence[str] | None = None) -> list[Claim]:
     """The claims of ``papers`` (default: every paper's), or only those named in ``claims``;
     an unknown paper or claim is a ``ValueError`` naming it and the known ones."""
-    papers = list(PAPERS) if papers is None else list(papers)
-    unknown = [paper for paper in papers if paper not in PAPERS]
+    known = claim_papers()
+    papers = list(known) if papers is None else list(papers)
+    unknown = [paper for paper in papers if paper not in known]
     if unknown:
-        raise ValueError(f"papers must be among {list(PAPERS)}, got {unknown}")
+        raise ValueError(f"papers must be among {list(known)}, got {unknown}")
     chosen = [claim for claim in CLAIMS.values() if claim.paper in papers]
     if claims is not None:
         missing = [key for key in claims if key not in CLAIMS]

@@ -25,7 +25,7 @@ PAPER_CARDS: dict[str, dict[str, Any]] = {
                "`n_free` samples are taken with the arm free, the next `n_loaded` with a 75 g "
                "tip mass (the same walk continues). This is the record `strain_sr` and "
                "`local_ik_asdm` learn from, taken by the procedure that builds them "
-               "(`soft_gym.procedures.zhao2021_exploration`), so the calibration cache shares it.",
+               "(`soft_gym.papers.zhao2021.exploration`), so the calibration cache shares it.",
         "observations": "`strain` (6,): the strain gauges' readings (3 per segment, the sensor's "
                         "units: bending strain with the gauges' noise).",
         "infos": "`command_pa` (6,) Pa; `tip_position_m` (3,) m; `key_points_m` (6, 3) m, "
@@ -43,7 +43,7 @@ PAPER_CARDS: dict[str, dict[str, Any]] = {
                "labels seven backbone points. A sample where ASES lost the arm is replaced by "
                "a copy of a good one turned about the axis (the paper's supplement; "
                "`augmented`). Train / validation / test sets are dealt out by command "
-               "(`split`). The procedure is `soft_gym.procedures.zou2022_dataset`.",
+               "(`split`). The procedure is `soft_gym.papers.zou2022.dataset`.",
         "observations": "`encoder` (3,): chamber lengths from the cable encoders (m).",
         "infos": "`command_pa` (3,) Pa; `stereo_labels_m` (7, 3) m, ASES's P_0..P_6 (the "
                  "DNN's labels); `true_points_m` (7, 3) m, the simulator's P_0..P_6; "
@@ -61,7 +61,7 @@ PAPER_CARDS: dict[str, dict[str, Any]] = {
                "reads the helical FBG fiber and the eye-in-hand camera, whose ORB + PnP pose "
                "labels the FBG shifts when it trusts the frame. These labelled samples "
                "initialise F-emp (`fused`, `camera`, `fbg` feedback). The procedure is "
-               "`soft_gym.procedures.wang2023_calibration.calibrate_pipeline`.",
+               "`soft_gym.papers.wang2023.calibration.calibrate_pipeline`.",
         "observations": "`fbg` (17,): Bragg wavelength shifts (nm).",
         "infos": "`command_pa` (3,) Pa; `pressures_pa` (3,) Pa, the chambers' pressures "
                  "(lagging the command); `tip_position_m` (3,) m and `tip_quaternion` (4,) "

@@ -130,16 +130,16 @@ def _rows(column: Any) -> np.ndarray:
 
 
 def read_exploration(dataset_id: str, root: DatasetRoot, expected: dict[str, Any]):
-    """zhao2021's exploration (:class:`~soft_gym.sensing.zhao2021.shape_exploration.ShapeDataset`)
+    """zhao2021's exploration (:class:`~soft_gym.papers.zhao2021.shape_exploration.ShapeDataset`)
     from its dataset.
 
     :param dataset_id: the dataset's id (``soft-arm/zhao2021/exploration-v0``).
     :param root: its datasets root (Minari's default when ``None``).
     :param expected: the method's collection settings
-        (:func:`~soft_gym.procedures.zhao2021_exploration.exploration_key`).
+        (:func:`~soft_gym.papers.zhao2021.exploration.exploration_key`).
     :raises ValueError: see :func:`check_settings` and :func:`~soft_gym.datasets.store.load_dataset`.
     """
-    from soft_gym.sensing.zhao2021.shape_exploration import ShapeDataset
+    from soft_gym.papers.zhao2021.shape_exploration import ShapeDataset
 
     episode, _ = _episode(dataset_id, root, "zhao2021", expected)
     infos = episode.infos
@@ -151,16 +151,16 @@ def read_exploration(dataset_id: str, root: DatasetRoot, expected: dict[str, Any
 
 
 def read_zou_dataset(dataset_id: str, root: DatasetRoot, expected: dict[str, Any]):
-    """zou2022's data set (:class:`~soft_gym.sensing.zou2022.shape_dnn.ZouDataset`, its split
+    """zou2022's data set (:class:`~soft_gym.papers.zou2022.shape_dnn.ZouDataset`, its split
     included) from its dataset.
 
     :param dataset_id: the dataset's id (``soft-arm/zou2022/stereo-labels-v0``).
     :param root: its datasets root (Minari's default when ``None``).
     :param expected: the method's collection settings
-        (:func:`~soft_gym.procedures.zou2022_dataset.dataset_key`).
+        (:func:`~soft_gym.papers.zou2022.dataset.dataset_key`).
     :raises ValueError: see :func:`check_settings` and :func:`~soft_gym.datasets.store.load_dataset`.
     """
-    from soft_gym.sensing.zou2022.shape_dnn import ZouDataset
+    from soft_gym.papers.zou2022.shape_dnn import ZouDataset
 
     episode, info = _episode(dataset_id, root, "zou2022", expected)
     infos = episode.infos

@@ -190,7 +190,7 @@ class SoftArmEnv(gym.Env):
         sensing: options of the feedback source: the camera/F-emp pipeline's (``n_init``,
             ``femp``, ``fusion``, ``vision``, ``exploration``, ``map_steps``, ``femp_prior``),
             ``strain_sr``'s (:class:`~soft_gym.sensing.feedback.StrainShapeFeedback`), ``stereo``'s
-            or ``encoder_dnn``'s (:mod:`soft_gym.sensing.zou2022.feedback`).
+            or ``encoder_dnn``'s (:mod:`soft_gym.papers.zou2022.feedback`).
         action_mode: ``"absolute"`` or ``"delta"``.
         delta_fraction: pressure change per unit action in delta mode, as a fraction of p_max.
         actuation: ``"pressure"`` (default) or ``"volume"``: each action drives a cylinder's

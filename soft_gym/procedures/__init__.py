@@ -7,9 +7,10 @@ start) lives here, and hands its results down:
 | module                  | what it drives                                                      |
 |-------------------------|---------------------------------------------------------------------|
 | `calibration`           | every calibrating feedback source's procedure, by name              |
-| `wang2023_calibration`  | the spiral exploration that calibrates the camera/F-emp pipeline    |
-| `zhao2021_exploration`  | the random exploration and the SFE-PD networks trained on it        |
-| `zou2022_dataset`       | the ASES-labelled data set and the shape DNN trained on it          |
 | `workspace`             | the reachable tips (reach targets, track paths)                     |
 | `positioning`           | the tip driven to an episode's start (point to point)               |
+
+Each paper's own procedures (wang2023's spiral exploration, zhao2021's exploration and arm fit,
+zou2022's ASES-labelled data set) live in its folder, ``soft_gym/papers/<key>/``, and join
+``calibration.CALIBRATIONS`` when the paper is registered.
 """

@@ -22,18 +22,10 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-import numpy as np
-
 from soft_gym._registry import Registry
 from soft_gym.engines import make_simulator
 from soft_gym.robots.spec import ArmSpec
-from soft_gym.procedures.wang2023_calibration import calibrate_pipeline
-from soft_gym.procedures.zhao2021_exploration import cached_reconstruction
-from soft_gym.procedures.zou2022_dataset import cached_shape_dnn
-from soft_gym.sensing.calibration_cache import cached
 from soft_gym.sensing.feedback_base import CalibrationContext, FeedbackSource
-from soft_gym.sensing.wang2023.pipeline import SensingPipeline
-from soft_gym.sensors.stereo import StereoCamera
 from soft_gym.simulator import Simulator
 
 Calibration = Callable[[FeedbackSource, CalibrationContext, bool], None]
@@ -62,27 +54,7 @@ def private_simulator(context: CalibrationContext) -> Simulator:
     return sim
 
 
-def calibrate_wang2023_pipeline(source: FeedbackSource, context: CalibrationContext,
-                                use_cache: bool = True) -> None:
-    """The camera/F-emp pipeline of ``fused``, ``camera`` and ``fbg`` (wang2023 Section IV-B):
-    calibrated on the arm at rest after ``settle_s``, with the sensors' noise seeded by 0."""
-    pipeline = SensingPipeline(context.make_sensor("image"), context.make_sensor("fbg"),
-                               **source.options)
-
-    def compute() -> tuple:
-        sim = private_simulator(context)
-        try:
-            sim.reset(settle_s=context.settle_s)
-            calibrate_pipeline(pipeline, sim, np.random.default_rng(0))
-        finally:
-            sim.close()
-        return (pipeline.vision, pipeline.femp, pipeline.calibration_samples)
-
-    key = {**context.key, **source.calibration_key()}
-    source.set_calibration((pipeline, cached(key, compute, use_cache=use_cache)))
-
-
-def _dataset_options(source: FeedbackSource) -> dict[str, Any]:
+def dataset_options(source: FeedbackSource) -> dict[str, Any]:
     """``dataset`` and ``dataset_root`` of a source given a dataset to train on (its
     ``sensing={"dataset": id}``), else nothing (the procedure collects)."""
     dataset = getattr(source, "dataset", None)
@@ -91,38 +63,9 @@ def _dataset_options(source: FeedbackSource) -> dict[str, Any]:
     return {"dataset": dataset, "dataset_root": getattr(source, "dataset_root", None)}
 
 
-def calibrate_zhao2021_reconstruction(source: FeedbackSource, context: CalibrationContext,
-                                      use_cache: bool = True) -> None:
-    """``strain_sr``: zhao2021's exploration with the env's gauge model, then the networks."""
-    # the paper's exploration and training take ~10 minutes on one core: show their bars
-    # (nothing is shown when the model comes from the cache)
-    source.set_calibration(cached_reconstruction(context.spec, context.make_sensor("strain"),
-                                                 source.config, use_cache=use_cache,
-                                                 progress=True, **_dataset_options(source)))
-
-
-def calibrate_zou2022_dnn(source: FeedbackSource, context: CalibrationContext,
-                          use_cache: bool = True) -> None:
-    """``encoder_dnn``: zou2022's ASES-labelled data set, then the DNN's training."""
-    options = source.labelling_stereo_options()
-    try:
-        stereo = StereoCamera(**options)
-    except TypeError as error:
-        raise ValueError(f"stereo must hold StereoCamera keyword arguments, got "
-                         f"{sorted(source.stereo_options)} ({error})") from None
-    # the paper-sized data set takes ~25 minutes on one core: show the bars (nothing is
-    # shown when the data set and network come from the cache)
-    source.set_calibration(cached_shape_dnn(context.spec, context.make_sensor("encoder"), stereo,
-                                            source.config, use_cache=use_cache, progress=True,
-                                            **_dataset_options(source)))
-
-
 CALIBRATIONS: Registry[Calibration] = Registry("calibration")
-"""Calibration procedures by feedback-source name."""
-for _name in ("fused", "camera", "fbg"):
-    CALIBRATIONS.register(_name, calibrate_wang2023_pipeline)
-CALIBRATIONS.register("strain_sr", calibrate_zhao2021_reconstruction)
-CALIBRATIONS.register("encoder_dnn", calibrate_zou2022_dnn)
+"""Calibration procedures by feedback-source name, filled by each paper's registration
+(:func:`soft_gym.papers.register_paper`)."""
 
 
 def calibrate(source: FeedbackSource, context: CalibrationContext,
@@ -141,6 +84,5 @@ def calibrate(source: FeedbackSource, context: CalibrationContext,
     CALIBRATIONS[source.name](source, context, use_cache)
 
 
-__all__ = ["CALIBRATIONS", "calibrate", "calibration_key", "private_simulator",
-                      "calibrate_wang2023_pipeline", "calibrate_zhao2021_reconstruction",
-                      "calibrate_zou2022_dnn"]
+__all__ = ["CALIBRATIONS", "calibrate", "calibration_key", "dataset_options",
+           "private_simulator"]

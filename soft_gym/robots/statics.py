@@ -11,7 +11,7 @@ every sub-link and of a weight hung at the tip. That is what both engines settle
 semi-implicit springs give ``tau = k0 q_rest - K(q) q`` exactly at rest (docs/architecture.md,
 "Semi-implicit joint springs"); :class:`StaticArm` finds it directly, by Newton's method on the
 potential energy, in milliseconds instead of seconds of simulated settling. The arm's
-calibration to a paper's poses and reach (:mod:`soft_gym.procedures.zhao2021_arm_fit`) runs on
+calibration to a paper's poses and reach (:mod:`soft_gym.papers.zhao2021.arm_fit`) runs on
 it; ``tests/soft_gym/robots/test_statics.py`` checks it against the settled PyBullet arm.
 """
 

@@ -1,14 +1,11 @@
-"""The papers' estimators: from one step's sensor readings to the tip pose (and backbone).
+"""The estimators' shared layer: from one step's sensor readings to the tip pose (and backbone).
 
-One folder per paper (``wang2023/``, ``zhao2021/``, ``zou2022/``: its estimators and its feedback
-sources); at the root, what they share: the protocol (:mod:`~soft_gym.sensing.feedback_base`),
-the :class:`~soft_gym.sensing.measurement.Measurement`, the sources of no paper in particular
-(:mod:`~soft_gym.sensing.feedback`: ``ground_truth``, ``em``) and the calibration cache.
-
-One folder per paper (``wang2023/``, ``zhao2021/``, ``zou2022/``: its estimators and its feedback
-sources); at the root, what they share: the protocol (:mod:`~soft_gym.sensing.feedback_base`),
-the :class:`~soft_gym.sensing.measurement.Measurement`, the sources of no paper in particular
-(:mod:`~soft_gym.sensing.feedback`: ``ground_truth``, ``em``) and the calibration cache.
+Here: the protocol (:mod:`~soft_gym.sensing.feedback_base`), the
+:class:`~soft_gym.sensing.measurement.Measurement`, the backbone's key points
+(:mod:`~soft_gym.sensing.key_points`), the sources of no paper in particular
+(:mod:`~soft_gym.sensing.feedback`: ``ground_truth``, ``em``) and the calibration cache. Each
+paper's estimators and sources are in its folder, ``soft_gym/papers/<key>/``, and join
+:data:`FEEDBACK_SOURCES` when the paper is registered (:mod:`soft_gym.papers`).
 
 Nothing here drives a simulator: an estimator sees a
 :class:`~soft_gym.sensing.measurement.Measurement` (the readings and the commands sent) and what a
@@ -21,14 +18,11 @@ from __future__ import annotations
 from soft_gym._registry import Registry
 from soft_gym.sensing.feedback import EMFeedback, GroundTruthFeedback
 from soft_gym.sensing.feedback_base import CalibrationContext, FeedbackEstimate, FeedbackSource
-from soft_gym.sensing.wang2023.feedback import CameraFeedback, FEmpFeedback, FusedFeedback
-from soft_gym.sensing.zhao2021.feedback import StrainShapeFeedback
-from soft_gym.sensing.zou2022.feedback import EncoderCCFeedback, EncoderDNNFeedback, StereoFeedback
 
 FEEDBACK_SOURCES: Registry[type[FeedbackSource]] = Registry("feedback")
-"""Feedback sources by name (the env's ``feedback=``)."""
-for _source in (GroundTruthFeedback, EMFeedback, CameraFeedback, FEmpFeedback, FusedFeedback,
-                StrainShapeFeedback, EncoderCCFeedback, StereoFeedback, EncoderDNNFeedback):
+"""Feedback sources by name (the env's ``feedback=``): the two of no paper in particular here,
+each paper's own added by its registration (:func:`soft_gym.papers.register_paper`)."""
+for _source in (GroundTruthFeedback, EMFeedback):
     FEEDBACK_SOURCES.register(_source.name, _source)
 
 

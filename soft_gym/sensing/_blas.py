@@ -1,6 +1,6 @@
 """One BLAS thread for the sensing pipeline's small matrices.
 
-The sensing pipeline's linear algebra is small: F-emp's OS-ELM (:mod:`soft_gym.sensing.wang2023.elm`)
+The sensing pipeline's linear algebra is small: F-emp's OS-ELM (:mod:`soft_gym.papers.wang2023.elm`)
 updates a 200 x 200 information matrix every step and refactors it by Cholesky every 50.
 OpenBLAS (bundled with numpy, SciPy and OpenCV) splits even these over all its threads, and on a
 busy machine (several simulators, a learner, the environment workers of a vectorised env) a split

@@ -20,8 +20,8 @@ See docs/architecture.md, "Feedback sources".
 | `encoder_dnn`  | `encoder`       | zou2022's DNN on the chamber lengths, trained on ASES labels |
 
 This module holds the two sources of no paper in particular (``ground_truth``, ``em``); the
-papers' own are in :mod:`soft_gym.sensing.wang2023.feedback`, :mod:`soft_gym.sensing.zhao2021.feedback`
-and :mod:`soft_gym.sensing.zou2022.feedback`; the protocol in :mod:`soft_gym.sensing.feedback_base`.
+papers' own are in :mod:`soft_gym.papers.wang2023.feedback`, :mod:`soft_gym.papers.zhao2021.feedback`
+and :mod:`soft_gym.papers.zou2022.feedback`; the protocol in :mod:`soft_gym.sensing.feedback_base`.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ import numpy as np
 
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.measurement import Measurement
-from soft_gym.sensing.zhao2021.shape_exploration import key_points_from_backbone
+from soft_gym.sensing.key_points import key_points_from_backbone
 
 
 class GroundTruthFeedback(FeedbackSource):

@@ -5,7 +5,7 @@ sensors' readings and the commands sent), as a real robot's estimator does: it n
 simulator. What it learns before the first step (a calibration) is computed by a procedure
 (:mod:`soft_gym.procedures.calibration`) that drives a private simulator and hands the result
 to :meth:`FeedbackSource.set_calibration`. Kept apart from the sources themselves
-(:mod:`soft_gym.sensing.feedback`, :mod:`soft_gym.sensing.zou2022.feedback`), so every module
+(:mod:`soft_gym.sensing.feedback`, :mod:`soft_gym.papers.zou2022.feedback`), so every module
 defining sources imports this one and none imports another; the registry
 (:data:`soft_gym.sensing.FEEDBACK_SOURCES`) is filled in the package's ``__init__``. See
 docs/architecture.md, "Feedback sources".
@@ -13,6 +13,7 @@ docs/architecture.md, "Feedback sources".
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from typing import Any, Callable, ClassVar
 
@@ -122,3 +123,16 @@ class FeedbackSource:
         """``P_0..P_6`` (m, (7, 3)) of this step's ``estimate``, asked for only by an env with a
         ``shape`` part (default: the estimate's ``shape_points_m``)."""
         return estimate.shape_points_m
+
+
+def dataset_option(options: dict[str, Any]) -> tuple[str | None, str | os.PathLike | None]:
+    """Pop ``dataset`` (a dataset id, or ``None``) and ``dataset_root`` (a directory, or
+    ``None``) from a source's ``options``; ``ValueError`` for another type."""
+    dataset, root = options.pop("dataset", None), options.pop("dataset_root", None)
+    if dataset is not None and not isinstance(dataset, str):
+        raise ValueError(f"dataset must be a dataset id (str) or None, got {dataset!r}")
+    if root is not None and not isinstance(root, (str, os.PathLike)):
+        raise ValueError(f"dataset_root must be a directory (str or path) or None, got {root!r}")
+    if root is not None and dataset is None:
+        raise ValueError("dataset_root is given without a dataset")
+    return dataset, root

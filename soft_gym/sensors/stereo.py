@@ -25,7 +25,7 @@ generator, left image first. The cameras are fixed, so :class:`~soft_gym.sensors
 MotionBlur` (which models camera motion) leaves their images sharp. Self-occlusion (Fig. 13b) is
 no fault here: it happens when the simulated arm bends towards the cameras.
 
-What ASES (:func:`~soft_gym.sensing.zou2022.stereo_shape.estimate_stereo_shape`) makes of them, measured
+What ASES (:func:`~soft_gym.papers.zou2022.stereo_shape.estimate_stereo_shape`) makes of them, measured
 on 20 random settled poses of the zou2022 arm in the 320 x 180 pair (clean: never lost, 3.0 mm
 mean point error): ``low_light`` at strength 0.5 / 0.7 is never lost (3.0 / 3.1 mm), at 0.75 always
 (the dim tip drops out of the mask: a broken contour or a tip end that meets neither arm nor
@@ -33,7 +33,7 @@ backdrop), at 0.85 or 1 always (no arm pixels); ``led_glare`` at strength 1 is l
 (9.0 mm on the other 3), at 0.5 on 13 of 20 (2.7 mm on the other 7; a tip washed out by the glare
 is caught by the occlusion check); a neutral plate (``rgba`` grey) over the whole pair, or over
 60 % of it from either side, from the top (the base hidden) or from the bottom (the tip half
-hidden: the occlusion check of :mod:`~soft_gym.sensing.zou2022.stereo_shape` finds the plate at the
+hidden: the occlusion check of :mod:`~soft_gym.papers.zou2022.stereo_shape` finds the plate at the
 visible arm's tip end, where the truncated arm gave 46 mm mean error before) is lost on every
 frame. From the bottom, 45 % is lost on 18 of 20 frames (3.1 mm on the other 2) and 30 % on 4 of
 20 (tips touching the plate's edge; 3.2 mm on the rest). The default skin-coloured plate lies

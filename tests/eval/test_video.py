@@ -145,7 +145,7 @@ def test_video_flag_puts_an_mp4_path_next_to_each_csv(command, tmp_path, monkeyp
 def test_estimation_video(tmp_path):
     """``run_experiments(video=True)`` writes ``<experiment>.mp4`` beside the CSV: the scene and
     the eye-in-hand frame with the estimates, one frame after reset and one per step."""
-    from eval.papers.estimation import run_estimation
+    from eval.papers.wang2023.estimation import run_estimation
 
     record = run_estimation("lighting", steps=4, progress=False,
                             video_path=tmp_path / "lighting.mp4")

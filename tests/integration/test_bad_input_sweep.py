@@ -17,9 +17,9 @@ from agents.policies import make_policy
 from cli_errors import assert_one_line_error
 from eval import suite
 from soft_gym._validation import SEED_MAX
-from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
-from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
-from soft_gym.sensing.zou2022.stereo_shape import ASESConfig
+from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
+from soft_gym.papers.zou2022.shape_dnn import ShapeDNNConfig
+from soft_gym.papers.zou2022.stereo_shape import ASESConfig
 from suite_specs import tiny_suite
 from train import sweep
 from train.__main__ import main as train_main
@@ -326,8 +326,8 @@ def test_a_foreign_state_fails_the_way_the_cache_rebuilds_on(load, cache_dir):
     """What the calibrations' ``use`` raises on a foreign state is one of the cache's
     rebuild-on errors (the issue's KeyError 'n_gauges', not an uncaught one)."""
     from agents.learners.local_ik import LocalIKNetwork
-    from soft_gym.sensing.zhao2021.shape_reconstruction import ShapeReconstructor
-    from soft_gym.sensing.zou2022.shape_dnn import ShapeDNN
+    from soft_gym.papers.zhao2021.shape_reconstruction import ShapeReconstructor
+    from soft_gym.papers.zou2022.shape_dnn import ShapeDNN
 
     from_state = {"zhao2021": ShapeReconstructor.from_state, "zou2022": ShapeDNN.from_state,
                   "local_ik": LocalIKNetwork.from_state}[load]

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import eval.__main__ as eval_main
-import eval.papers.estimation as estimation
-import eval.papers.ho2018_factors as ho2018_factors
+import eval.papers.wang2023.estimation as estimation
+import eval.papers.ho2018.factors as ho2018_factors
 from soft_gym import demo
 from train import ship
 from train.__main__ import main as train_main
@@ -50,7 +50,7 @@ COMMANDS = {
     "bench gp_speed": ("gp_speed", [], "--window"),
     "bench integration_tradeoff": ("integration_tradeoff", [], "--links"),
     "bench lwpr_rwr_update_speed": ("lwpr_rwr_update_speed", [], "--window"),
-    "eval.papers.ho2018_factors": (ho2018_factors.main, [], "--seeds"),
+    "eval.papers.ho2018.factors": (ho2018_factors.main, [], "--seeds"),
     "bench revision_speed": ("revision_speed", [], "--rounds"),
     "bench sensor_speed": ("sensor_speed", [], "--steps"),
     "bench train_speed": ("train_speed", [], "--algo"),

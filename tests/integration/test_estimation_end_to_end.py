@@ -3,14 +3,14 @@ tip error against the simulator's true tip.
 
 One short run of the simulator (no camera: rendering and tracking would cost ~20 ms a step) drives
 the wang2023 arm through the pipeline's calibration spiral (``N_INIT`` steps that initialise
-F-emp, as :meth:`soft_gym.sensing.wang2023.pipeline.SensingPipeline.calibrate` does) and then through the
-estimation spiral of :mod:`eval.papers.estimation`, reading the default FBG fiber (1 pm noise) every
+F-emp, as :meth:`soft_gym.papers.wang2023.pipeline.SensingPipeline.calibrate` does) and then through the
+estimation spiral of :mod:`eval.papers.wang2023.estimation`, reading the default FBG fiber (1 pm noise) every
 0.05 s step. The reference of every check is the simulator's true tip (``sim.tip_pose()``),
 never anything computed from the fiber.
 
 Two properties that no other default-suite test checks against the true tip:
 
-* **F-emp's forgetting** (:mod:`soft_gym.sensing.wang2023.elm`, ``w = 0.999``: a memory of ~1000
+* **F-emp's forgetting** (:mod:`soft_gym.papers.wang2023.elm`, ``w = 0.999``: a memory of ~1000
   updates). Forgetting only shows when the map from wavelength shifts to tip pose changes, and
   only if the new readings fall where F-emp already holds old samples that now contradict them.
   Measured on this arm (F-emp's mean tip error with ``w = 0.999`` and with ``w = 1``), the usual
@@ -25,7 +25,7 @@ Two properties that no other default-suite test checks against the true tip:
   the old condition, an OS-ELM without forgetting carries all of them and follows the change at
   a rate of 1/n; with forgetting the old samples fade as ``w^k``. Labels are the true tip
   position plus ``LABEL_NOISE_M`` of Gaussian noise per axis, a stand-in for the camera
-  estimates the pipeline labels F-emp with (its mean error is ~0.8 mm, eval/papers/estimation.py).
+  estimates the pipeline labels F-emp with (its mean error is ~0.8 mm, eval/papers/wang2023/estimation.py).
 * **The fiber's strain model** (:mod:`soft_gym.sensors.fbg`, eq. (F1): the helix factor
   ``cos^2 a - nu sin^2 a = -0.385``). F-emp cannot see it: it learns the map from this very
   fiber and standardises its inputs, so any consistent gain or sign error of the model is
@@ -50,13 +50,13 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from eval.papers.estimation import ESTIMATION_SPIRAL
+from eval.papers.wang2023.estimation import ESTIMATION_SPIRAL
 from soft_gym.kinematics import cc_segment_transform
 from soft_gym.robots import get_preset
 from soft_gym.robots.actuation import pressure_at_fraction
-from soft_gym.sensing.wang2023.exploration import spiral_fractions
-from soft_gym.sensing.wang2023.femp import FEmpEstimator
-from soft_gym.sensing.wang2023.pipeline import SensingPipeline
+from soft_gym.papers.wang2023.exploration import spiral_fractions
+from soft_gym.papers.wang2023.femp import FEmpEstimator
+from soft_gym.papers.wang2023.pipeline import SensingPipeline
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber, FBGLayout
 from soft_gym.engines import make_simulator

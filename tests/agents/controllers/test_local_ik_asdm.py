@@ -115,7 +115,7 @@ def test_bad_options_are_refused(env):
 @pytest.mark.slow  # 45 s: the exploration of 900 steps
 def test_network_learns_the_exploration_and_reloads_identically(tmp_path):
     from soft_gym.robots.presets import get_preset
-    from soft_gym.procedures.zhao2021_exploration import collect_exploration
+    from soft_gym.papers.zhao2021.exploration import collect_exploration
     from soft_gym.sensors.strain_gauge import StrainGauges
 
     # 900 steps: the arm's bores balloon above 0.5 bar, so a 0.05 bar step moves the tip 2-22 mm

@@ -150,7 +150,7 @@ SHORT_VARYING = {"pretrain_waypoints": 80, "max_epochs": 6, "cycle_s": 20.0, "le
 
 @pytest.fixture(scope="module")
 def short_static():
-    from eval.papers.ho2018 import run_experiment
+    from eval.papers.ho2018.experiments import run_experiment
 
     return run_experiment("static", seed=0, progress=False, **SHORT)
 
@@ -186,7 +186,7 @@ def test_controller_save_load_predicts_identically(tmp_path):
 
 @pytest.fixture(scope="module")
 def short_varying():
-    from eval.papers.ho2018 import run_experiment
+    from eval.papers.ho2018.experiments import run_experiment
 
     return run_experiment("varying", seed=0, progress=False, **SHORT_VARYING)
 

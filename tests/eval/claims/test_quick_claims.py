@@ -19,14 +19,14 @@ import math
 import pytest
 
 from eval.claims import VERDICTS
-from eval.claims import ho2018 as ho2018_claims
-from eval.claims import zhao2021 as zhao2021_claims
-from eval.claims import zou2022 as zou2022_claims
+from eval.papers.ho2018 import claims as ho2018_claims
+from eval.papers.zhao2021 import claims as zhao2021_claims
+from eval.papers.zou2022 import claims as zou2022_claims
 from eval.claims.report import markdown
 from eval.claims.run import read_record, record_file, run_ledger
-from eval.papers import zhao2021 as zhao2021_papers
-from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
-from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
+from eval.papers.zhao2021 import experiments as zhao2021_papers
+from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
+from soft_gym.papers.zou2022.shape_dnn import ShapeDNNConfig
 
 
 def _quick(paper: str, claim: str, out) -> tuple[dict, dict]:

@@ -38,7 +38,7 @@ def test_every_paper_has_a_dataset_id():
 
 
 def test_zhao2021_equals_the_exploration(tmp_path):
-    from soft_gym.procedures.zhao2021_exploration import collect_exploration
+    from soft_gym.papers.zhao2021.exploration import collect_exploration
 
     written, dataset, env = _written("zhao2021", tmp_path, n_free=16, n_loaded=8)
     context = _private_context(*ZHAO2021_ENV)
@@ -57,7 +57,7 @@ def test_zhao2021_equals_the_exploration(tmp_path):
 
 
 def test_zou2022_equals_the_data_set(tmp_path):
-    from soft_gym.procedures.zou2022_dataset import collect_dataset
+    from soft_gym.papers.zou2022.dataset import collect_dataset
     from soft_gym.sensing import make_feedback_source
     from soft_gym.sensors.stereo import StereoCamera
 
@@ -79,9 +79,9 @@ def test_zou2022_equals_the_data_set(tmp_path):
 
 def test_wang2023_equals_the_calibration(tmp_path):
     from soft_gym.procedures.calibration import private_simulator
-    from soft_gym.procedures.wang2023_calibration import calibrate_pipeline
+    from soft_gym.papers.wang2023.calibration import calibrate_pipeline
     from soft_gym.sensing import make_feedback_source
-    from soft_gym.sensing.wang2023.pipeline import SensingPipeline
+    from soft_gym.papers.wang2023.pipeline import SensingPipeline
 
     _, dataset, env = _written("wang2023", tmp_path, n_init=15)
     context = _private_context(*WANG2023_ENV)

@@ -1,7 +1,7 @@
 """The wang2023 estimation experiments (Section IV-C/F, Figs. 6-7, Tables III and VI) end to end.
 
 The default suite runs a 40 %-length lighting run; the full clean run is marked slow. The
-papers' findings on the full runs, seeds 0-2, are the claims ledger's (``eval/claims/wang2023.py``,
+papers' findings on the full runs, seeds 0-2, are the claims ledger's (``eval/papers/wang2023/claims.py``,
 ``pytest -m slow tests/eval/claims/test_claims_full.py``).
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.papers.estimation import _phases, fusion_weights, run_estimation
+from eval.papers.wang2023.estimation import _phases, fusion_weights, run_estimation
 from eval.metrics import estimation_errors
 
 
@@ -70,5 +70,5 @@ def test_the_seed_draws_the_camera_estimates_and_a_seed_repeats_its_run():
 def test_clean_femp_error_after_initialisation():
     """Section IV-C: F-emp, initialised from 450 samples and updated online, tracks the clean
     spiral within 1.5 mm on average. (The paper's figures under occlusion, lighting, pushes,
-    flicks and initialisation sizes are the claims ledger's: ``eval/claims/wang2023.py``.)"""
+    flicks and initialisation sizes are the claims ledger's: ``eval/papers/wang2023/claims.py``.)"""
     assert _errors("clean", steps=4000)["femp"]["mean_mm"] < 1.5

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from eval.papers import ho2018
+from eval.papers.ho2018 import experiments as ho2018
 from soft_gym.robots.presets import get_preset
 
 TINY_MODEL = {"pretrain_waypoints": 6, "max_epochs": 2, "leg_decisions": 5}

@@ -1,11 +1,11 @@
-"""The ho2018 floor study's bookkeeping (the runs themselves are eval.papers.ho2018's)."""
+"""The ho2018 floor study's bookkeeping (the runs themselves are eval.papers.ho2018.experiments's)."""
 
 from __future__ import annotations
 
 import pytest
 
-from eval.papers import ho2018_factors
-from eval.papers.ho2018_factors import (FACTORS, MEASURED_ON, RUNS, factor_keywords, main,
+from eval.papers.ho2018 import factors as ho2018_factors
+from eval.papers.ho2018.factors import (FACTORS, MEASURED_ON, RUNS, factor_keywords, main,
                                          report, run_factors)
 
 

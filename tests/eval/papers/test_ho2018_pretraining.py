@@ -11,7 +11,7 @@ import gymnasium as gym
 import pytest
 
 from agents.policies import make_policy
-from eval.papers import ho2018
+from eval.papers.ho2018 import experiments as ho2018
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,7 @@
 """The zhao2021 experiments (``python -m eval zhao2021``).
 
 A short version on a small model: the runner's plumbing, reachability of the paper's points, the
-tables. The paper's findings on seeds 0-2 are the claims ledger's (``eval/claims/zhao2021.py``,
+tables. The paper's findings on seeds 0-2 are the claims ledger's (``eval/papers/zhao2021/claims.py``,
 ``pytest -m slow tests/eval/claims/test_claims_full.py``).
 """
 
@@ -12,11 +12,11 @@ from dataclasses import asdict
 import numpy as np
 import pytest
 
-from eval.papers import zhao2021
-from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
+from eval.papers.zhao2021 import experiments as zhao2021
+from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
 
 SMALL = ReconstructionConfig(n_free=240, n_loaded=120, max_iterations=80)
-"""The small model of tests/soft_gym/sensing/zhao2021/test_shape_reconstruction.py (one training
+"""The small model of tests/soft_gym/papers/zhao2021/test_shape_reconstruction.py (one training
 per test process)."""
 
 

@@ -1,7 +1,7 @@
 """zhao2021 Table II: the backbone fit on FEM-like shapes with noisy key points (Section V-A).
 
 The shapes are the paper's eight actuations simulated on the zhao2021 arm with four spiralling
-1 N forces (:mod:`eval.papers.zhao2021_table2`); the criteria are Table II's own numbers.
+1 N forces (:mod:`eval.papers.zhao2021.table2`); the criteria are Table II's own numbers.
 """
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.papers.zhao2021_table2 import (CONFIGURATIONS, PAPER_TABLE2_MM, XI_MM, plot_table2,
+from eval.papers.zhao2021.table2 import (CONFIGURATIONS, PAPER_TABLE2_MM, XI_MM, plot_table2,
                                          report_table2, run_table2, simulate_shapes)
-from soft_gym.sensing.zhao2021.backbone_fit import BACKBONE_CURVES
+from soft_gym.papers.zhao2021.backbone_fit import BACKBONE_CURVES
 
 PAPER_LARGEST_MM = np.max(list(PAPER_TABLE2_MM.values()), axis=0)
 """Table II's largest error at each xi (mm): 3.18, 3.88, 3.97, 3.68."""

@@ -1,4 +1,4 @@
-"""zou2022 closed-loop comparison (eval/papers/zou2022_control.py): rows, faults, refusals, table,
+"""zou2022 closed-loop comparison (eval/papers/zou2022/control.py): rows, faults, refusals, table,
 plot.
 
 The runs are short: a circle at four times the default speed (two ~5 s cycles), ``cc_model``
@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from eval.papers.zou2022_control import (CONTROL_CONDITIONS, CONTROL_FEEDBACK, CONTROL_POLICIES,
+from eval.papers.zou2022.control import (CONTROL_CONDITIONS, CONTROL_FEEDBACK, CONTROL_POLICIES,
                                   control_table, cycle_duration_s, env_kwargs, plot_control,
                                   run_control, stereo_fault, strip_records)
 

@@ -4,7 +4,7 @@ continuous bend, ASES under visual faults.
 References: the bend's pressure schedule from the paper's text (PMA2 1 -> 2.5 bar in 0.05 bar
 steps over 30 s); the simulator's true points; the paper's qualitative result (Table 4: the DNN
 several times more accurate than constant curvature from the same encoders; the claims ledger,
-``eval/claims/zou2022.py``, judges it at the paper's ratio of the 3-D RMSEs, 3.74).
+``eval/papers/zou2022/claims.py``, judges it at the paper's ratio of the 3-D RMSEs, 3.74).
 """
 
 from __future__ import annotations
@@ -12,9 +12,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.papers import zou2022, zou2022_levers
+from eval.papers.zou2022 import experiments as zou2022
+from eval.papers.zou2022 import levers as zou2022_levers
 from eval.__main__ import main
-from soft_gym.sensing.zou2022.shape_dnn import ShapeDNNConfig
+from soft_gym.papers.zou2022.shape_dnn import ShapeDNNConfig
 
 QUICK = ShapeDNNConfig(n_samples=150, settle_s=0.8, batch_size=16, epochs=200)
 """A quick model (the default tests' size); the paper's has 29791 samples."""

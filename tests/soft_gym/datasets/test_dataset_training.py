@@ -13,8 +13,8 @@ import soft_gym  # noqa: F401 - registers the ids
 from agents.policies import make_policy
 from eval.datasets import write_paper_dataset
 from eval.datasets.papers import ZHAO2021_ENV, _private_context
-from soft_gym.procedures.zhao2021_exploration import collect_exploration, exploration_of
-from soft_gym.sensing.zhao2021.shape_reconstruction import ReconstructionConfig
+from soft_gym.papers.zhao2021.exploration import collect_exploration, exploration_of
+from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
 
 ZHAO_SIZE = {"n_free": 16, "n_loaded": 8}
 ZOU_SIZE = {"n_samples": 20}

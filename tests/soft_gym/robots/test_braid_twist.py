@@ -17,8 +17,8 @@ import pytest
 from soft_gym.robots.pneumatics import twist_of_effective_pressure
 from soft_gym.robots.presets import get_preset
 from soft_gym.robots.spec import SegmentSpec
-from soft_gym.sensing.zou2022.cc_shape import cc_shape_points
-from soft_gym.sensing.zou2022.shape_dnn import true_shape_points
+from soft_gym.papers.zou2022.cc_shape import cc_shape_points
+from soft_gym.papers.zou2022.shape_dnn import true_shape_points
 from soft_gym.engines.pybullet.simulator import ArmSimulator
 
 ZOU = get_preset("zou2022")

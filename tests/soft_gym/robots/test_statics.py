@@ -15,7 +15,9 @@ import pytest
 
 from soft_gym.engines import make_simulator
 from soft_gym.robots.pneumatics import chamber_loads, effective_pressure_pa
-from soft_gym.robots.presets import WANG2023, ZHAO2021, paper_pressures_to_chambers
+from soft_gym.papers.wang2023.arm import WANG2023
+from soft_gym.papers.zhao2021.arm import ZHAO2021
+from soft_gym.papers.zhao2021.frames import paper_pressures_to_chambers
 from soft_gym.robots.statics import StaticArm
 from soft_gym.procedures.static_reach import closest_reach
 

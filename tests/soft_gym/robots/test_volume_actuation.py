@@ -12,7 +12,8 @@ import pytest
 from soft_gym.engines import make_simulator
 from soft_gym.envs.config import EnvConfig
 from soft_gym.robots.pneumatics import VolumeSupply
-from soft_gym.robots.presets import HO2018, HO2018_CYLINDERS, PRESETS, volume_actuated
+from soft_gym.papers.ho2018.arm import HO2018, HO2018_CYLINDERS
+from soft_gym.robots.presets import PRESETS, volume_actuated
 from soft_gym.robots.spec import CylinderSpec
 
 VOLUME_HO2018 = volume_actuated(HO2018)

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from soft_gym.procedures.static_reach import closest_reach
-from soft_gym.procedures.zhao2021_arm_fit import (
+from soft_gym.papers.zhao2021.arm_fit import (
     CIRCLE_MASS_KG,
     P2P_GOAL_MM,
     P2P_LOADS_KG,
@@ -27,15 +27,10 @@ from soft_gym.procedures.zhao2021_arm_fit import (
     circle_point_mm,
     evaluate_table3,
 )
-from soft_gym.robots.presets import (
-    ZHAO2021,
-    ZHAO2021_PAPER_CHAMBERS,
-    ZHAO2021_PAPER_FRAME_DEG,
-    ZHAO2021_PAPER_ORIGIN_Z_M,
-    base_point_from_paper,
-    paper_point_from_base,
-    paper_pressures_to_chambers,
-)
+from soft_gym.papers.zhao2021.arm import ZHAO2021
+from soft_gym.papers.zhao2021.frames import (ZHAO2021_PAPER_CHAMBERS, ZHAO2021_PAPER_FRAME_DEG,
+                                             ZHAO2021_PAPER_ORIGIN_Z_M, base_point_from_paper,
+                                             paper_point_from_base, paper_pressures_to_chambers)
 from soft_gym.robots.statics import StaticArm
 from soft_gym.robots.spec import SegmentSpec
 from soft_gym.engines.pybullet.simulator import ArmSimulator

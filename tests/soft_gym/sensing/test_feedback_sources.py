@@ -20,10 +20,10 @@ from soft_gym.sensing import FEEDBACK_SOURCES, FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.feedback import EMFeedback, GroundTruthFeedback
 from soft_gym.sensing.feedback_base import CalibrationContext
 from soft_gym.sensing.measurement import Measurement
-from soft_gym.sensing.wang2023 import pipeline
-from soft_gym.sensing.wang2023.feedback import CameraFeedback, FEmpFeedback, FusedFeedback
-from soft_gym.sensing.zhao2021 import shape_reconstruction
-from soft_gym.sensing.zhao2021.feedback import StrainShapeFeedback
+from soft_gym.papers.wang2023 import pipeline
+from soft_gym.papers.wang2023.feedback import CameraFeedback, FEmpFeedback, FusedFeedback
+from soft_gym.papers.zhao2021 import shape_reconstruction
+from soft_gym.papers.zhao2021.feedback import StrainShapeFeedback
 
 QUICK = {"n_init": 40}
 """A short calibration (40 labelled exploration steps) for tests that only compare runs."""
@@ -91,7 +91,7 @@ def test_a_value_is_computed_on_one_thread_whatever_threads_the_caller_runs(cach
 
 _SECOND_PROCESS = """
 import numpy as np, gymnasium as gym, soft_gym
-from soft_gym.sensing.wang2023.pipeline import SensingPipeline
+from soft_gym.papers.wang2023.pipeline import SensingPipeline
 
 def refuse(*args, **kwargs):
     raise AssertionError("the second process calibrated instead of reading the disk cache")

@@ -15,8 +15,8 @@ from gymnasium.utils.env_checker import check_env
 
 import soft_gym  # noqa: F401
 from soft_gym.robots.presets import get_preset
-from soft_gym.sensing.zou2022.shape_dnn import STEREO_INTRINSICS
-from soft_gym.sensing.zou2022.stereo_shape import estimate_stereo_shape
+from soft_gym.papers.zou2022.shape_dnn import STEREO_INTRINSICS
+from soft_gym.papers.zou2022.stereo_shape import estimate_stereo_shape
 from soft_gym.sensors.faults import (LowLight, MovingOccluder, copy_faults, faults_per_sensor,
                                      make_faults)
 from soft_gym.sensors.stereo import OCCLUDER_FRACTION, StereoCamera
