@@ -33,6 +33,7 @@ from eval.palette import policy_color, policy_label
 from eval.report import (error_peaks_mm, markdown_table, plot_error_time, with_mean_std,
                          write_records_csv, write_results_json)
 from eval.runner import RunConfig, check_configs
+from soft_gym.papers import DEFAULT_PRESET
 
 CONDITIONS: dict[str, dict[str, Any]] = {
     "nominal": {},
@@ -45,7 +46,7 @@ CONDITIONS: dict[str, dict[str, Any]] = {
 
 def run_comparison(policies: Sequence[str], paths: Sequence[str], conditions: Sequence[str],
                    seeds: Sequence[int], out: str | Path, cycles: int = 2,
-                   feedback: str = "fused", kp: float = 0.06, preset: str = "wang2023",
+                   feedback: str = "fused", kp: float = 0.06, preset: str = DEFAULT_PRESET,
                    progress: bool = True, workers: int = 1,
                    video: bool = False, check: bool = True) -> list[dict[str, Any]]:
     """Run the comparison grid and write its outputs; returns the seed-aggregated rows

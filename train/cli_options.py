@@ -19,6 +19,7 @@ from eval.runner import make_uncalibrated_env
 from soft_gym._cli import check_file, fail
 from soft_gym.engines import EngineFeatureError
 from soft_gym.envs.registration import preset_env_id
+from soft_gym.papers import DEFAULT_PRESET
 from soft_gym.robots.presets import PRESETS
 from train.config import CONFIG_DIR, TrainSettings, check_hyperparameters, parse_key_values
 
@@ -29,11 +30,10 @@ MUJOCO_RANDOMIZATION = CONFIG_DIR / "randomization_mujoco.yaml"
 def add_env_options(parser: argparse.ArgumentParser) -> None:
     """``--env``, ``--preset`` and ``--env-kwargs``: which env to train on, and how it is made."""
     parser.add_argument("--env", default=None,
-                        help="Gymnasium id (default SoftArmTrack<Preset>-v0, e.g. "
-                             "SoftArmTrackWang2023-v0)")
-    parser.add_argument("--preset", default="wang2023",
-                        help="arm preset when --env is not given (wang2023, zhao2021, zou2022, "
-                             "ho2018)")
+                        help=f"Gymnasium id (default SoftArmTrack<Preset>-v0, e.g. "
+                             f"{preset_env_id('track', DEFAULT_PRESET)})")
+    parser.add_argument("--preset", default=DEFAULT_PRESET,
+                        help=f"arm preset when --env is not given ({', '.join(PRESETS)})")
     parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
                         help="env keyword arguments over the config's (e.g. feedback=em); "
                              "checked by building the env before training")

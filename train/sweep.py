@@ -91,6 +91,8 @@ import soft_gym  # noqa: F401  (registers the env ids)
 from soft_gym._cli import HelpFormatter, check_environment, check_output_dir, seed_int
 from soft_gym._validation import SEED_MAX
 from soft_gym.envs.config import EnvConfig
+from soft_gym.envs.registration import preset_env_id
+from soft_gym.papers import DEFAULT_PRESET
 from train.cli_options import (add_env_options, check_conf_file, check_env_kwargs,
                                check_hyperparameter_overrides, parse_env_and_hyperparameters,
                                randomization_hint, resolve_env_id)
@@ -154,7 +156,7 @@ class SweepRequest:
         progress: show a progress bar over the trials.
     """
 
-    env_id: str = "SoftArmTrackWang2023-v0"
+    env_id: str = preset_env_id("track", DEFAULT_PRESET)
     env_kwargs: dict = field(default_factory=dict)
     hyperparameters: dict = field(default_factory=dict)
     trials: int = 8

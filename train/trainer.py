@@ -45,6 +45,8 @@ from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
 import soft_gym  # noqa: F401  (registers the env ids)
+from soft_gym.envs.registration import preset_env_id
+from soft_gym.papers import DEFAULT_PRESET
 from agents.policies.sb3 import mark_normalization
 from train.batched import Sb3VectorEnv
 from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class,
@@ -118,7 +120,7 @@ class TrainRequest:
     """
 
     algo: str = "sac"
-    env_id: str = "SoftArmTrackWang2023-v0"
+    env_id: str = preset_env_id("track", DEFAULT_PRESET)
     env_kwargs: dict = field(default_factory=dict)
     hyperparameters: dict = field(default_factory=dict)
     timesteps: int | None = None

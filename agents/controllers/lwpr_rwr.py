@@ -397,7 +397,7 @@ class LWPRRWRController(BaselinePolicy):
     def _read_pretraining_data(self) -> tuple[np.ndarray, ...]:
         """The transitions of the walk recorded in :attr:`dataset` (checked against
         :meth:`walk_key`), equal to those :meth:`_collect_pretraining_data` takes."""
-        from soft_gym.datasets.training import read_pretraining_walk
+        from soft_gym.papers.ho2018.readers import read_pretraining_walk
 
         observations = read_pretraining_walk(self.dataset, self.dataset_root, self.walk_key())
         schedule = self._actuation_schedule()

@@ -84,6 +84,8 @@ class PaperDataset:
         paper_size: the paper's sample counts (the collector's ``size``).
         quick_size: small counts for a quick look and the tests.
         summary: one line on what is recorded.
+        card: the data card's text: ``title``, ``how``, ``observations``, ``infos``,
+            ``biases`` and optionally ``layout`` (:func:`~eval.datasets.cards.paper_card`).
     """
 
     paper: str
@@ -92,6 +94,7 @@ class PaperDataset:
     paper_size: dict[str, int] = field(default_factory=dict)
     quick_size: dict[str, int] = field(default_factory=dict)
     summary: str = ""
+    card: Mapping[str, str] = field(default_factory=dict)
 
 
 def env_calibration_context(env_id: str, env_kwargs: dict[str, Any]):

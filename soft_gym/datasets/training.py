@@ -1,18 +1,18 @@
-"""The papers' datasets read back as the data their methods train on, so that a method given a
-dataset (``dataset=<id>``) skips its own collection.
+"""What every paper's dataset reader shares: the papers' datasets read back as the data their
+methods train on, so that a method given a dataset (``dataset=<id>``) skips its own collection.
 
-Each reader loads a dataset written by ``python -m eval datasets``
+Each reader (in its paper's folder, ``soft_gym/papers/<key>/readers.py``) loads a dataset written by ``python -m eval datasets``
 (:func:`~soft_gym.datasets.store.load_dataset`), checks that it holds the right paper's data and that
 it was collected with the settings the method would collect with (:func:`check_settings`: the
 arm, the sensor models, the sizes and the seed, as stored in the dataset's ``match`` metadata),
 and rebuilds the procedure's own data object, equal bit for bit to what the collection returns
 for the same settings:
 
-* :func:`read_exploration`: ``soft-arm/zhao2021/exploration-v0`` as the ``ShapeDataset`` that
+* :func:`soft_gym.papers.zhao2021.readers.read_exploration`: ``soft-arm/zhao2021/exploration-v0`` as the ``ShapeDataset`` that
   ``strain_sr`` and ``local_ik_asdm`` learn from;
-* :func:`read_zou_dataset`: ``soft-arm/zou2022/stereo-labels-v0`` as the ``ZouDataset`` (split
+* :func:`soft_gym.papers.zou2022.readers.read_zou_dataset`: ``soft-arm/zou2022/stereo-labels-v0`` as the ``ZouDataset`` (split
   included) that ``encoder_dnn`` learns from;
-* :func:`read_pretraining_walk`: ``soft-arm/ho2018/pretraining-v0`` as the observations of
+* :func:`soft_gym.papers.ho2018.readers.read_pretraining_walk`: ``soft-arm/ho2018/pretraining-v0`` as the observations of
   ``lwpr_rwr``'s pre-training walk, from which it takes its transitions.
 
 Every bad input (an unknown id, a corrupt directory, another paper's dataset, a setting that
@@ -97,7 +97,7 @@ def _compare(dataset_id: str, stored: dict[str, Any], expected: dict[str, Any],
                              f"{_short(stored[name])}, but this method's is {_short(value)}")
 
 
-def _episode(dataset_id: str, root: DatasetRoot, paper: str,
+def paper_episode(dataset_id: str, root: DatasetRoot, paper: str,
              expected: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
     """The single episode of ``paper``'s dataset ``dataset_id`` and its metadata, checked."""
     if not isinstance(dataset_id, str):
@@ -124,70 +124,9 @@ def data_digest(*arrays: np.ndarray) -> str:
     return digest.hexdigest()
 
 
-def _rows(column: Any) -> np.ndarray:
+def procedure_rows(column: Any) -> np.ndarray:
     """A procedure episode's column without its NaN row 0, as float64."""
     return np.asarray(column, dtype=float)[1:]
 
 
-def read_exploration(dataset_id: str, root: DatasetRoot, expected: dict[str, Any]):
-    """zhao2021's exploration (:class:`~soft_gym.papers.zhao2021.shape_exploration.ShapeDataset`)
-    from its dataset.
-
-    :param dataset_id: the dataset's id (``soft-arm/zhao2021/exploration-v0``).
-    :param root: its datasets root (Minari's default when ``None``).
-    :param expected: the method's collection settings
-        (:func:`~soft_gym.papers.zhao2021.exploration.exploration_key`).
-    :raises ValueError: see :func:`check_settings` and :func:`~soft_gym.datasets.store.load_dataset`.
-    """
-    from soft_gym.papers.zhao2021.shape_exploration import ShapeDataset
-
-    episode, _ = _episode(dataset_id, root, "zhao2021", expected)
-    infos = episode.infos
-    return ShapeDataset(pressures_pa=_rows(infos["command_pa"]),
-                        readings=_rows(episode.observations["strain"]),
-                        key_points_m=_rows(infos["key_points_m"]),
-                        backbone_m=_rows(infos["backbone_m"]),
-                        tip_load_kg=_rows(infos["tip_load_kg"]))
-
-
-def read_zou_dataset(dataset_id: str, root: DatasetRoot, expected: dict[str, Any]):
-    """zou2022's data set (:class:`~soft_gym.papers.zou2022.shape_dnn.ZouDataset`, its split
-    included) from its dataset.
-
-    :param dataset_id: the dataset's id (``soft-arm/zou2022/stereo-labels-v0``).
-    :param root: its datasets root (Minari's default when ``None``).
-    :param expected: the method's collection settings
-        (:func:`~soft_gym.papers.zou2022.dataset.dataset_key`).
-    :raises ValueError: see :func:`check_settings` and :func:`~soft_gym.datasets.store.load_dataset`.
-    """
-    from soft_gym.papers.zou2022.shape_dnn import ZouDataset
-
-    episode, info = _episode(dataset_id, root, "zou2022", expected)
-    infos = episode.infos
-    split = _rows(infos["split"])
-    data = ZouDataset(_rows(infos["command_pa"]), _rows(episode.observations["encoder"]),
-                      _rows(infos["stereo_labels_m"]), _rows(infos["true_points_m"]),
-                      _rows(infos["augmented"]) == 1.0, int(info["settings"]["n_lost"]))
-    data.train, data.validation, data.test = (np.flatnonzero(split == index)
-                                              for index in range(3))
-    return data
-
-
-def read_pretraining_walk(dataset_id: str, root: DatasetRoot,
-                          expected: dict[str, Any]) -> np.ndarray:
-    """The observations of ``lwpr_rwr``'s pre-training walk, as the env returned them (the
-    reset's first), from ho2018's dataset.
-
-    :param dataset_id: the dataset's id (``soft-arm/ho2018/pretraining-v0``).
-    :param root: its datasets root (Minari's default when ``None``).
-    :param expected: the controller's walk settings
-        (:meth:`~agents.controllers.lwpr_rwr.LWPRRWRController.walk_key`).
-    :returns: ``(steps + 1, n_obs)`` flat observations in the env's dtype.
-    :raises ValueError: see :func:`check_settings` and :func:`~soft_gym.datasets.store.load_dataset`.
-    """
-    episode, _ = _episode(dataset_id, root, "ho2018", expected)
-    return np.asarray(episode.observations)
-
-
-__all__ = ["check_settings", "data_digest", "read_exploration", "read_pretraining_walk",
-           "read_zou_dataset"]
+__all__ = ["check_settings", "data_digest", "paper_episode", "procedure_rows"]

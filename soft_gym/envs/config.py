@@ -20,6 +20,7 @@ from soft_gym._validation import (require_choice, require_integer, require_names
 from soft_gym.engines import DEFAULT_ENGINE, ENGINES
 from soft_gym.envs.observations import OBSERVATION_PARTS, STATE_PARTS
 from soft_gym.envs.rendering import check_render_size
+from soft_gym.papers import DEFAULT_PRESET
 from soft_gym.robots.arm_file import arm_from_preset
 from soft_gym.robots.presets import volume_actuated
 from soft_gym.robots.spec import ArmSpec
@@ -52,7 +53,7 @@ class EnvConfig:
         ValueError: naming the argument, the value and what is allowed.
     """
 
-    preset: str | os.PathLike | ArmSpec = "wang2023"
+    preset: str | os.PathLike | ArmSpec = DEFAULT_PRESET
     engine: str = DEFAULT_ENGINE
     task: str = "reach"
     path: str | list[str] = "circle"

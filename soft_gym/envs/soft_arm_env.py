@@ -123,6 +123,7 @@ from soft_gym.engines import ENGINES, EngineNeed, make_simulator, require_engine
 from soft_gym.envs.config import EnvConfig, check_arguments
 from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.envs.rendering import SceneRenderer
+from soft_gym.papers import DEFAULT_PRESET
 from soft_gym.procedures.calibration import calibrate, calibration_key
 from soft_gym.procedures.positioning import drive_tip_to
 from soft_gym.procedures.workspace import reachable_tips
@@ -231,12 +232,13 @@ class SoftArmEnv(gym.Env):
     """Whether :meth:`close` has been called (``step`` and ``reset`` are then refused)."""
     _ready = False  # reset since made or copied, and not closed: step() may run
 
-    def __init__(self, preset: str | os.PathLike | ArmSpec = "wang2023", **kwargs: Any) -> None:
+    def __init__(self, preset: str | os.PathLike | ArmSpec = DEFAULT_PRESET,
+                 **kwargs: Any) -> None:
         config = kwargs.pop("config", None)
         if config is None:
             check_arguments(kwargs)
             config = EnvConfig(preset=preset, **kwargs)
-        elif kwargs or preset != "wang2023":
+        elif kwargs or preset != DEFAULT_PRESET:
             raise ValueError("config takes the place of every other argument: give either "
                              "config=EnvConfig(...) or keyword arguments")
         self._config_copy = config.copied()  # to rebuild from (see "Copies")

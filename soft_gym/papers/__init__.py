@@ -23,4 +23,8 @@ from soft_gym.papers.ho2018.paper import PAPER as HO2018_PAPER
 for _paper in (WANG2023_PAPER, ZHAO2021_PAPER, ZOU2022_PAPER, HO2018_PAPER):
     register_paper(_paper)
 
-__all__ = ["PAPERS", "Paper", "register_paper", "unregister_paper"]
+DEFAULT_PRESET: str = WANG2023_PAPER.arms[0].name
+"""The env's arm when none is named: the reference paper's, whose camera and FBG fiber give the
+default ``fused`` feedback."""
+
+__all__ = ["DEFAULT_PRESET", "PAPERS", "Paper", "register_paper", "unregister_paper"]

@@ -54,7 +54,33 @@ def collect_ho2018(size: dict[str, int], seed: int = 0, progress: bool = True,
                       raw=transitions, match=match)
 
 
+CARD: dict[str, str] = {
+    "title": "ho2018 pre-training walk (Section 3.2)",
+    "how": "`lwpr_rwr`'s pre-training: on an unloaded, fault-free copy of the env "
+           "(EM-tracker feedback), 20 control steps at the rest actuation, then straight "
+           "lines of 30 decisions (2 control steps each) between random actuator-space "
+           "waypoints (uniform in [0, 0.6] of every chamber's range). The LWPR forward "
+           "model learns the transitions (p, u, du, dp) every `hold_steps` steps of this "
+           "episode. Recorded as the env ran it.",
+    "observations": "the env's flat observation: `pose` (7,), the EM tracker's tip "
+                    "position (m) and quaternion; `target` (6,) m (the reach task's, not "
+                    "used by the walk).",
+    "infos": "`tip_position_m` (3,) m, `tip_quaternion` (4,), `backbone_m` (n, 3) m, "
+             "`chamber_lengths_m` (6,) m, `pressures_pa` (6,) Pa, `target_m` (3,) m, "
+             "`error_mm` mm, `time_s` s: the ground truth of every step (row 0: the reset).",
+    "biases": "EM noise 0.8 mm / 0.7 deg; the arm is unloaded; waypoints cover only "
+              "[0, 0.6] of each chamber's range.",
+    "layout": "One Gymnasium episode as the env ran it: `observations` (steps + 1), "
+              "`actions`, `rewards`, `terminations`, `truncations` (steps) and `infos` "
+              "(steps + 1, row 0 from the reset). `recover_environment()` makes that env; "
+              "`reset(seed=episode's seed)` and the actions give the observations back bit "
+              "for bit.",
+}
+"""The data card's text (:func:`eval.datasets.cards.paper_card`)."""
+
+
 DATASET = PaperDataset(
     "ho2018", "soft-arm/ho2018/pretraining-v0", collect_ho2018,
     {"pretrain_waypoints": 80}, {"pretrain_waypoints": 2},
-    "pre-training walk: env actions, EM-feedback observations, true tip and backbone")
+    "pre-training walk: env actions, EM-feedback observations, true tip and backbone",
+    card=CARD)

@@ -104,7 +104,28 @@ def collect_wang2023(size: dict[str, int], seed: int = 0, progress: bool = True,
                       raw=pipeline)
 
 
+CARD: dict[str, str] = {
+    "title": "wang2023 sensing calibration (Section IV-B)",
+    "how": "The predefined spiral actuation, one command per control period, on a private "
+           "simulator of the wang2023 arm at rest after the env's settle time; every step "
+           "reads the helical FBG fiber and the eye-in-hand camera, whose ORB + PnP pose "
+           "labels the FBG shifts when it trusts the frame. These labelled samples "
+           "initialise F-emp (`fused`, `camera`, `fbg` feedback). The procedure is "
+           "`soft_gym.papers.wang2023.calibration.calibrate_pipeline`.",
+    "observations": "`fbg` (17,): Bragg wavelength shifts (nm).",
+    "infos": "`command_pa` (3,) Pa; `pressures_pa` (3,) Pa, the chambers' pressures "
+             "(lagging the command); `tip_position_m` (3,) m and `tip_quaternion` (4,) "
+             "(x, y, z, w), true; `backbone_m` (n_links + 1, 3) m; "
+             "`camera_label_position_m` (3,) m and `camera_label_quaternion` (4,), the "
+             "camera's pose (NaN where it gave none); `labelled` (1 = used by F-emp).",
+    "biases": "The camera labels are the vision tracker's, with its errors; frames it "
+              "did not trust are unlabelled. The exploration covers the spiral only.",
+}
+"""The data card's text (:func:`eval.datasets.cards.paper_card`)."""
+
+
 DATASET = PaperDataset(
     "wang2023", "soft-arm/wang2023/calibration-v0", collect_wang2023,
     {"n_init": 450}, {"n_init": 20},
-    "spiral calibration: commands, FBG shifts, camera labels, true tip pose and backbone")
+    "spiral calibration: commands, FBG shifts, camera labels, true tip pose and backbone",
+    card=CARD)

@@ -48,7 +48,29 @@ def collect_zhao2021(size: dict[str, int], seed: int = 0, progress: bool = True,
                                             config.load_kg, config.seed))
 
 
+CARD: dict[str, str] = {
+    "title": "zhao2021 random exploration (Section VI-A)",
+    "how": "A random walk in pressure space on a private simulator of the zhao2021 arm: "
+           "each sample adjusts two random chambers by +-1/16 of p_max (0.05 bar), holds "
+           "the command 1 s and reads the strain gauges and the backbone. The first "
+           "`n_free` samples are taken with the arm free, the next `n_loaded` with a 75 g "
+           "tip mass (the same walk continues). This is the record `strain_sr` and "
+           "`local_ik_asdm` learn from, taken by the procedure that builds them "
+           "(`soft_gym.papers.zhao2021.exploration`), so the calibration cache shares it.",
+    "observations": "`strain` (6,): the strain gauges' readings (3 per segment, the sensor's "
+                    "units: bending strain with the gauges' noise).",
+    "infos": "`command_pa` (6,) Pa; `tip_position_m` (3,) m; `key_points_m` (6, 3) m, "
+             "zhao2021's P_1..P_6; `backbone_m` (n_links + 1, 3) m; `tip_load_kg` kg.",
+    "biases": "The arm is simulated (2 x 4 rigid links, thread-limited bores); gauges "
+              "read the simulated curvature with Gaussian noise, no drift or hysteresis. "
+              "The walk never leaves [p_pre, p_max]; the loaded half follows the free half "
+              "without a reset.",
+}
+"""The data card's text (:func:`eval.datasets.cards.paper_card`)."""
+
+
 DATASET = PaperDataset(
     "zhao2021", "soft-arm/zhao2021/exploration-v0", collect_zhao2021,
     {"n_free": 4000, "n_loaded": 2000}, {"n_free": 40, "n_loaded": 20},
-    "random exploration: commands, strain-gauge readings, key points, backbone, tip load")
+    "random exploration: commands, strain-gauge readings, key points, backbone, tip load",
+    card=CARD)

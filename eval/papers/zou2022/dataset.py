@@ -58,7 +58,30 @@ def collect_zou2022(size: dict[str, int], seed: int = 0, progress: bool = True,
                       match=dataset_key(context.spec, encoders, stereo, source.config))
 
 
+CARD: dict[str, str] = {
+    "title": "zou2022 ASES-labelled pressure sweep (Section 5.1 (1))",
+    "how": "Distinct commands of the 0.1 bar grid (0-3 bar per muscle, 31^3 = 29791 "
+           "commands) in random order on a private simulator, each held 2 s; the cable "
+           "encoders' chamber lengths are read and the stereo pair's ASES (SOM centreline) "
+           "labels seven backbone points. A sample where ASES lost the arm is replaced by "
+           "a copy of a good one turned about the axis (the paper's supplement; "
+           "`augmented`). Train / validation / test sets are dealt out by command "
+           "(`split`). The procedure is `soft_gym.papers.zou2022.dataset`.",
+    "observations": "`encoder` (3,): chamber lengths from the cable encoders (m).",
+    "infos": "`command_pa` (3,) Pa; `stereo_labels_m` (7, 3) m, ASES's P_0..P_6 (the "
+             "DNN's labels); `true_points_m` (7, 3) m, the simulator's P_0..P_6; "
+             "`tip_position_m` (3,) m, true; `augmented` (1 = rotated copy); `split` "
+             "(0 train, 1 validation, 2 test).",
+    "biases": "The labels are ASES's, not the truth: they carry the stereo pair's "
+              "triangulation and SOM errors (compare `true_points_m`). The simulated arm "
+              "twists as its muscles fill (an assumed unbalanced braid). Augmented samples "
+              "are copies, not measurements.",
+}
+"""The data card's text (:func:`eval.datasets.cards.paper_card`)."""
+
+
 DATASET = PaperDataset(
     "zou2022", "soft-arm/zou2022/stereo-labels-v0", collect_zou2022,
     {"n_samples": 29791}, {"n_samples": 30},
-    "pressure sweep: commands, encoder lengths, ASES stereo labels, true points, split")
+    "pressure sweep: commands, encoder lengths, ASES stereo labels, true points, split",
+    card=CARD)

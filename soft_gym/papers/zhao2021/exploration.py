@@ -128,7 +128,7 @@ def exploration_key(spec: ArmSpec, gauges, n_free: int, n_loaded: int, load_kg: 
     """What the exploration's record depends on: the arm (its ``preset`` name and the whole
     spec), the gauge model, the sample counts, the tip mass (kg) and the seed. The calibration
     cache keys on it, and a dataset of the exploration must match it
-    (:func:`soft_gym.datasets.training.read_exploration`)."""
+    (:func:`soft_gym.papers.zhao2021.readers.read_exploration`)."""
     return {"preset": spec.name, "arm": repr(spec),
             "gauges": sensor_description(gauges, GAUGE_SETTINGS), "n_free": n_free,
             "n_loaded": n_loaded, "load_kg": load_kg, "seed": seed}
@@ -142,7 +142,7 @@ def exploration_of(spec: ArmSpec, gauges, config: ReconstructionConfig, use_cach
     arm, gauge model, sizes and seed (equal bit for bit to the collection; ``ValueError``
     naming the dataset and the setting otherwise)."""
     if dataset is not None:
-        from soft_gym.datasets.training import read_exploration
+        from soft_gym.papers.zhao2021.readers import read_exploration
 
         return read_exploration(dataset, dataset_root, exploration_key(
             spec, gauges, config.n_free, config.n_loaded, config.load_kg, config.seed))

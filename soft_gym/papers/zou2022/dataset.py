@@ -165,7 +165,7 @@ def dataset_key(spec: ArmSpec, encoders, stereo=None, config: ShapeDNNConfig = S
     """What the data set depends on: the arm (its ``preset`` name and the whole spec), the
     encoder and stereo models, ASES's settings and the recipe (samples, grid step, settling,
     augmentation, split, seed). The calibration cache keys on it, and a dataset of the data set
-    must match it (:func:`soft_gym.datasets.training.read_zou_dataset`)."""
+    must match it (:func:`soft_gym.papers.zou2022.readers.read_zou_dataset`)."""
     stereo = default_stereo() if stereo is None else stereo
     ases_config = ASESConfig() if ases_config is None else ases_config
     return {"preset": spec.name, "arm": repr(spec),
@@ -196,7 +196,7 @@ def dataset_of(spec: ArmSpec, encoders, stereo=None, config: ShapeDNNConfig = Sh
     arm, sensors, ASES settings and recipe (equal bit for bit to the collection; ``ValueError``
     naming the dataset and the setting otherwise)."""
     if dataset is not None:
-        from soft_gym.datasets.training import read_zou_dataset
+        from soft_gym.papers.zou2022.readers import read_zou_dataset
 
         return read_zou_dataset(dataset, dataset_root,
                                 dataset_key(spec, encoders, stereo, config, ases_config))
