@@ -11,7 +11,10 @@ import pytest
 
 import soft_gym  # noqa: F401 - registers the ids
 from eval.datasets import PAPER_DATASETS, load_dataset, write_paper_dataset
-from eval.datasets.papers import WANG2023_ENV, ZHAO2021_ENV, ZOU2022_ENV, _private_context
+from eval.datasets.papers import env_calibration_context as _private_context
+from eval.papers.wang2023.dataset import WANG2023_ENV
+from eval.papers.zhao2021.dataset import ZHAO2021_ENV
+from eval.papers.zou2022.dataset import ZOU2022_ENV
 from soft_gym.robots.actuation import Actuation
 
 

@@ -12,7 +12,8 @@ import torch
 import soft_gym  # noqa: F401 - registers the ids
 from agents.policies import make_policy
 from eval.datasets import write_paper_dataset
-from eval.datasets.papers import ZHAO2021_ENV, _private_context
+from eval.datasets.papers import env_calibration_context as _private_context
+from eval.papers.zhao2021.dataset import ZHAO2021_ENV
 from soft_gym.papers.zhao2021.exploration import collect_exploration, exploration_of
 from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
 

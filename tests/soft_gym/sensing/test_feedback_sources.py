@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 
 import soft_gym  # noqa: F401
+from soft_gym.papers.wang2023 import calibration as wang2023_calibration
+from soft_gym.papers.zhao2021 import exploration as zhao2021_exploration
 from soft_gym.procedures import calibration as procedures
 from soft_gym.robots import get_preset
 from soft_gym.sensing import calibration_cache
@@ -304,9 +306,9 @@ class RestSim:
 
 @pytest.fixture
 def stand_in_pipeline(monkeypatch):
-    monkeypatch.setattr(procedures, "SensingPipeline", Pipeline)
+    monkeypatch.setattr(wang2023_calibration, "SensingPipeline", Pipeline)
     monkeypatch.setattr(procedures, "make_simulator", RestSim)
-    monkeypatch.setattr(procedures, "calibrate_pipeline",
+    monkeypatch.setattr(wang2023_calibration, "calibrate_pipeline",
                         lambda built, sim, rng: built.calibrate(sim, rng))
     monkeypatch.setenv("SOFT_GYM_CACHE", "off")
     calibration_cache.clear_memory()
@@ -489,7 +491,7 @@ def test_strain_sr_calibrates_through_the_cached_reconstruction(monkeypatch) -> 
         calls.append((spec, gauges, config, use_cache, progress))
         return reconstructor, {"report": 1}
 
-    monkeypatch.setattr(procedures, "cached_reconstruction", cached_reconstruction)
+    monkeypatch.setattr(zhao2021_exploration, "cached_reconstruction", cached_reconstruction)
     source = StrainShapeFeedback({"n_free": 30, "history_step_s": 0.5})
     assert source.history_step_s == 0.5 and source.config.n_free == 30
     context = CalibrationContext(spec=ZHAO, settle_s=1.0, make_sensor=lambda name: "gauges")
