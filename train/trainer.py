@@ -46,6 +46,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNorm
 
 import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies.sb3 import mark_normalization
+from soft_gym._distributions import REFERENCE_ENGINE_PACKAGE
 from soft_gym.engines import REFERENCE_ENGINE, engine_supports
 from train.batched import Sb3VectorEnv
 from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class, batched_engines,
@@ -174,7 +175,7 @@ def versions() -> dict[str, str]:
     info = {"python": platform.python_version(), "platform": platform.platform(),
             "gymnasium": gymnasium.__version__, "stable_baselines3": stable_baselines3.__version__,
             "torch": str(torch.__version__), "numpy": np.__version__}
-    for package in ("pybullet", "soft-arm-gym"):
+    for package in (REFERENCE_ENGINE_PACKAGE, "soft-arm-gym"):
         try:
             info[package] = version(package)
         except PackageNotFoundError:
