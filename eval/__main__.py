@@ -80,7 +80,7 @@ from soft_gym._cli import (HelpFormatter, check_environment, check_output_dir, f
                            finite_float, int_at_least, json_or_name, json_value,
                            non_negative_int, positive_float, positive_int, seed_int)
 from soft_gym._validation import SEED_MAX
-from soft_gym.engines import DEFAULT_ENGINE, ENGINES
+from soft_gym.engines import ENGINES, REFERENCE_ENGINE
 from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.papers.zou2022.shape_dnn import ShapeDNNConfig
 from soft_gym.papers.zhao2021.backbone_fit import BACKBONE_CURVES
@@ -154,7 +154,7 @@ def _track(args: argparse.Namespace, parser: argparse.ArgumentParser,
         policy=policy, policy_params={"kp": kp} if _takes_kp(policy) else {}, seed=seed,
         env_kwargs={"preset": args.preset, "path": args.path, "cycles": args.cycles,
                     "scenario": scenario, "faults": faults, "feedback": args.feedback,
-                    "engine": getattr(args, "engine", DEFAULT_ENGINE), **policy_env(policy)},
+                    "engine": getattr(args, "engine", REFERENCE_ENGINE), **policy_env(policy)},
         video_path=str(out / f"{_track_label(policy, kp, seed)}.mp4") if video else None)
         for kp, seed, policy in runs]
     _check_configs(parser, configs, TRACK_OPTIONS if options is None else options)
@@ -434,7 +434,7 @@ def _track_parser(sub) -> argparse.ArgumentParser:
                             "agents always get the parts they were trained with")
     track.add_argument("--seeds", type=seed_int, nargs="+", default=[0],
                        help=f"episode seeds (integers in [0, {SEED_MAX}])")
-    track.add_argument("--engine", choices=list(ENGINES), default=DEFAULT_ENGINE,
+    track.add_argument("--engine", choices=list(ENGINES), default=REFERENCE_ENGINE,
                        help="physics engine (mujoco: no cameras or bodies beside the arm, "
                             "refused before any run)")
     track.add_argument("--out", default="results/track",

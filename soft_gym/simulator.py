@@ -94,8 +94,8 @@ class Simulator(Protocol):
     """One soft arm, its pneumatics and the loads on it, in one engine.
 
     Attributes:
-        features: what the engine offers beyond the arm (``"bodies"``, ``"rendering"``; see
-            :data:`soft_gym.engines.ENGINE_FEATURES`), as a class attribute.
+        features: what the engine offers beyond the arm (``"bodies"``, ``"rendering"``,
+            ``"batched"``; see :data:`soft_gym.engines.ENGINE_FEATURES`), as a class attribute.
         spec: the arm (:class:`~soft_gym.robots.spec.ArmSpec`).
         world: the bodies and cameras around the arm (:class:`World`).
         loads: the attached scenario elements, in the order added.

@@ -41,10 +41,11 @@ import yaml
 
 from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_output_dir, fail,
                            finite_float, non_negative_int, positive_int, seed_int)
+from soft_gym.engines import REFERENCE_ENGINE, engine_supports
 from train.cli_options import (add_env_options, check_arm_env_kwargs, check_conf_file,
                                check_env_kwargs, check_hyperparameter_overrides,
                                parse_env_and_hyperparameters, randomization_hint, resolve_env_id)
-from train.config import ALGORITHMS, OFF_POLICY, VEC_KINDS, parse_key_values
+from train.config import ALGORITHMS, OFF_POLICY, VEC_KINDS, batched_engines, parse_key_values
 from train.sweep import main as sweep_main
 
 
@@ -80,8 +81,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="parallel envs, >= 1 (default: the config's n_envs)")
     parser.add_argument("--vec", choices=VEC_KINDS, default="subprocess",
                         help="how the --n-envs envs run: 'subprocess' (one process each) or "
-                             "'batched' (MuJoCo arms stepped as one batch in this process; "
-                             "needs --env-kwargs engine=mujoco)")
+                             "'batched' (arms stepped as one batch in this process; needs "
+                             f"--env-kwargs {batched_engines()})")
     parser.add_argument("--eval-freq", type=non_negative_int, default=10_000,
                         help="env steps between evaluations (0: none)")
     parser.add_argument("--eval-episodes", type=positive_int, default=2,
@@ -343,9 +344,10 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
                      else "--randomize" if args.randomize else "--env-kwargs")
     overrides = {key: randomization if key == "randomization" else "--env-kwargs"
                  for key in env_kwargs}
-    if args.vec == "batched" and settings.env_kwargs.get("engine") != "mujoco":
-        parser.error(f"--vec batched steps MuJoCo arms as one batch: add --env-kwargs "
-                     f"engine=mujoco (got engine={settings.env_kwargs.get('engine', 'pybullet')!r})")
+    engine = settings.env_kwargs.get("engine", REFERENCE_ENGINE)
+    if args.vec == "batched" and not engine_supports(engine, "batched"):
+        parser.error(f"--vec batched steps arms as one batch: add --env-kwargs "
+                     f"{batched_engines()} (got engine={engine!r})")
     check_env_kwargs(parser, env_id, settings.env_kwargs, overrides,
                      randomization_hint("--randomization-config "))
     check_arm_env_kwargs(parser, env_id, settings, args.vec,

@@ -41,6 +41,7 @@ import numpy as np
 import yaml
 
 from agents.policies.sb3 import ALGORITHM_CLASSES, model_class
+from soft_gym.engines import engines_supporting
 
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
 ALGORITHMS = tuple(ALGORITHM_CLASSES)
@@ -50,6 +51,12 @@ stable-baselines3's classes of the same name (:data:`agents.policies.sb3.ALGORIT
 OFF_POLICY = ("sac", "td3", "ddpg")
 VEC_KINDS = ("subprocess", "batched")
 """How ``n_envs`` envs run (:func:`train.trainer.make_vec_env`)."""
+
+
+def batched_engines() -> str:
+    """The env keyword that ``vec="batched"`` needs, in words: the engines that step arms as one
+    batch (:func:`soft_gym.engines.engines_supporting`), e.g. ``"engine=mujoco"``."""
+    return " or ".join(f"engine={name}" for name in engines_supporting("batched"))
 
 _SPECIAL = ("n_timesteps", "n_envs", "normalize", "env_kwargs", "arm_env_kwargs", "noise_type",
             "noise_std", "policy")

@@ -25,7 +25,7 @@ from agents.policies import (SHIPPED_DIR, BaselinePolicy, make_policy, mark_mode
                              model_normalization_mark, normalization_file, resolve_sb3_path)
 from eval.runner import run_episode
 from soft_gym._cli import HelpFormatter
-from soft_gym.engines import DEFAULT_ENGINE, ENGINES
+from soft_gym.engines import ENGINES, REFERENCE_ENGINE, EngineFeatureError
 from train.tracking_curve import BEST_TRACKING_MODEL_FILE, CURVE_FILE
 from train.trainer import BEST_MODEL_FILE, MODEL_FILE, NORMALIZATION_FILE
 
@@ -66,7 +66,7 @@ def _agent_directory(agent: str | Path) -> Path:
 def training_engine(config: dict) -> str:
     """The physics engine an agent trained on (its run's env keyword ``engine``, default
     PyBullet)."""
-    return config["env_kwargs"].get("engine", DEFAULT_ENGINE)
+    return config["env_kwargs"].get("engine", REFERENCE_ENGINE)
 
 
 def nominal_evaluation(agent: str | Path, engine: str | None = None) -> dict:
@@ -112,9 +112,8 @@ def engine_gap(directory: str | Path) -> dict:
     for engine in ENGINES:
         try:
             errors[engine] = nominal_evaluation(directory, engine)["settled_error_mm"]
-        except ValueError as error:  # e.g. camera feedback, which the MuJoCo engine refuses
-            if "engine" not in str(error):
-                raise
+        except EngineFeatureError:  # e.g. camera feedback on an engine without cameras
+            pass
     return {"training_engine": training_engine(config), "settled_error_mm": errors}
 
 

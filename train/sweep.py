@@ -90,6 +90,7 @@ from tqdm import tqdm
 import soft_gym  # noqa: F401  (registers the env ids)
 from soft_gym._cli import HelpFormatter, check_environment, check_output_dir, seed_int
 from soft_gym._validation import SEED_MAX
+from soft_gym.engines import REFERENCE_ENGINE, engine_supports
 from soft_gym.envs.config import EnvConfig
 from soft_gym.envs.registration import preset_env_id
 from soft_gym.papers import DEFAULT_PRESET
@@ -336,9 +337,11 @@ def apply_values(entry: Mapping[str, Any], values: Mapping[str, Any]) -> dict[st
 
 
 def trial_arms(entry: Mapping[str, Any]) -> tuple[int, str]:
-    """``(n_envs, vec)`` of a trial: the entry's arms in one MuJoCo batch when its env runs on
-    the mujoco engine, else one env."""
-    if (entry.get("env_kwargs") or {}).get("engine") == "mujoco":
+    """``(n_envs, vec)`` of a trial: the entry's arms in one batch when its env runs on an
+    engine that steps arms as one batch (MuJoCo; :func:`soft_gym.engines.engine_supports`),
+    else one env."""
+    engine = (entry.get("env_kwargs") or {}).get("engine", REFERENCE_ENGINE)
+    if engine_supports(engine, "batched"):
         return int(entry.get("n_envs", 1)), "batched"
     return 1, "subprocess"
 

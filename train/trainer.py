@@ -48,8 +48,10 @@ import soft_gym  # noqa: F401  (registers the env ids)
 from soft_gym.envs.registration import preset_env_id
 from soft_gym.papers import DEFAULT_PRESET
 from agents.policies.sb3 import mark_normalization
+from soft_gym._distributions import REFERENCE_ENGINE_PACKAGE
+from soft_gym.engines import REFERENCE_ENGINE, engine_supports
 from train.batched import Sb3VectorEnv
-from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class,
+from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class, batched_engines,
                           build_action_noise, read_hyperparameters, split_hyperparameters)
 from train.curves import plot_learning_curve, plot_tracking_curve
 from train.demonstrations import (load_demonstrations, record_demonstrations,
@@ -175,7 +177,7 @@ def versions() -> dict[str, str]:
     info = {"python": platform.python_version(), "platform": platform.platform(),
             "gymnasium": gymnasium.__version__, "stable_baselines3": stable_baselines3.__version__,
             "torch": str(torch.__version__), "numpy": np.__version__}
-    for package in ("pybullet", "soft-arm-gym"):
+    for package in (REFERENCE_ENGINE_PACKAGE, "soft-arm-gym"):
         try:
             info[package] = version(package)
         except PackageNotFoundError:
@@ -203,14 +205,15 @@ def make_vec_env(env_id: str, env_kwargs: dict, n_envs: int, seed: int,
         raise ValueError(f"vec must be one of {list(VEC_KINDS)}, got {vec!r}")
     if per_arm is not None and vec != "batched":
         raise ValueError("arm_env_kwargs gives the arms of one batch their own env keyword "
-                         "arguments: train with --vec batched (and engine=mujoco), got "
+                         f"arguments: train with --vec batched (and {batched_engines()}), got "
                          f"vec={vec!r}")
     if vec == "batched":
         batched = Sb3VectorEnv(env_id.split(":")[-1], n_envs, monitor_dir=monitor_dir,
                                per_env_kwargs=per_arm, **env_kwargs)
         batched.seed(seed)
         return batched
-    if env_kwargs.get("engine") == "mujoco":  # SB3 asks for rgb_array frames, which it lacks
+    if not engine_supports(env_kwargs.get("engine", REFERENCE_ENGINE), "rendering"):
+        # SB3 asks for rgb_array frames, which an engine without cameras cannot give
         env_kwargs = {"render_mode": None, **env_kwargs}
     vec_cls = SubprocVecEnv if n_envs > 1 else DummyVecEnv
     kwargs = {"start_method": "spawn"} if n_envs > 1 else {}

@@ -22,6 +22,7 @@ from typing import Any
 
 from agents.policies.sb3 import (ALGORITHM_CLASSES, SB3Policy, normalization_file,
                                  training_segments)
+from soft_gym.engines import REFERENCE_ENGINE
 
 TRAINED_AGENT_KEY = "trained_agent"
 """The key marking a ``training.yaml`` segment inherited from the agent a run started from."""
@@ -108,7 +109,7 @@ def inherited_segments(agent: TrainedAgent) -> list[dict[str, Any]]:
     already, from an agent the agent was itself fine-tuned from, keeps its marks)."""
     env_kwargs = agent.config.get("env_kwargs") or {}
     marks = {TRAINED_AGENT_KEY: Path(agent.name).name if Path(agent.name).exists() else agent.name,
-             "engine": str(env_kwargs.get("engine", "pybullet")),
+             "engine": str(env_kwargs.get("engine", REFERENCE_ENGINE)),
              "feedback": env_kwargs.get("feedback")}
     # a segment the agent itself inherited keeps the marks of the agent it came from
     return [{**segment, **{key: value for key, value in marks.items() if key not in segment}}

@@ -25,6 +25,7 @@ import yaml
 from gymnasium import spaces
 
 from agents.policies.base import BaselinePolicy, PolicyRefusal, check_observation, describe_value
+from soft_gym.engines import REFERENCE_ENGINE
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "trained"
 """Trained agents kept in the repository, one directory each (``sb3:<name>`` loads one)."""
@@ -67,7 +68,7 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
             "wall_s": float(sum(segment.get("wall_s", 0.0) + segment.get("demo_wall_s", 0.0)
                                 for segment in segments)),
             "n_envs": int(segments[-1].get("n_envs", 1)),
-            "engine": str(env_kwargs.get("engine", "pybullet")),
+            "engine": str(env_kwargs.get("engine", REFERENCE_ENGINE)),
             "feedback": env_kwargs.get("feedback"),
             "plateau": bool(segments[-1].get("stopped_at_plateau", False)),
             "interrupted": bool(segments[-1].get("interrupted", False)),

@@ -7,6 +7,8 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
+from soft_gym._distributions import REFERENCE_ENGINE_PACKAGE
+
 PROCEDURE_LAYOUT = (
     "One episode holds the procedure's samples in the order taken. Step `i`'s action is sample "
     "`i`'s command as the env's absolute-mode action (`a = 2 (p - p_pre) / (p_max - p_pre) - 1`)"
@@ -20,7 +22,8 @@ PROCEDURE_LAYOUT = (
 def package_versions() -> dict[str, str]:
     """Installed versions of what made the data."""
     versions = {}
-    for name in ("soft-arm-gym", "minari", "gymnasium", "pybullet", "numpy", "torch"):
+    for name in ("soft-arm-gym", "minari", "gymnasium", REFERENCE_ENGINE_PACKAGE, "numpy",
+                 "torch"):
         try:
             versions[name] = version(name)
         except PackageNotFoundError:

@@ -25,6 +25,7 @@ import numpy as np
 from eval.metrics import MM_PER_M, summarize
 from eval.report import to_jsonable
 from eval.suite.grid import canonical_json, cell_key
+from soft_gym._distributions import REFERENCE_ENGINE_PACKAGE
 
 
 def cell_metrics(record: Mapping[str, np.ndarray]) -> dict[str, Any]:
@@ -57,7 +58,8 @@ def library_versions() -> dict[str, str]:
     versions = {}
     for key, dist in (("soft_arm_gym", "soft-arm-gym"), ("gymnasium", "gymnasium"),
                       ("stable_baselines3", "stable-baselines3"), ("torch", "torch"),
-                      ("numpy", "numpy"), ("pybullet", "pybullet")):
+                      ("numpy", "numpy"),
+                      (REFERENCE_ENGINE_PACKAGE, REFERENCE_ENGINE_PACKAGE)):
         try:
             versions[key] = metadata.version(dist)
         except metadata.PackageNotFoundError:

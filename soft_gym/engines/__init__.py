@@ -3,15 +3,17 @@
 | name       | class                                                  | features                 |
 |------------|--------------------------------------------------------|--------------------------|
 | `pybullet` | :class:`soft_gym.engines.pybullet.ArmSimulator`        | `bodies`, `rendering`    |
-| `mujoco`   | :class:`soft_gym.engines.mujoco.MujocoArmSimulator`    | (the arm alone)          |
+| `mujoco`   | :class:`soft_gym.engines.mujoco.MujocoArmSimulator`    | `batched`                |
 
-`pybullet` is the default and the reference the papers' experiments run on; `mujoco` integrates
-the same chain (:mod:`soft_gym.robots.chain`) with its springs native, several times faster
-(docs/architecture.md, "The MuJoCo engine"). :func:`make_simulator` builds one; everything above
-the engines (env, sensors, loads, tasks, procedures, baselines) uses only the interface
-(docs/architecture.md, "The simulator interface"). What an engine lacks is refused before any
-work by :func:`require_engine_features`, naming beside the engines that have it what would run on
-the engine asked for (e.g. the feedback sources it runs).
+`pybullet` is :data:`REFERENCE_ENGINE`, the default and the engine the papers' experiments run
+on; `mujoco` integrates the same chain (:mod:`soft_gym.robots.chain`) with its springs native,
+several times faster, and steps a batch of arms together (docs/architecture.md, "The MuJoCo
+engine"). :func:`make_simulator` builds one; everything above the engines (env, sensors, loads,
+tasks, procedures, baselines) uses only the interface (docs/architecture.md, "The simulator
+interface") and asks what an engine can do by feature (:data:`ENGINE_FEATURES`,
+:func:`engine_supports`, :func:`engines_supporting`), never by its name. What an engine lacks is
+refused before any work by :func:`require_engine_features`, naming beside the engines that have
+it what would run on the engine asked for (e.g. the feedback sources it runs).
 """
 
 from __future__ import annotations
@@ -30,16 +32,54 @@ ENGINES: Registry[type] = Registry("engine")
 ENGINES.register("pybullet", ArmSimulator)
 ENGINES.register("mujoco", MujocoArmSimulator)
 
-DEFAULT_ENGINE = "pybullet"
+REFERENCE_ENGINE = "pybullet"
+"""The engine the papers' experiments run on, and every engine argument's default."""
 
 ENGINE_FEATURES: dict[str, str] = {
     "bodies": "rigid bodies beside the arm (a swaying mass, an obstacle rod) and their contacts",
     "rendering": "camera frames (the eye-in-hand camera, the stereo pair, render())",
+    "batched": "arms stepped together as one batch (a vector env's arms in lockstep)",
 }
-"""What an engine may offer beyond the arm (each simulator class's ``features``)."""
+"""What an engine may offer beyond the arm (each simulator class's ``features``), by name. A class
+that offers ``"batched"`` has ``step_batch(sims, seconds, executor=None, n_threads=1)``, which
+advances arms of that class together by ``seconds`` (s)."""
 
 
-def make_simulator(spec: ArmSpec, engine: str = DEFAULT_ENGINE,
+def _require_feature(feature: str) -> str:
+    """``feature``, refused with a ``ValueError`` unless it is a name of :data:`ENGINE_FEATURES`."""
+    if not isinstance(feature, str) or feature not in ENGINE_FEATURES:
+        raise ValueError(f"feature must be one of {list(ENGINE_FEATURES)}, got {feature!r}")
+    return feature
+
+
+def engine_supports(engine: str, feature: str) -> bool:
+    """Whether ``engine`` is a registered engine (:data:`ENGINES`) that offers ``feature``.
+
+    Args:
+        engine: an engine name; anything else (an unknown name, a non-string) offers nothing,
+            and is left to the env to refuse by name.
+        feature: a name from :data:`ENGINE_FEATURES`.
+
+    Raises:
+        ValueError: ``feature`` not a name of :data:`ENGINE_FEATURES`.
+    """
+    _require_feature(feature)
+    return isinstance(engine, str) and engine in ENGINES and feature in ENGINES[engine].features
+
+
+def engines_supporting(*features: str) -> list[str]:
+    """The registered engines that offer every one of ``features`` (names from
+    :data:`ENGINE_FEATURES`), in registration order.
+
+    Raises:
+        ValueError: a feature not a name of :data:`ENGINE_FEATURES`.
+    """
+    for feature in features:
+        _require_feature(feature)
+    return [name for name in ENGINES if set(features) <= ENGINES[name].features]
+
+
+def make_simulator(spec: ArmSpec, engine: str = REFERENCE_ENGINE,
                    physics_dt_s: float | None = None) -> Simulator:
     """A new simulator of the arm ``spec`` in ``engine`` (see :data:`ENGINES`).
 
@@ -99,7 +139,7 @@ def require_engine_features(engine: str,
             need = EngineNeed(need[0], frozenset(need[1]))
         missing = sorted(set(need.features) - offered)
         if missing:
-            able = [name for name in ENGINES if set(need.features) <= ENGINES[name].features]
+            able = engines_supporting(*need.features)
             remedy = f" or {need.remedy}" if need.remedy else ""
             raise EngineFeatureError(
                 f"{need.what} needs {' and '.join(ENGINE_FEATURES[f] for f in missing)}, which "
@@ -107,5 +147,6 @@ def require_engine_features(engine: str,
                 engine, need)
 
 
-__all__ = ["ENGINES", "DEFAULT_ENGINE", "ENGINE_FEATURES", "EngineFeatureError", "EngineNeed",
+__all__ = ["ENGINES", "REFERENCE_ENGINE", "ENGINE_FEATURES",
+           "EngineFeatureError", "EngineNeed", "engine_supports", "engines_supporting",
            "make_simulator", "require_engine_features"]

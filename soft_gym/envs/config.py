@@ -17,7 +17,7 @@ from typing import Any
 
 from soft_gym._validation import (require_choice, require_integer, require_names,
                                   require_non_negative)
-from soft_gym.engines import DEFAULT_ENGINE, ENGINES
+from soft_gym.engines import ENGINES, REFERENCE_ENGINE
 from soft_gym.envs.observations import OBSERVATION_PARTS, STATE_PARTS
 from soft_gym.envs.rendering import check_render_size
 from soft_gym.papers import DEFAULT_PRESET
@@ -54,7 +54,7 @@ class EnvConfig:
     """
 
     preset: str | os.PathLike | ArmSpec = DEFAULT_PRESET
-    engine: str = DEFAULT_ENGINE
+    engine: str = REFERENCE_ENGINE
     task: str = "reach"
     path: str | list[str] = "circle"
     cycles: int = 1

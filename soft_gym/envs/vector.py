@@ -31,7 +31,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array
 
 from soft_gym._validation import require_integer
-from soft_gym.engines.mujoco.stepping import step_arms
+from soft_gym.engines import REFERENCE_ENGINE, engine_supports, engines_supporting
 from soft_gym.envs.soft_arm_env import ClosedEnvError, ResetNeededError, SoftArmEnv
 
 MAX_NUM_ENVS = 4096
@@ -102,14 +102,15 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
             engine and control period. Arms whose actuation differs are stepped one after another
             instead of in lockstep, with the same result.
         **env_kwargs: the keyword arguments of every arm's
-            :class:`~soft_gym.envs.soft_arm_env.SoftArmEnv`; ``engine`` must be ``"mujoco"``.
+            :class:`~soft_gym.envs.soft_arm_env.SoftArmEnv`; ``engine`` must be one that
+            offers ``"batched"`` (:func:`soft_gym.engines.engine_supports`): MuJoCo.
 
     Attributes:
         envs: the arms' envs (``envs[i].sim`` is arm ``i``'s simulator).
 
     Raises:
         ValueError: naming the argument, for a bad ``num_envs``, ``threads`` or
-            ``autoreset_mode``, an engine other than MuJoCo, or any bad env argument.
+            ``autoreset_mode``, an engine without ``"batched"``, or any bad env argument.
     """
 
     def __init__(self, num_envs: int, *, threads: int = 1,
@@ -121,13 +122,14 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         arm_kwargs = _per_env_kwargs(per_env_kwargs, self.num_envs)
         for i, own in enumerate(arm_kwargs):
-            engine = {**env_kwargs, **own}.get("engine", "pybullet")
-            if engine != "mujoco":
+            engine = {**env_kwargs, **own}.get("engine", REFERENCE_ENGINE)
+            if not engine_supports(engine, "batched"):
                 where = f" (per_env_kwargs[{i}])" if "engine" in own else ""
-                raise ValueError(f"engine must be 'mujoco' for a batched vector env (its arms "
-                                 f"are stepped together in MuJoCo), got {engine!r}{where}; for "
-                                 "PyBullet arms use gym.make_vec(..., vectorization_mode='sync' "
-                                 "or 'async')")
+                able = " or ".join(repr(name) for name in engines_supporting("batched"))
+                raise ValueError(f"engine must be {able} for a batched vector env (an engine "
+                                 f"that steps arms together as one batch), got {engine!r}{where}; "
+                                 "for arms on another engine use gym.make_vec(..., "
+                                 "vectorization_mode='sync' or 'async')")
         if per_env_kwargs is None:
             self.envs = [SoftArmEnv(**env_kwargs)]
             for _ in range(self.num_envs - 1):  # each arm its own copy of the arguments
@@ -200,8 +202,9 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
                    if not resetting[i]}
         for i, action in checked.items():
             self.envs[i].command(action)
-        step_arms([self.envs[i].sim for i in checked], self.envs[0].arm.control_period_s,
-                  self._executor, self.threads)
+        type(self.envs[0].sim).step_batch([self.envs[i].sim for i in checked],
+                                          self.envs[0].arm.control_period_s, self._executor,
+                                          self.threads)
         results: list = [None] * self.num_envs
         for i, env in enumerate(self.envs):
             if resetting[i]:  # NextStep: this step resets the arm, its action unused

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from soft_gym._validation import as_points, require_positive
-from soft_gym.engines import DEFAULT_ENGINE, make_simulator
+from soft_gym.engines import REFERENCE_ENGINE, make_simulator
 from soft_gym.procedures.positioning import follow_path
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.sensing.calibration_cache import cached
@@ -27,7 +27,7 @@ def reachable_tips(spec: ArmSpec, n_samples: int = 96, hold_s: float = 0.4,
     set is the same in every process.
     """
     def walk() -> np.ndarray:
-        sim = make_simulator(spec, DEFAULT_ENGINE)
+        sim = make_simulator(spec, REFERENCE_ENGINE)
         rng = np.random.default_rng(seed)
         sim.reset(settle_s=0.3)
         low, high = spec.p_pre_pa, spec.p_max_pa
@@ -39,7 +39,7 @@ def reachable_tips(spec: ArmSpec, n_samples: int = 96, hold_s: float = 0.4,
         sim.close()
         return tips
 
-    parts = {"what": "reachable tips", "arm": repr(spec), "engine": DEFAULT_ENGINE,
+    parts = {"what": "reachable tips", "arm": repr(spec), "engine": REFERENCE_ENGINE,
              "n_samples": int(n_samples), "hold_s": float(hold_s), "seed": int(seed)}
     return cached(parts, walk)
 
@@ -72,7 +72,7 @@ def reach_distances(spec: ArmSpec, points_m: np.ndarray, hold_s: float = 1.0,
     points = as_points("points_m", points_m)
     hold_s = require_positive("hold_s", hold_s)
     tolerance_m = require_positive("tolerance_m", tolerance_m)
-    sim = make_simulator(spec, "pybullet")
+    sim = make_simulator(spec, REFERENCE_ENGINE)
     try:
         sim.reset(settle_s=0.3)
         return follow_path(sim, points, hold_s=hold_s, tolerance_m=tolerance_m)[1]

@@ -28,6 +28,7 @@ import cv2
 import numpy
 import platformdirs
 
+from soft_gym._distributions import REFERENCE_ENGINE_PACKAGE
 from soft_gym._threads import one_compute_thread
 
 CACHE_ENV_VARIABLE = "SOFT_GYM_CACHE"
@@ -39,7 +40,7 @@ def library_versions() -> dict[str, str]:
     """Versions whose change can change a calibration (package and numerical libraries)."""
     versions = {"numpy": numpy.__version__, "opencv": cv2.__version__,
                 "soft_gym source": _source_digest()}
-    for name in ("soft-arm-gym", "pybullet"):
+    for name in ("soft-arm-gym", REFERENCE_ENGINE_PACKAGE):
         try:
             versions[name] = metadata.version(name)
         except metadata.PackageNotFoundError:

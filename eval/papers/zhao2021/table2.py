@@ -37,7 +37,7 @@ from tqdm import tqdm
 
 from eval.report import save_figure
 from soft_gym._validation import require_integer, require_seed
-from soft_gym.engines import make_simulator
+from soft_gym.engines import REFERENCE_ENGINE, make_simulator
 from soft_gym.robots.presets import get_preset
 from soft_gym.papers.zhao2021.frames import paper_pressures_to_chambers
 from soft_gym.robots.spec import ArmSpec
@@ -80,7 +80,7 @@ def fem_like_arm(links_per_segment: int = LINKS_PER_SEGMENT) -> ArmSpec:
         dataclasses.replace(segment, n_links=links) for segment in preset.segments))
 
 
-def simulate_shapes(links_per_segment: int = LINKS_PER_SEGMENT, engine: str = "pybullet"
+def simulate_shapes(links_per_segment: int = LINKS_PER_SEGMENT, engine: str = REFERENCE_ENGINE
                     ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Each configuration's key points ``P0..P6`` (7, 3) and true backbone (m, 3) (m, base
     frame) on :func:`fem_like_arm`, under the four spiralling forces."""

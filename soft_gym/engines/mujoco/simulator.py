@@ -49,8 +49,13 @@ class MujocoArmSimulator(CommonArm):
         time_s: simulated time since the last reset (s).
     """
 
-    features: frozenset[str] = frozenset()
-    """Engine features beyond the arm (see :data:`soft_gym.engines.ENGINE_FEATURES`): none."""
+    features: frozenset[str] = frozenset({"batched"})
+    """Engine features beyond the arm (see :data:`soft_gym.engines.ENGINE_FEATURES`): arms
+    stepped as one batch (:attr:`step_batch`)."""
+
+    step_batch = staticmethod(step_arms)
+    """``step_batch(sims, seconds, executor=None, n_threads=1)`` advances arms of this class
+    together by ``seconds`` (s) (:func:`~soft_gym.engines.mujoco.stepping.step_arms`)."""
 
     def __init__(self, spec: ArmSpec, physics_dt_s: float | None = None) -> None:
         self.spec = spec

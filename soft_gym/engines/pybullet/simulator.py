@@ -55,7 +55,8 @@ class ArmSimulator(CommonArm):
     """
 
     features: frozenset[str] = frozenset({"bodies", "rendering"})
-    """Engine features beyond the arm (:data:`soft_gym.engines.ENGINE_FEATURES`): all."""
+    """Engine features beyond the arm (:data:`soft_gym.engines.ENGINE_FEATURES`): bodies beside
+    it and cameras (its arms are not stepped as one batch)."""
 
     def __init__(self, spec: ArmSpec, physics_dt_s: float | None = None) -> None:
         self.spec = spec
