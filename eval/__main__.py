@@ -59,6 +59,7 @@ from agents.policies import BASELINES, shipped_agents
 from eval import compare as compare_module
 from eval import runner  # runner.run_many, looked up at each call (tests stand in for it)
 from eval import datasets as datasets_module
+from eval import results_page
 from eval import suite as suite_module
 from eval.claims import CLAIMS, claim_papers
 from eval.datasets import write as dataset_write
@@ -956,6 +957,7 @@ COMMANDS: dict[str, Command] = {
     "claims": Command(_claims_parser, _run_claims),
     "suite": Command(_suite_parser, _run_suite),
     "datasets": Command(_datasets_parser, _run_datasets),
+    "results": Command(results_page.add_parser, results_page.run),
 }
 """Subcommand name -> its parser and its work, in the order ``--help`` lists them."""
 

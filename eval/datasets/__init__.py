@@ -15,7 +15,7 @@ suite's runs.
   (``local_ik_asdm``, ``strain_sr``, ``encoder_dnn``, ``lwpr_rwr``; ``dataset=<id>``), checked
   against the method's settings.
 
-The ids, fields and units are in README.md ("Datasets"), the data cards in docs/datasets.md.
+The ids, fields and units and the data cards are in docs/datasets.md.
 """
 
 from eval.datasets.episodes import EpisodeRecorder

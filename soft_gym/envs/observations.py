@@ -3,7 +3,7 @@
 ``obs=`` of the env picks and orders parts from :data:`OBSERVATION_PARTS`; each
 :class:`ObservationPart` gives the part's space (from the arm and the simulated sensors) and its
 value at a step (from the step's measurement, the feedback estimate, the task and the pressures).
-The env's docstring and the README's table are checked against this one
+The env's docstring and the guide's table (docs/guide.md) are checked against this one
 (``tests/test_readme.py``, ``tests/soft_gym/envs/test_env.py``).
 
 | part       | size            | content                                                   | unit |
