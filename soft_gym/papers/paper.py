@@ -4,14 +4,16 @@ evaluation layer finds its experiments, claims, datasets and subcommand.
 One :func:`register_paper` call makes a paper known everywhere: its arms become presets
 (:data:`soft_gym.robots.presets.PRESETS`, with the cylinders its paper drives volumes with), its
 feedback sources become ``feedback=`` names (:data:`soft_gym.sensing.FEEDBACK_SOURCES`) with
-their calibration procedures (:data:`soft_gym.procedures.calibration.CALIBRATIONS`), and the
+their calibration procedures (:data:`soft_gym.procedures.calibration.CALIBRATIONS`), its visual
+disturbance protocols become ``faults=`` presets (:data:`soft_gym.sensors.faults.FAULT_PRESETS`),
+and the
 evaluation layer imports :attr:`Paper.evaluation` for the rest. A paper outside the package is
 registered the same way (docs/architecture.md, "A fifth paper").
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from soft_gym._registry import Registry
@@ -20,6 +22,7 @@ from soft_gym.robots.presets import PRESETS, register_preset, unregister_preset
 from soft_gym.robots.spec import ArmSpec, CylinderSpec
 from soft_gym.sensing import FEEDBACK_SOURCES
 from soft_gym.sensing.feedback_base import FeedbackSource
+from soft_gym.sensors.faults import FAULT_PRESETS
 
 
 @dataclass(frozen=True)
@@ -38,6 +41,9 @@ class Paper:
             (``actuation="volume"``), for every arm of the paper; ``None`` where it drives
             pressures.
         cylinder_notes: where :attr:`cylinders`' numbers come from (merged into the arm's notes).
+        fault_presets: the paper's visual-disturbance protocols by name (``faults=<name>``),
+            each a function returning a list of faults
+            (:data:`soft_gym.sensors.faults.FAULT_PRESETS`).
         evaluation: the importable module of the evaluation layer holding the paper's
             experiments, claims, datasets and subcommand (``"eval.papers.zou2022"``), or
             ``None`` for a paper with none.
@@ -50,6 +56,7 @@ class Paper:
     calibrations: Mapping[str, Calibration] = field(default_factory=dict)
     cylinders: CylinderSpec | None = None
     cylinder_notes: Mapping[str, str] = field(default_factory=dict)
+    fault_presets: Mapping[str, Callable[..., list]] = field(default_factory=dict)
     evaluation: str | None = None
 
 
@@ -81,6 +88,10 @@ def _check(paper: Paper) -> None:
         raise ValueError(f"Paper.calibrations of {paper.key!r} must give a procedure for each "
                          f"calibrating source {sorted(calibrating)} and nothing else; missing "
                          f"{missing}, not calibrating sources {stray}")
+    for name, preset in paper.fault_presets.items():
+        if not (isinstance(name, str) and name and callable(preset)):
+            raise ValueError(f"Paper.fault_presets of {paper.key!r} must map names to functions "
+                             f"returning faults, got {name!r}: {preset!r}")
     if paper.cylinders is not None and not paper.arms:
         raise ValueError(f"Paper.cylinders of {paper.key!r} needs arms to drive")
     if paper.evaluation is not None and not (
@@ -102,7 +113,8 @@ def register_paper(paper: Paper) -> None:
     """
     _check(paper)
     for registry, names in ((PAPERS, [paper.key]),
-                            (FEEDBACK_SOURCES, [s.name for s in paper.feedback_sources])):
+                            (FEEDBACK_SOURCES, [s.name for s in paper.feedback_sources]),
+                            (FAULT_PRESETS, list(paper.fault_presets))):
         taken = [name for name in names if name in registry]
         if taken:
             raise ValueError(f"{registry.kind} {taken} of paper {paper.key!r} already "
@@ -117,6 +129,8 @@ def register_paper(paper: Paper) -> None:
         FEEDBACK_SOURCES.register(source.name, source)
     for name, procedure in paper.calibrations.items():
         CALIBRATIONS.register(name, procedure)
+    for name, preset in paper.fault_presets.items():
+        FAULT_PRESETS.register(name, preset)
     PAPERS.register(paper.key, paper)
 
 
@@ -124,6 +138,8 @@ def unregister_paper(key: str) -> None:
     """Remove the paper ``key`` and everything its registration added (a plug-in that is done,
     e.g. in a test)."""
     paper = PAPERS[key]
+    for name in paper.fault_presets:
+        FAULT_PRESETS.unregister(name)
     for name in paper.calibrations:
         CALIBRATIONS.unregister(name)
     for source in paper.feedback_sources:

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from soft_gym.datasets.training import DatasetRoot, paper_episode, procedure_rows
 
 
