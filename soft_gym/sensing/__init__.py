@@ -2,16 +2,16 @@
 
 One folder per paper (``wang2023/``, ``zhao2021/``, ``zou2022/``: its estimators and its feedback
 sources); at the root, what they share: the protocol (:mod:`~soft_gym.sensing.feedback_base`),
-the :class:`~soft_gym.sensing.measurement.Measurement`, the sources of no paper in particular
+the :class:`~soft_gym.sensors.measurement.Measurement`, the sources of no paper in particular
 (:mod:`~soft_gym.sensing.feedback`: ``ground_truth``, ``em``) and the calibration cache.
 
 One folder per paper (``wang2023/``, ``zhao2021/``, ``zou2022/``: its estimators and its feedback
 sources); at the root, what they share: the protocol (:mod:`~soft_gym.sensing.feedback_base`),
-the :class:`~soft_gym.sensing.measurement.Measurement`, the sources of no paper in particular
+the :class:`~soft_gym.sensors.measurement.Measurement`, the sources of no paper in particular
 (:mod:`~soft_gym.sensing.feedback`: ``ground_truth``, ``em``) and the calibration cache.
 
 Nothing here drives a simulator: an estimator sees a
-:class:`~soft_gym.sensing.measurement.Measurement` (the readings and the commands sent) and what a
+:class:`~soft_gym.sensors.measurement.Measurement` (the readings and the commands sent) and what a
 calibration procedure (:mod:`soft_gym.procedures`) gave it. ``feedback=`` of the env names a
 source registered in :data:`FEEDBACK_SOURCES` (see :mod:`soft_gym.sensing.feedback`).
 """
