@@ -229,7 +229,7 @@ def check_trained_agent(parser: argparse.ArgumentParser, args: argparse.Namespac
                         settings) -> None:
     """``--trained-agent``: an agent of ``--algo`` that reads the run's observations and writes
     its actions, normalised as the run is (one line naming the option otherwise)."""
-    from eval.runner import make_uncalibrated_env
+    from soft_gym.envs.uncalibrated import make_uncalibrated_env
     from train.warm_start import check_fits, find_trained_agent
 
     env = make_uncalibrated_env(env_id, {**settings.env_kwargs, **settings.arm_variants()[0]})

@@ -41,8 +41,8 @@ from tqdm import tqdm
 
 from agents.policies import BASELINES, make_policy
 from agents.policies.registry import constructor_parameters
-from eval.datasets.episodes import EpisodeRecorder
-from eval.runner import run_episode
+from agents.rollout import run_episode
+from soft_gym.datasets.episodes import EpisodeRecorder
 from soft_gym.datasets.store import load_dataset, write_dataset
 
 DEMO_GROUP = "demos"

@@ -23,7 +23,7 @@ import yaml
 import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import (SHIPPED_DIR, BaselinePolicy, make_policy, mark_model_file,
                              model_normalization_mark, normalization_file, resolve_sb3_path)
-from eval.runner import run_episode
+from agents.rollout import run_episode
 from soft_gym._cli import HelpFormatter
 from soft_gym.engines import DEFAULT_ENGINE, ENGINES
 from train.tracking_curve import BEST_TRACKING_MODEL_FILE, CURVE_FILE
@@ -70,7 +70,7 @@ def training_engine(config: dict) -> str:
 
 
 def nominal_evaluation(agent: str | Path, engine: str | None = None) -> dict:
-    """A shipped agent's nominal tracking: one episode (:func:`eval.runner.run_episode`) of the
+    """A shipped agent's nominal tracking: one episode (:func:`agents.rollout.run_episode`) of the
     env it trained on, with its recipe's keyword arguments less the randomisation (its feedback
     and path, no load), reset with seed 123, deterministic actions.
 

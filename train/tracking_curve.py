@@ -28,8 +28,8 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 from agents.policies.sb3 import SB3Policy, normalization_file
-from eval.metrics import summarize
-from eval.runner import run_episode
+from agents.rollout import run_episode
+from agents.tracking_error import last_cycle_error_mm
 from soft_gym.scenarios.randomization import RandomizationConfig
 
 CURVE_FILE = "eval/tracking_curve.csv"
@@ -130,12 +130,6 @@ def has_plateaued(timesteps: np.ndarray, errors_mm: np.ndarray,
         return False
     best_before, best_now = float(earlier.min()), float(errors_mm.min())
     return best_before - best_now < min_improvement * best_before
-
-
-def last_cycle_error_mm(record: dict) -> float:
-    """Mean tracking error (mm) over the record's last cycle: the suites' score
-    (:func:`eval.metrics.summarize`)."""
-    return float(summarize(record)["tracking"]["per_cycle"]["mean_mm"][-1])
 
 
 class TrackingCurveCallback(BaseCallback):

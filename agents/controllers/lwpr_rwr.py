@@ -314,7 +314,7 @@ class LWPRRWRController(BaselinePolicy):
         between random actuator-space waypoints, on an unloaded, fault-free copy of the env.
 
         :param wrap_env: applied to the copy once made, before its reset (e.g. a recorder of the
-            walk, :class:`eval.datasets.episodes.EpisodeRecorder`); it must pass observations
+            walk, :class:`soft_gym.datasets.episodes.EpisodeRecorder`); it must pass observations
             and actions through unchanged. The wrapped env is closed after the walk.
         """
         env = self.pretraining_env()

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from eval.datasets.cards import suite_card
-from eval.datasets.episodes import episode_buffer
+from soft_gym.datasets.episodes import episode_buffer
 from soft_gym.datasets.store import write_dataset
 from eval.suite.grid import Cell
 from eval.suite.store import episode_path, read_record

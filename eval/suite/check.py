@@ -11,9 +11,9 @@ from typing import Any
 from tqdm import tqdm
 
 from agents.policies import PolicyRefusal, SB3Policy, make_policy
-from eval.runner import uncalibrated_env_class
 from eval.suite.grid import Cell, arm_env, canonical_json, expand
 from eval.suite.spec import PolicyEntry, SuiteError, SuiteSpec
+from soft_gym.envs.uncalibrated import uncalibrated_env_class
 
 
 class EnvChecker:
