@@ -30,10 +30,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from soft_gym.datasets.episodes import (EpisodeRecorder, box_dict_space, episode_buffer,
-                                    procedure_episode)
 from soft_gym._registry import Registry
 from soft_gym._validation import require_integer, require_seed
+from soft_gym.datasets.episodes import (EpisodeRecorder, box_dict_space, episode_buffer,
+                                        procedure_episode)
 
 
 @dataclass
