@@ -8,7 +8,7 @@ actions, the training engine, reset seed :data:`CURVE_SEED`) and writes one row 
 to ``eval/tracking_curve.csv``: env steps, wall time (s), the mean of the cases' last-cycle mean
 errors (mm) and each case's. The model with the lowest mean is kept as
 ``best_tracking_model.zip`` (with its normalisation statistics,
-:func:`agents.policies.sb3.normalization_file`). With ``until_plateau``
+:func:`agents.policies.run_dir.normalization_file`). With ``until_plateau``
 training stops once :func:`has_plateaued`: the last ``fraction`` (20 %) of the steps so far
 lowered the best error by under ``min_improvement`` (5 %) of it, so the budget comes from the
 curve, not from a time limit; ``--timesteps`` is then the most it may take.
@@ -27,13 +27,13 @@ import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
-from agents.policies.sb3 import SB3Policy, normalization_file
+from agents.policies.run_dir import BEST_TRACKING_MODEL_FILE, normalization_file
+from agents.policies.sb3 import SB3Policy
 from agents.rollout import run_episode
 from agents.tracking_error import last_cycle_error_mm
 from soft_gym.scenarios.randomization import RandomizationConfig
 
 CURVE_FILE = "eval/tracking_curve.csv"
-BEST_TRACKING_MODEL_FILE = "best_tracking_model.zip"
 CURVE_SEED = 777
 """Reset seed of every evaluation episode (apart from the training and SB3 evaluation seeds)."""
 CURVE_CYCLES = 2

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agents.policies.sb3 import (ALGORITHM_CLASSES, SB3Policy, normalization_file,
-                                 training_segments)
+from agents.policies.run_dir import normalization_file
+from agents.policies.sb3 import ALGORITHM_CLASSES, SB3Policy, training_segments
 
 TRAINED_AGENT_KEY = "trained_agent"
 """The key marking a ``training.yaml`` segment inherited from the agent a run started from."""
