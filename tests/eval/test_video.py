@@ -156,10 +156,11 @@ def test_estimation_video(tmp_path):
 
 def test_estimation_video_flag(tmp_path, monkeypatch):
     import eval.__main__ as cli
+    from eval.commands import paper_estimation
 
     calls = []
-    monkeypatch.setattr(cli, "run_experiments", lambda *args, **kwargs: calls.append(kwargs)
-                        or [{"experiment": "clean"}])
+    monkeypatch.setattr(paper_estimation, "run_experiments",
+                        lambda *args, **kwargs: calls.append(kwargs) or [{"experiment": "clean"}])
     cli.main(["estimation", "--steps", "600", "--out", str(tmp_path), "--video"])
     cli.main(["estimation", "--steps", "600", "--out", str(tmp_path)])
     assert [call.get("video", False) for call in calls] == [True, False]
