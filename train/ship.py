@@ -74,14 +74,20 @@ def nominal_evaluation(agent: str | Path, engine: str | None = None) -> dict:
     env it trained on, with its recipe's keyword arguments less the randomisation (its feedback
     and path, no load), reset with seed 123, deterministic actions.
 
-    :param agent: the agent's directory, or a shipped agent's name.
-    :param engine: the physics engine to run it on (one of
-        :data:`soft_gym.engines.ENGINES`); ``None``, the one it trained on.
-    :return: ``settled_error_mm``, the mean tip error (mm) after the first quarter of the steps
-        (the start from rest left out); ``resting_error_mm``, the mean error of holding every
+    Args:
+        agent: the agent's directory, or a shipped agent's name.
+        engine: the physics engine to run it on (one of :data:`soft_gym.engines.ENGINES`);
+            ``None``, the one it trained on.
+
+    Returns:
+        ``settled_error_mm``, the mean tip error (mm) after the first quarter of the steps (the
+        start from rest left out); ``resting_error_mm``, the mean error of holding every
         chamber at its pre-pressure over the same episode; the env id and keyword arguments
         (``engine`` among them where it is not the training engine), the reset seed and the
         steps.
+
+    Raises:
+        ValueError: an agent without its ``config.yaml``, or an unknown ``engine``.
     """
     directory = _agent_directory(agent)
     config = yaml.safe_load((directory / CONFIG_FILE).read_text())

@@ -55,8 +55,16 @@ def find_trained_agent(agent: str | Path, algo: str) -> TrainedAgent:
     its statistics, or a shipped agent's name), loaded once to check them (a damaged model,
     missing statistics: :meth:`agents.policies.sb3.SB3Policy.load`'s ``ValueError``).
 
-    :param agent: the agent to start from.
-    :param algo: the run's algorithm; ``ValueError`` unless the agent's is the same.
+    Args:
+        agent: the agent to start from.
+        algo: the run's algorithm (``python -m train``'s ``--algo`` name).
+
+    Returns:
+        The agent's files, checked, and the agent loaded.
+
+    Raises:
+        ValueError: naming ``trained_agent``, where the agent does not load, its training
+            record is malformed, or its algorithm is not ``algo``.
     """
     try:
         policy = SB3Policy.load(agent)
