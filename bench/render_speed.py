@@ -17,7 +17,7 @@ there: ``cam scene ms`` is that env's ``env.render()``, ``panels ms`` the whole 
 counted). ``panel size`` is the frame's width x height.
 
 ``--video-run`` also times the video overhead: ``cc_model`` tracks one wang2023 circle (400 steps
-of 0.05 s) with fused feedback via :func:`eval.runner.run_episode`, without and with a video
+of 0.05 s) with fused feedback via :func:`agents.rollout.run_episode`, without and with a video
 (scene and eye-in-hand panels, MP4 through imageio-ffmpeg), and checks that both runs give the
 same record.
 
@@ -95,7 +95,8 @@ def time_video(size: tuple[int, int], seed: int, folder: str) -> dict[str, float
     import gymnasium as gym
 
     from agents.policies import make_policy
-    from eval.runner import run_episode
+    from agents.rollout import run_episode
+    from eval.video import EpisodeVideo
 
     times, records = {}, {}
     for video in (False, True):
@@ -103,8 +104,8 @@ def time_video(size: tuple[int, int], seed: int, folder: str) -> dict[str, float
                        feedback="fused", render_size=size)
         policy = make_policy("cc_model", env=env, kp=0.06)
         start = time.perf_counter()
-        records[video] = run_episode(env, policy, seed=seed,
-                                     video_path=f"{folder}/bench_video.mp4" if video else None)
+        frames = EpisodeVideo(env, f"{folder}/bench_video.mp4", None) if video else None
+        records[video] = run_episode(env, policy, seed=seed, frames=frames)
         times[video] = time.perf_counter() - start
         env.close()
     for key in records[False]:

@@ -33,6 +33,11 @@ without ``cycle`` counts as a single cycle.
 Units: records are SI (metres); every output of this module is in
 millimetres and its name says so (``*_mm``).
 
+The per-step tracking error (:func:`tracking_error_mm`), the statistics of an
+error series (:func:`error_stats`) and :data:`MM_PER_M` are defined in
+:mod:`agents.tracking_error`, below evaluation and training (training's
+tracking curve scores agents with them), and are part of this module's API.
+
 Statistics
 ----------
 Every statistic is taken over the finite samples only (a step whose tip or
@@ -59,6 +64,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from agents.tracking_error import (MM_PER_M, distance_mm, error_stats, record_cycles,
+                                    record_positions, record_steps, tracking_error_mm)
 from soft_gym.tasks.paths import path_deviation
 
 __all__ = [
@@ -79,9 +86,6 @@ __all__ = [
     "summary_table",
     "tracking_error_mm",
 ]
-
-#: Millimetres per metre (metrics are reported in mm, records are in m).
-MM_PER_M: float = 1000.0
 
 #: Estimator name -> record column of its position estimate (m).
 ESTIMATE_COLUMNS: dict[str, str] = {
@@ -110,72 +114,14 @@ SEED_STD_SUFFIX = "_seed_std"
 # ---------------------------------------------------------------------------
 
 
-def _positions(record: Mapping[str, Any], key: str) -> np.ndarray:
-    """Return ``record[key]`` as a float (T, 3) array or raise ValueError."""
-    if key not in record:
-        raise ValueError(f"record has no {key!r} column (keys: {sorted(record)})")
-    arr = np.asarray(record[key], dtype=float)
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"record[{key!r}] must have shape (T, 3), got {arr.shape}")
-    return arr
-
-
-def _n_steps(record: Mapping[str, Any]) -> int:
-    """Number of steps T of a record (from ``tip_m``)."""
-    return _positions(record, "tip_m").shape[0]
-
-
-def _cycles(record: Mapping[str, Any]) -> np.ndarray:
-    """Integer cycle index per step; zeros when the record has no ``cycle``."""
-    t = _n_steps(record)
-    if "cycle" not in record:
-        return np.zeros(t, dtype=int)
-    cyc = np.asarray(record["cycle"])
-    if cyc.shape != (t,):
-        raise ValueError(f"record['cycle'] must have shape ({t},), got {cyc.shape}")
-    if cyc.size and not np.all(np.equal(np.mod(cyc, 1), 0)):
-        raise ValueError("record['cycle'] must hold integers")
-    return cyc.astype(int)
-
-
-def _distance_mm(a_m: np.ndarray, b_m: np.ndarray) -> np.ndarray:
-    """Row-wise Euclidean distance in mm between two (T, 3) arrays in m."""
-    return np.linalg.norm(a_m - b_m, axis=1) * MM_PER_M
-
-
 def cycle_ids(record: Mapping[str, Any]) -> list[int]:
     """Sorted distinct cycle indices of a record (``[0]`` without ``cycle``)."""
-    return [int(c) for c in np.unique(_cycles(record))]
+    return [int(c) for c in np.unique(record_cycles(record))]
 
 
 # ---------------------------------------------------------------------------
 # Per-step errors
 # ---------------------------------------------------------------------------
-
-
-def tracking_error_mm(record: Mapping[str, Any]) -> np.ndarray:
-    """Tracking error per step: distance from the target to the tip (mm).
-
-    ``e[t] = |target_m[t] - tip_m[t]| * 1000``: the target presented at step
-    ``t`` against the ground-truth tip after that step, as in Wang et al.
-    2023 ("distance between the current target and the actual end-effector").
-
-    Args:
-        record: Episode record with ``target_m`` and ``tip_m`` (T, 3), metres.
-
-    Returns:
-        Array of shape (T,) in millimetres.
-
-    Raises:
-        ValueError: If a column is missing or the shapes disagree.
-    """
-    target = _positions(record, "target_m")
-    tip = _positions(record, "tip_m")
-    if target.shape != tip.shape:
-        raise ValueError(
-            f"record['target_m'] {target.shape} and record['tip_m'] {tip.shape} differ in shape"
-        )
-    return _distance_mm(target, tip)
 
 
 def path_deviation_mm(record: Mapping[str, Any]) -> np.ndarray:
@@ -194,7 +140,7 @@ def path_deviation_mm(record: Mapping[str, Any]) -> np.ndarray:
         Array of shape (T,) in millimetres; all NaN if the record has no
         polyline (reach tasks).
     """
-    tip = _positions(record, "tip_m")
+    tip = record_positions(record, "tip_m")
     out = np.full(tip.shape[0], np.nan)
     polyline = record.get("polyline_m")
     if polyline is None:
@@ -215,43 +161,18 @@ def estimation_error_mm(record: Mapping[str, Any], column: str) -> np.ndarray:
     Returns:
         Array of shape (T,) in millimetres.
     """
-    tip = _positions(record, "tip_m")
-    est = _positions(record, column)
+    tip = record_positions(record, "tip_m")
+    est = record_positions(record, column)
     if est.shape != tip.shape:
         raise ValueError(
             f"record[{column!r}] {est.shape} and record['tip_m'] {tip.shape} differ in shape"
         )
-    return _distance_mm(est, tip)
+    return distance_mm(est, tip)
 
 
 # ---------------------------------------------------------------------------
 # Statistics
 # ---------------------------------------------------------------------------
-
-
-def error_stats(errors_mm: np.ndarray) -> dict[str, float]:
-    """Mean, std, max and RMSE of an error series (mm), over finite samples.
-
-    Args:
-        errors_mm: Errors in millimetres, any shape (flattened).
-
-    Returns:
-        ``{"mean_mm", "std_mm", "max_mm", "rmse_mm", "n"}``; ``std`` is the
-        population standard deviation; ``n`` is the number of finite samples
-        used.  With no finite sample the statistics are NaN and ``n`` is 0.
-    """
-    e = np.asarray(errors_mm, dtype=float).ravel()
-    e = e[np.isfinite(e)]
-    if e.size == 0:
-        return {"mean_mm": math.nan, "std_mm": math.nan, "max_mm": math.nan,
-                "rmse_mm": math.nan, "n": 0}
-    return {
-        "mean_mm": float(np.mean(e)),
-        "std_mm": float(np.std(e)),
-        "max_mm": float(np.max(e)),
-        "rmse_mm": float(np.sqrt(np.mean(e * e))),
-        "n": int(e.size),
-    }
 
 
 def _section(errors_mm: np.ndarray, cycles: np.ndarray, ids: Sequence[int]) -> dict[str, Any]:
@@ -311,8 +232,9 @@ def estimation_errors(
         if "time_s" not in record:
             raise ValueError("estimation_errors with phases needs record['time_s']")
         time = np.asarray(record["time_s"], dtype=float)
-        if time.shape != (_n_steps(record),):
-            raise ValueError(f"record['time_s'] must have shape ({_n_steps(record)},), got {time.shape}")
+        if time.shape != (record_steps(record),):
+            raise ValueError(f"record['time_s'] must have shape ({record_steps(record)},), "
+                             f"got {time.shape}")
     out: dict[str, dict[str, Any]] = {}
     for name, column in columns.items():
         if column not in record:
@@ -355,7 +277,7 @@ def summarize(
         ``record["cycle"]``).  ``final_mm`` is the error at the last step
         (the reach-task figure of merit).
     """
-    cycles = _cycles(record)
+    cycles = record_cycles(record)
     ids = [int(c) for c in np.unique(cycles)]
     track = tracking_error_mm(record)
     dev = path_deviation_mm(record)

@@ -1,32 +1,27 @@
 """Drive any policy (baseline or SB3 model) through any env configuration and record each step.
 
-The record of one episode is a dict of arrays (see :mod:`eval.metrics` for what is computed from
-it): ``time_s``, ``target_m``, ``tip_m`` (ground truth), ``feedback_m`` (the pose the policy saw),
-``action``, ``pressure_pa``, ``cycle`` and, for tracking tasks, ``polyline_m``; plus the sensing
-pipeline's estimates (``camera_m``, ``femp_m``, ``fused_m``, ``em_m``,
-``reprojection_error_px``) when the env provides them in ``info["estimates"]``.
-
-With a video path (``RunConfig.video_path``, ``run_episode(video_path=...)``) the run also writes
-a video (:mod:`eval.video`) of :func:`soft_gym.envs.rendering.render_frame` frames: one after
-``reset`` and one after every step, at the env's ``render_fps``. Rendering only reads the
-simulation, so the record is the same with and without a video.
+A :class:`RunConfig` names one run: its policy, env and seed. :func:`run` builds it
+(:func:`build`) and records one episode with :func:`agents.rollout.run_episode` (the record's
+columns are listed there; :mod:`eval.metrics` computes from them). With a video path
+(``RunConfig.video_path``) the run also writes a video (:class:`eval.video.EpisodeVideo`) of
+:func:`soft_gym.envs.rendering.render_frame` frames: one after ``reset`` and one after every
+step, at the env's ``render_fps``. Rendering only reads the simulation, so the record is the same
+with and without a video.
 
 Before a batch of runs starts, :func:`check_configs` checks every configuration the cheap way
-(each distinct env built once without calibrating its feedback, every baseline made on it, every
-SB3 agent loaded once and its observation and action spaces compared with its env's), so that a
-bad run late in a batch fails before the first one starts; :func:`run_many` hands each record to
+(each distinct env built once without calibrating its feedback,
+:func:`soft_gym.envs.uncalibrated.make_uncalibrated_env`, every baseline made on it, every SB3
+agent loaded once and its observation and action spaces compared with its env's), so that a bad
+run late in a batch fails before the first one starts; :func:`run_many` hands each record to
 ``on_result`` as it finishes, so that a batch failing later keeps the finished runs.
 """
 
 from __future__ import annotations
 
-import copy
-import functools
 import json
 import multiprocessing
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import gymnasium as gym
@@ -35,10 +30,9 @@ from tqdm import tqdm
 
 import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import BASELINES, BaselinePolicy, SB3Policy, make_policy
-from eval.video import VideoWriter
-from soft_gym.envs.rendering import check_panels, default_panels, render_frame
-from soft_gym.envs.soft_arm_env import SoftArmEnv
-from soft_gym.tasks.paths import cycle_index
+from agents.rollout import run_episode
+from eval.video import EpisodeVideo
+from soft_gym.envs.uncalibrated import make_uncalibrated_env
 
 
 @dataclass
@@ -92,80 +86,6 @@ def _describe(value: Any) -> str:
     return str(value)
 
 
-def run_episode(env: gym.Env, policy: BaselinePolicy, seed: int = 0, learn: bool = True,
-                progress: bool = False, description: str = "",
-                video_path: str | Path | None = None,
-                video_panels: Sequence[str] | None = None) -> dict[str, np.ndarray]:
-    """Run one episode of ``policy`` on ``env`` (online learners update every step); with
-    ``video_path``, write its video there (see the module docstring)."""
-    unwrapped = env.unwrapped
-    video = None if video_path is None else _EpisodeVideo(env, video_path, video_panels)
-    observation, info = env.reset(seed=seed)
-    policy.reset()
-    if video is not None:
-        video.capture()
-    columns: dict[str, list] = {key: [] for key in (
-        "time_s", "target_m", "tip_m", "feedback_m", "action", "pressure_pa", "error_mm")}
-    estimates: dict[str, list] = {}
-    task = unwrapped.task
-    total = getattr(task, "episode_steps", None)
-    bar = tqdm(total=total, desc=description, leave=False, disable=not progress)
-    done = False
-    while not done:
-        action, _ = policy.predict(observation, deterministic=True)
-        next_observation, reward, terminated, truncated, info = env.step(action)
-        if learn:
-            policy.update(observation, action, reward, next_observation, info)
-        columns["time_s"].append(info["time_s"])
-        columns["target_m"].append(info["target_m"])
-        columns["tip_m"].append(info["tip_position_m"])
-        columns["feedback_m"].append(
-            unwrapped.observation_part(next_observation, "pose")[:3]
-            if "pose" in unwrapped.obs_parts else info["tip_position_m"])
-        columns["action"].append(np.asarray(action, dtype=float))
-        columns["pressure_pa"].append(info["pressures_pa"])
-        columns["error_mm"].append(info["error_mm"])
-        for key, value in info.get("estimates", {}).items():
-            estimates.setdefault(key, []).append(value)
-        observation = next_observation
-        done = terminated or truncated
-        if video is not None:
-            video.capture()
-        bar.update(1)
-    bar.close()
-    if video is not None:
-        video.close()
-    record = {key: np.asarray(value, dtype=float) for key, value in columns.items()}
-    steps = len(record["time_s"])
-    cycles = getattr(getattr(task, "path_spec", None), "cycles", 1)
-    if hasattr(task, "trajectory_m") and len(task.trajectory_m) == steps:
-        record["cycle"] = cycle_index(steps, cycles)
-        record["polyline_m"] = np.asarray(task.path_m)
-    else:
-        record["cycle"] = np.zeros(steps, dtype=int)
-    for key, values in estimates.items():
-        try:
-            record[key] = np.asarray(values, dtype=float)
-        except (TypeError, ValueError):  # not numbers per step (zou2022's SOM nodes, reasons)
-            continue
-    return record
-
-
-class _EpisodeVideo:
-    """Frames of one episode streamed into a video file."""
-
-    def __init__(self, env: gym.Env, path: str | Path, panels: Sequence[str] | None) -> None:
-        self.env = env
-        self.panels = default_panels(env) if panels is None else check_panels(env, panels)
-        self.writer = VideoWriter(path, env.unwrapped.metadata["render_fps"])
-
-    def capture(self) -> None:
-        self.writer.append(render_frame(self.env, self.panels))
-
-    def close(self) -> Path:
-        return self.writer.close()
-
-
 def build(config: RunConfig) -> tuple[gym.Env, BaselinePolicy]:
     """Make the env and the policy of ``config`` (calibrating the policy if it needs to)."""
     if config.policy.startswith("sb3:"):
@@ -185,9 +105,10 @@ def run(config: RunConfig, progress: bool = False) -> dict[str, np.ndarray]:
     """Build and run one configuration; returns its record."""
     env, policy = build(config)
     try:
+        frames = (None if config.video_path is None
+                  else EpisodeVideo(env, config.video_path, config.video_panels))
         return run_episode(env, policy, seed=config.seed, progress=progress,
-                           description=f"{config.policy} seed {config.seed}",
-                           video_path=config.video_path, video_panels=config.video_panels)
+                           description=f"{config.policy} seed {config.seed}", frames=frames)
     finally:
         env.close()
 
@@ -260,34 +181,6 @@ class ConfigError(ValueError):
         self.message = " ".join(str(message).split())
         super().__init__(f"run {index} ({config.policy}, seed {config.seed}): {part}: "
                          f"{self.message}")
-
-
-def make_uncalibrated_env(env_id: str, kwargs: dict[str, Any]) -> gym.Env:
-    """The env of ``env_id`` with ``kwargs``, with every argument check and its simulator but no
-    feedback calibration (the runs calibrate, cached on disk)."""
-    try:
-        spec = gym.spec(env_id)
-    except gym.error.Error as error:
-        raise ValueError(f"env id must be a registered id, got {env_id!r} ({error})") from None
-    entry = dict(spec.kwargs or {})
-    alias = entry.pop("alias_preset", None)
-    kwargs = copy.deepcopy(dict(kwargs))
-    if alias is not None:
-        if kwargs.get("preset", alias) != alias:
-            raise ValueError(f"preset must be {alias!r} on {env_id}, got {kwargs['preset']!r}")
-        kwargs["preset"] = alias
-    return uncalibrated_env_class()(**{**entry, **kwargs})
-
-
-@functools.lru_cache(maxsize=None)
-def uncalibrated_env_class():
-    """:class:`SoftArmEnv` with every argument check and its simulator but no feedback
-    calibration: what the runners and :mod:`eval.suite` build to check configurations."""
-    class UncalibratedEnv(SoftArmEnv):
-        def _calibrate(self, use_cache: bool) -> None:  # the runs calibrate (cached on disk)
-            pass
-
-    return UncalibratedEnv
 
 
 class _Checker:

@@ -2,7 +2,8 @@
 H.264) or, where ffmpeg is absent, as a GIF.
 
 :class:`VideoWriter` streams frames to disk as they come (a 4000-step run at 640 x 240 would hold
-1.8 GB in memory otherwise); :func:`write_video` writes a list of frames at once. The runners
+1.8 GB in memory otherwise); :func:`write_video` writes a list of frames at once and
+:class:`EpisodeVideo` films one episode of :func:`agents.rollout.run_episode`. The runners
 (``python -m eval track|benchmark|compare|estimation --video``) write one video per run next to
 its CSV, at the env's ``metadata["render_fps"]`` (its control rate: one frame per control step,
 the first right after ``reset``), so the video plays in simulated real time.
@@ -11,9 +12,12 @@ the first right after ``reset``), so the video plays in simulated real time.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, Sequence
 
+import gymnasium as gym
 import numpy as np
+
+from soft_gym.envs.rendering import check_panels, default_panels, render_frame
 
 
 def ffmpeg_available() -> bool:
@@ -106,6 +110,33 @@ class VideoWriter:
             self._writer = None
         elif kind is None:
             self.close()  # raises: nothing was written
+
+
+class EpisodeVideo:
+    """The frames of one episode streamed into a video file: the
+    :class:`~agents.rollout.FrameSink` that :func:`agents.rollout.run_episode` hands a frame
+    after ``reset`` and after every step (:func:`soft_gym.envs.rendering.render_frame`, at the
+    env's ``metadata["render_fps"]``).
+
+    Args:
+        env: the env filmed.
+        path: the video file (:class:`VideoWriter`: ``.mp4``, or ``.gif`` without ffmpeg).
+        panels: panels of each frame; ``None``: the scene, and the camera sensors beside it
+            when the env has any.
+    """
+
+    def __init__(self, env: gym.Env, path: str | Path, panels: Sequence[str] | None) -> None:
+        self.env = env
+        self.panels = default_panels(env) if panels is None else check_panels(env, panels)
+        self.writer = VideoWriter(path, env.unwrapped.metadata["render_fps"])
+
+    def capture(self) -> None:
+        """Append the env's frame now."""
+        self.writer.append(render_frame(self.env, self.panels))
+
+    def close(self) -> Path:
+        """Finish the file; returns its path."""
+        return self.writer.close()
 
 
 def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float,

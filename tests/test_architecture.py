@@ -9,9 +9,11 @@ of the repository it reaches (``from soft_gym.sensors import fbg`` is an import 
 ``soft_gym.sensors.fbg``; ``from soft_gym.scenarios import Push`` of ``soft_gym.scenarios``).
 
 The rules: no two modules import each other, directly or around a longer cycle; nothing in
-``soft_gym`` imports ``agents``, ``train`` or ``eval``; only the engine package
+``soft_gym`` imports ``agents``, ``train`` or ``eval``; nothing in ``train`` imports ``eval``
+(what both need lives in ``agents`` or ``soft_gym``); only the engine package
 (``soft_gym.engines``) imports a physics engine, and everything else uses a simulator through
-:class:`soft_gym.simulator.Simulator` and :class:`~soft_gym.simulator.World` alone; and no file
+:class:`soft_gym.simulator.Simulator` and :class:`~soft_gym.simulator.World` alone; the sensors
+(``soft_gym.sensors``) import nothing from the estimators (``soft_gym.sensing``); and no file
 cites the design document that lived outside the repository (the code cites
 docs/architecture.md and the papers instead).
 """
@@ -32,6 +34,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("soft_gym", "agents", "train", "eval")
 LOWER_LAYER = "soft_gym"
 UPPER_LAYERS = ("agents", "train", "eval")
+TRAINING_LAYER, EVALUATION_LAYER = "train", "eval"
+"""Peers above ``agents``: training never imports evaluation."""
 
 ENGINE_PACKAGE = "soft_gym.engines"
 ENGINE_LIBRARIES = ("pybullet", "pybullet_utils", "pybullet_data", "mujoco")
@@ -233,6 +237,31 @@ def test_soft_gym_imports_no_agents_train_or_eval():
              and found.name.split(".")[0] in UPPER_LAYERS]
     assert not wrong, ("soft_gym is the bottom layer and must not import agents, train or eval "
                        "(docs/architecture.md, \"Layers and packages\"):\n" + "\n".join(wrong))
+
+
+SENSORS_PACKAGE = "soft_gym.sensors"
+ESTIMATION_PACKAGE = "soft_gym.sensing"
+
+
+def test_sensors_never_import_the_estimators():
+    wrong = [f"{found.path.relative_to(ROOT)}:{found.line} imports {found.name}"
+             for found in _all_imports()
+             if found.importer.startswith(SENSORS_PACKAGE)
+             and (_resolve(found.name) or "").startswith(ESTIMATION_PACKAGE)]
+    assert not wrong, ("the sensors are the layer below the estimators: move what both need "
+                       "(as the Measurement in soft_gym/sensors/measurement.py) into "
+                       "soft_gym/sensors/ (docs/architecture.md, \"Layers and packages\"):\n"
+                       + "\n".join(wrong))
+
+
+def test_train_imports_no_eval():
+    wrong = [f"{found.path.relative_to(ROOT)}:{found.line} imports {found.name}"
+             for found in _all_imports()
+             if found.importer.split(".")[0] == TRAINING_LAYER
+             and found.name.split(".")[0] == EVALUATION_LAYER]
+    assert not wrong, ("train must not import eval: move what both need into agents (as "
+                       "agents/rollout.py) or soft_gym (docs/architecture.md, \"Layers and "
+                       "packages\"):\n" + "\n".join(wrong))
 
 
 ESTIMATION_AND_TASKS = ("soft_gym.sensing", "soft_gym.tasks")

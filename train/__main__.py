@@ -39,6 +39,7 @@ from pathlib import Path
 
 import yaml
 
+from agents.policies.run_dir import CONFIG_FILE, MODEL_FILE
 from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_output_dir, fail,
                            finite_float, non_negative_int, positive_int, seed_int)
 from soft_gym.engines import REFERENCE_ENGINE, engine_supports
@@ -205,19 +206,16 @@ def check_demonstrations(parser: argparse.ArgumentParser, args: argparse.Namespa
 def check_resume(parser: argparse.ArgumentParser, run_dir: str) -> None:
     """``--resume``: a run directory of ``python -m train`` (config.yaml with its request, and
     model.zip)."""
-    # lazy: train.trainer (stable-baselines3, PyTorch) costs 1.3 s (-X importtime); --help skips it
-    from train.trainer import MODEL_FILE
-
     path = Path(run_dir)
     if not path.is_dir():
         parser.error(f"--resume {run_dir!r} is not a directory: give the run directory of an "
                      f"earlier python -m train")
-    missing = [name for name in ("config.yaml", MODEL_FILE) if not (path / name).is_file()]
+    missing = [name for name in (CONFIG_FILE, MODEL_FILE) if not (path / name).is_file()]
     if missing:
         parser.error(f"--resume {run_dir!r} holds no {' or '.join(missing)}: give the run "
                      f"directory of an earlier python -m train")
     try:
-        saved = yaml.safe_load((path / "config.yaml").read_text())
+        saved = yaml.safe_load((path / CONFIG_FILE).read_text())
     except yaml.YAMLError as error:
         fail(parser, "--resume", f"{run_dir!r}: config.yaml is not YAML: {error}")
     if not isinstance(saved, dict) or not isinstance(saved.get("request"), dict):
@@ -230,7 +228,7 @@ def check_trained_agent(parser: argparse.ArgumentParser, args: argparse.Namespac
                         settings) -> None:
     """``--trained-agent``: an agent of ``--algo`` that reads the run's observations and writes
     its actions, normalised as the run is (one line naming the option otherwise)."""
-    from eval.runner import make_uncalibrated_env
+    from soft_gym.envs.uncalibrated import make_uncalibrated_env
     from train.warm_start import check_fits, find_trained_agent
 
     env = make_uncalibrated_env(env_id, {**settings.env_kwargs, **settings.arm_variants()[0]})
@@ -357,7 +355,7 @@ def check_training(parser: argparse.ArgumentParser, args: argparse.Namespace,
     name = args.name or f"{args.algo}_{env_id}_seed{args.seed}"
     if name.strip() in ("", ".", ".."):
         parser.error(f"--name must name a run directory, got {name!r}")
-    if (Path(args.out) / name / "config.yaml").exists():
+    if (Path(args.out) / name / CONFIG_FILE).exists():
         parser.error(f"--name: run directory {str(Path(args.out) / name)!r} already holds a "
                      f"run: give another --name or --out, or continue it with --resume")
     return request

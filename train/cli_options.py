@@ -15,11 +15,11 @@ import gymnasium
 import yaml
 
 import soft_gym  # noqa: F401  (registers the env ids)
-from eval.runner import make_uncalibrated_env
 from soft_gym._cli import check_file, fail
 from soft_gym.engines import EngineFeatureError
 from soft_gym.envs.registration import preset_env_id
 from soft_gym.papers import DEFAULT_PRESET
+from soft_gym.envs.uncalibrated import make_uncalibrated_env
 from soft_gym.robots.presets import PRESETS
 from train.config import CONFIG_DIR, TrainSettings, check_hyperparameters, parse_key_values
 

@@ -41,8 +41,8 @@ from tqdm import tqdm
 
 from agents.policies import BASELINES, make_policy
 from agents.policies.registry import constructor_parameters
-from eval.datasets.episodes import EpisodeRecorder
-from eval.runner import run_episode
+from agents.rollout import run_episode
+from soft_gym.datasets.episodes import EpisodeRecorder
 from soft_gym.datasets.store import load_dataset, write_dataset
 
 DEMO_GROUP = "demos"
@@ -89,11 +89,23 @@ def record_demonstrations(env_id: str, env_kwargs: dict[str, Any], policy: str, 
     """Run baseline ``policy`` for ``episodes`` episodes of ``gym.make(env_id, **env_kwargs)``
     and write them as a Minari dataset under ``root``; returns its id.
 
-    :param policy: a baseline name of :func:`agents.policies.make_policy` (not ``sb3:``).
-    :param episodes: episodes to record (>= 1), reset with seeds ``seed``, ``seed + 1``, ...
-    :param policy_params: the baseline's keyword arguments.
-    :raises ValueError: an unknown baseline or one that cannot control this env (from
-        :func:`~agents.policies.make_policy`), or ``episodes`` < 1.
+    Args:
+        env_id: the training env's id.
+        env_kwargs: its keyword arguments.
+        policy: a baseline name of :func:`agents.policies.make_policy` (not ``sb3:``).
+        episodes: episodes to record (>= 1), reset with seeds ``seed``, ``seed + 1``, ...
+        seed: the first episode's reset seed.
+        root: the datasets root the recording is written under.
+        policy_params: the baseline's keyword arguments.
+        progress: show progress bars (the episodes', and the baseline's own build's where it
+            has one).
+
+    Returns:
+        The dataset's id.
+
+    Raises:
+        ValueError: an unknown baseline or one that cannot control this env (from
+            :func:`~agents.policies.make_policy`), or ``episodes`` < 1.
     """
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be an integer >= 1, got {episodes!r}")
@@ -138,9 +150,10 @@ def load_demonstrations(dataset_id: str, root: str | Path | None,
     """The transitions of dataset ``dataset_id`` (under ``root``), checked against ``env``'s
     observation and action spaces.
 
-    :raises ValueError: a dataset that does not load (:func:`soft_gym.datasets.store.
-        load_dataset`), observations that are not a flat ``Box`` of ``env``'s shape, or actions
-        not of ``env``'s action space.
+    Raises:
+        ValueError: a dataset that does not load
+            (:func:`soft_gym.datasets.store.load_dataset`), observations that are not a flat
+            ``Box`` of ``env``'s shape, or actions not of ``env``'s action space.
     """
     dataset = load_dataset(dataset_id, root)
     obs_space, action_space = dataset.observation_space, dataset.action_space

@@ -23,14 +23,14 @@ import yaml
 import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import (SHIPPED_DIR, BaselinePolicy, make_policy, mark_model_file,
                              model_normalization_mark, normalization_file, resolve_sb3_path)
-from eval.runner import run_episode
+from agents.policies.run_dir import (BEST_MODEL_FILE, BEST_TRACKING_MODEL_FILE, CONFIG_FILE,
+                                     EVALUATION_FILE, MODEL_FILE, NORMALIZATION_FILE, SOURCE_FILE,
+                                     TRAINING_FILE, VERSIONS_FILE)
+from agents.rollout import run_episode
 from soft_gym._cli import HelpFormatter
 from soft_gym.engines import ENGINES, REFERENCE_ENGINE, EngineFeatureError
-from train.tracking_curve import BEST_TRACKING_MODEL_FILE, CURVE_FILE
-from train.trainer import BEST_MODEL_FILE, MODEL_FILE, NORMALIZATION_FILE
+from train.tracking_curve import CURVE_FILE
 
-
-EVALUATION_FILE = "evaluation.yaml"
 MODEL_CHOICES = {"final": MODEL_FILE, "best": BEST_MODEL_FILE,
                  "best_tracking": BEST_TRACKING_MODEL_FILE}
 """Which model of a run to ship: the final one, SB3's best evaluated (by return), or the best on
@@ -57,7 +57,7 @@ def _agent_directory(agent: str | Path) -> Path:
     """The directory of an agent given as a path or a shipped agent's name
     (:func:`~agents.policies.resolve_sb3_path`), refused unless it holds config.yaml."""
     directory = resolve_sb3_path(agent)
-    if not (directory / "config.yaml").is_file():
+    if not (directory / CONFIG_FILE).is_file():
         raise ValueError(f"agent {str(agent)!r} is neither a directory holding config.yaml nor a "
                          f"shipped agent in {SHIPPED_DIR}")
     return directory
@@ -70,21 +70,27 @@ def training_engine(config: dict) -> str:
 
 
 def nominal_evaluation(agent: str | Path, engine: str | None = None) -> dict:
-    """A shipped agent's nominal tracking: one episode (:func:`eval.runner.run_episode`) of the
+    """A shipped agent's nominal tracking: one episode (:func:`agents.rollout.run_episode`) of the
     env it trained on, with its recipe's keyword arguments less the randomisation (its feedback
     and path, no load), reset with seed 123, deterministic actions.
 
-    :param agent: the agent's directory, or a shipped agent's name.
-    :param engine: the physics engine to run it on (one of
-        :data:`soft_gym.engines.ENGINES`); ``None``, the one it trained on.
-    :return: ``settled_error_mm``, the mean tip error (mm) after the first quarter of the steps
-        (the start from rest left out); ``resting_error_mm``, the mean error of holding every
+    Args:
+        agent: the agent's directory, or a shipped agent's name.
+        engine: the physics engine to run it on (one of :data:`soft_gym.engines.ENGINES`);
+            ``None``, the one it trained on.
+
+    Returns:
+        ``settled_error_mm``, the mean tip error (mm) after the first quarter of the steps (the
+        start from rest left out); ``resting_error_mm``, the mean error of holding every
         chamber at its pre-pressure over the same episode; the env id and keyword arguments
         (``engine`` among them where it is not the training engine), the reset seed and the
         steps.
+
+    Raises:
+        ValueError: an agent without its ``config.yaml``, or an unknown ``engine``.
     """
     directory = _agent_directory(agent)
-    config = yaml.safe_load((directory / "config.yaml").read_text())
+    config = yaml.safe_load((directory / CONFIG_FILE).read_text())
     env_kwargs = {key: value for key, value in config["env_kwargs"].items()
                   if key != "randomization"}
     if engine is not None and engine != training_engine(config):
@@ -107,7 +113,7 @@ def engine_gap(directory: str | Path) -> dict:
     """The agent's nominal error (:func:`nominal_evaluation`) on every engine that runs its env:
     ``{"training_engine": name, "settled_error_mm": {engine: mm}}``, the sim-to-sim gap beside
     the engine it trained on (an engine that lacks a feature of its env is left out)."""
-    config = yaml.safe_load((Path(directory) / "config.yaml").read_text())
+    config = yaml.safe_load((Path(directory) / CONFIG_FILE).read_text())
     errors = {}
     for engine in ENGINES:
         try:
@@ -140,7 +146,7 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
         raise ValueError(f"model must be one of {list(MODEL_CHOICES)}, got {model!r}")
     model_file = MODEL_CHOICES[model]
     statistics = normalization_file(run_dir / model_file)
-    if not (run_dir / model_file).is_file() or not (run_dir / "config.yaml").is_file():
+    if not (run_dir / model_file).is_file() or not (run_dir / CONFIG_FILE).is_file():
         raise ValueError(f"run_dir {str(run_dir)!r} holds no {model_file} with a config.yaml")
     target = Path(destination) / name
     target.mkdir(parents=True, exist_ok=True)
@@ -150,12 +156,12 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
         shutil.copy(statistics, target / NORMALIZATION_FILE)
     if model_normalization_mark(target / MODEL_FILE) is None:  # a model saved before the mark
         mark_model_file(target / MODEL_FILE, normalized)
-    for extra in ("config.yaml", "versions.yaml", "training.yaml", "learning_curve.png",
+    for extra in (CONFIG_FILE, VERSIONS_FILE, TRAINING_FILE, "learning_curve.png",
                   "tracking_curve.png", CURVE_FILE):
         if (run_dir / extra).is_file():
             (target / extra).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy(run_dir / extra, target / extra)
-    (target / "source.txt").write_text(f"{model} model of run {run_dir.name}\n")
+    (target / SOURCE_FILE).write_text(f"{model} model of run {run_dir.name}\n")
     if evaluate:
         write_evaluation(target)
     return target
@@ -178,7 +184,7 @@ def main(argv: list[str] | None = None) -> None:
             parser.error("--evaluate takes agents already shipped: give no run_dir or name")
         directories = [resolve_sb3_path(agent) for agent in args.evaluate]
         for agent, directory in zip(args.evaluate, directories):
-            if not all((directory / file).is_file() for file in ("model.zip", "config.yaml")):
+            if not all((directory / file).is_file() for file in (MODEL_FILE, CONFIG_FILE)):
                 parser.error(f"--evaluate: {agent!r} is not a shipped agent (no model.zip with a "
                              f"config.yaml in {directory})")
         for directory in directories:

@@ -375,10 +375,11 @@ def evaluate_run(run_dir: str | os.PathLike, episodes: int, seed: int) -> dict[s
     # lazy: stable-baselines3 and train.trainer cost 1.3 s (-X importtime), see baseline_point
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from train.trainer import MODEL_FILE, NORMALIZATION_FILE, make_vec_env
+    from agents.policies.run_dir import CONFIG_FILE, MODEL_FILE, NORMALIZATION_FILE
+    from train.trainer import make_vec_env
 
     run_dir = Path(run_dir)
-    config = yaml.safe_load((run_dir / "config.yaml").read_text())
+    config = yaml.safe_load((run_dir / CONFIG_FILE).read_text())
     env = make_vec_env(config["env_id"], config["env_kwargs"], 1, seed)
     if (run_dir / NORMALIZATION_FILE).is_file():
         env = VecNormalize.load(str(run_dir / NORMALIZATION_FILE), env)

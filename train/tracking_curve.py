@@ -8,7 +8,7 @@ actions, the training engine, reset seed :data:`CURVE_SEED`) and writes one row 
 to ``eval/tracking_curve.csv``: env steps, wall time (s), the mean of the cases' last-cycle mean
 errors (mm) and each case's. The model with the lowest mean is kept as
 ``best_tracking_model.zip`` (with its normalisation statistics,
-:func:`agents.policies.sb3.normalization_file`). With ``until_plateau``
+:func:`agents.policies.run_dir.normalization_file`). With ``until_plateau``
 training stops once :func:`has_plateaued`: the last ``fraction`` (20 %) of the steps so far
 lowered the best error by under ``min_improvement`` (5 %) of it, so the budget comes from the
 curve, not from a time limit; ``--timesteps`` is then the most it may take.
@@ -27,13 +27,13 @@ import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
-from agents.policies.sb3 import SB3Policy, normalization_file
-from eval.metrics import summarize
-from eval.runner import run_episode
+from agents.policies.run_dir import BEST_TRACKING_MODEL_FILE, normalization_file
+from agents.policies.sb3 import SB3Policy
+from agents.rollout import run_episode
+from agents.tracking_error import last_cycle_error_mm
 from soft_gym.scenarios.randomization import RandomizationConfig
 
 CURVE_FILE = "eval/tracking_curve.csv"
-BEST_TRACKING_MODEL_FILE = "best_tracking_model.zip"
 CURVE_SEED = 777
 """Reset seed of every evaluation episode (apart from the training and SB3 evaluation seeds)."""
 CURVE_CYCLES = 2
@@ -76,10 +76,15 @@ def evaluation_cases(env_kwargs: dict, arm_variants: list[dict] | None = None
     drawn per training episode), nominal and, where training randomises loads, with a tip mass
     at the middle of the randomised range (a load seen in training, not a held-out one).
 
-    :param env_kwargs: the recipe's env keyword arguments.
-    :param arm_variants: where the arms of the batch differ (the recipe's ``arm_env_kwargs``,
-        :meth:`train.config.TrainSettings.arm_variants`), the set for each distinct arm's
-        keyword arguments over ``env_kwargs``, its labels led by the arm's (``feedback=...``).
+    Args:
+        env_kwargs: the recipe's env keyword arguments.
+        arm_variants: where the arms of the batch differ (the recipe's ``arm_env_kwargs``,
+            :meth:`train.config.TrainSettings.arm_variants`), the set for each distinct arm's
+            keyword arguments over ``env_kwargs``, its labels led by the arm's
+            (``feedback=...``).
+
+    Returns:
+        The evaluation cases, each with its label and env keyword arguments.
     """
     variants = arm_variants or [{}]
     cases = []
@@ -115,12 +120,16 @@ def has_plateaued(timesteps: np.ndarray, errors_mm: np.ndarray,
     ``min_improvement`` (relative) below the best over those in the first ``1 - fraction`` of
     the steps so far.
 
-    :param timesteps: env steps of each evaluation, increasing.
-    :param errors_mm: the evaluations' errors (mm), lower is better.
-    :param fraction: the share of the latest steps whose improvement is judged (0.2: the last
-        20 %).
-    :param min_improvement: the relative improvement under which the curve is flat (0.05).
-    :param min_evaluations: no plateau before this many evaluations.
+    Args:
+        timesteps: env steps of each evaluation, increasing.
+        errors_mm: the evaluations' errors (mm), lower is better.
+        fraction: the share of the latest steps whose improvement is judged (0.2: the last
+            20 %).
+        min_improvement: the relative improvement under which the curve is flat (0.05).
+        min_evaluations: no plateau before this many evaluations.
+
+    Returns:
+        Whether the curve has flattened.
     """
     timesteps, errors_mm = np.asarray(timesteps, float), np.asarray(errors_mm, float)
     if len(errors_mm) < min_evaluations:
@@ -132,28 +141,23 @@ def has_plateaued(timesteps: np.ndarray, errors_mm: np.ndarray,
     return best_before - best_now < min_improvement * best_before
 
 
-def last_cycle_error_mm(record: dict) -> float:
-    """Mean tracking error (mm) over the record's last cycle: the suites' score
-    (:func:`eval.metrics.summarize`)."""
-    return float(summarize(record)["tracking"]["per_cycle"]["mean_mm"][-1])
-
-
 class TrackingCurveCallback(BaseCallback):
     """Evaluate the live model on ``cases`` every ``curve_freq`` env steps (see the module).
 
-    :param env_id: the training env's id.
-    :param env_kwargs: the training env's keyword arguments (the randomisation is removed).
-    :param cases: the evaluation set (:func:`evaluation_cases`).
-    :param curve_freq: env steps between evaluations, >= 1.
-    :param run_dir: the run directory (the CSV and the best model go there).
-    :param until_plateau: stop training once :func:`has_plateaued`.
-    :param fraction: the plateau rule's share of the latest steps.
-    :param min_improvement: the plateau rule's relative improvement.
-    :param min_timesteps: env steps before the plateau rule may stop training (a curve flat at
-        the start, before learning takes hold, is not a plateau).
-    :param evaluate_at_start: also evaluate before the first step (a run started from a trained
-        agent: the curve then shows where it began, and the starting model is the best until
-        training beats it).
+    Args:
+        env_id: the training env's id.
+        env_kwargs: the training env's keyword arguments (the randomisation is removed).
+        cases: the evaluation set (:func:`evaluation_cases`).
+        curve_freq: env steps between evaluations, >= 1.
+        run_dir: the run directory (the CSV and the best model go there).
+        until_plateau: stop training once :func:`has_plateaued`.
+        fraction: the plateau rule's share of the latest steps.
+        min_improvement: the plateau rule's relative improvement.
+        min_timesteps: env steps before the plateau rule may stop training (a curve flat at
+            the start, before learning takes hold, is not a plateau).
+        evaluate_at_start: also evaluate before the first step (a run started from a trained
+            agent: the curve then shows where it began, and the starting model is the best
+            until training beats it).
     """
 
     def __init__(self, env_id: str, env_kwargs: dict, cases: list[EvaluationCase],

@@ -1,6 +1,6 @@
 """Train a stable-baselines3 agent on a soft-arm env and keep everything needed to reproduce it.
 
-A run directory holds:
+A run directory holds (:mod:`agents.policies.run_dir` names its files and writes the YAML ones):
 
 * ``model.zip`` (final), ``best_model.zip`` (best evaluation), and checkpoints
   ``checkpoints/<algo>_<N>_steps.zip``;
@@ -47,6 +47,10 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNorm
 import soft_gym  # noqa: F401  (registers the env ids)
 from soft_gym.envs.registration import preset_env_id
 from soft_gym.papers import DEFAULT_PRESET
+from agents.policies.run_dir import (BEST_NORMALIZATION_FILE, CHECKPOINTS_DIR, CONFIG_FILE,
+                                     MODEL_FILE, NORMALIZATION_FILE, REPLAY_BUFFER_FILE,
+                                     append_training_segment, write_run_config,
+                                     write_training_segments, write_versions)
 from agents.policies.sb3 import mark_normalization
 from soft_gym._distributions import REFERENCE_ENGINE_PACKAGE
 from soft_gym.engines import REFERENCE_ENGINE, engine_supports
@@ -61,11 +65,6 @@ from train.tracking_curve import (PLATEAU_FRACTION, PLATEAU_IMPROVEMENT, Trackin
 from train.warm_start import (check_fits, find_trained_agent, inherited_segments,
                                load_trained_model)
 
-MODEL_FILE = "model.zip"
-BEST_MODEL_FILE = "best_model.zip"
-NORMALIZATION_FILE = "vecnormalize.pkl"
-BEST_NORMALIZATION_FILE = "best_vecnormalize.pkl"
-REPLAY_BUFFER_FILE = "replay_buffer.pkl"
 DEMO_SEED_OFFSET = 20_000
 """Demonstrations are recorded on reset seeds ``seed + DEMO_SEED_OFFSET`` onward, apart from
 the training envs' (``seed``...) and the evaluation env's (``seed + 10_000``)."""
@@ -115,10 +114,11 @@ class TrainRequest:
         plateau_improvement: the plateau rule's relative improvement (0.05).
         min_timesteps: env steps before the plateau rule may stop training.
         save_replay_buffer: also save an off-policy run's replay buffer
-            (:data:`REPLAY_BUFFER_FILE`, all of its ``buffer_size`` transitions preallocated:
-            tens of MB, 45 MB for SAC on the track envs) beside the model, so that ``resume``
-            continues with the transitions gathered so far; without it a resumed run starts with
-            an empty buffer. A resumed run that had one saved keeps saving it.
+            (:data:`~agents.policies.run_dir.REPLAY_BUFFER_FILE`, all of its ``buffer_size``
+            transitions preallocated: tens of MB, 45 MB for SAC on the track envs) beside the
+            model, so that ``resume`` continues with the transitions gathered so far; without it
+            a resumed run starts with an empty buffer. A resumed run that had one saved keeps
+            saving it.
     """
 
     algo: str = "sac"
@@ -245,11 +245,11 @@ def train(request: TrainRequest) -> Path:
     torch.set_num_threads(max(1, int(request.threads)))
     if request.resume is not None:
         run_dir = Path(request.resume)
-        missing = [name for name in ("config.yaml", MODEL_FILE) if not (run_dir / name).is_file()]
+        missing = [name for name in (CONFIG_FILE, MODEL_FILE) if not (run_dir / name).is_file()]
         if missing:
             raise ValueError(f"resume {str(run_dir)!r} holds no {' or '.join(missing)}: give "
                              f"the run directory of an earlier training")
-        saved = yaml.safe_load((run_dir / "config.yaml").read_text())
+        saved = yaml.safe_load((run_dir / CONFIG_FILE).read_text())
         # the buffer goes on being saved where it was, or where this resume asks for it
         keep_buffer = (bool(saved["request"].get("save_replay_buffer"))
                        or request.save_replay_buffer or (run_dir / REPLAY_BUFFER_FILE).is_file())
@@ -261,7 +261,7 @@ def train(request: TrainRequest) -> Path:
         settings, hyperparameters = resolve(request)
         name = request.run_name or f"{request.algo}_{request.env_id}_seed{request.seed}"
         run_dir = Path(request.out_dir) / name
-        if (run_dir / "config.yaml").exists():
+        if (run_dir / CONFIG_FILE).exists():
             raise ValueError(f"run directory {str(run_dir)!r} already holds a run: pick another "
                              "run_name or pass resume")
     if request.save_replay_buffer and request.algo not in OFF_POLICY:
@@ -317,17 +317,16 @@ def train(request: TrainRequest) -> Path:
     if request.resume is None and request.uses_demonstrations:
         demo_report = _start_from_demonstrations(request, settings, model, env, run_dir)
 
-    (run_dir / "config.yaml").write_text(yaml.safe_dump({
+    write_run_config(run_dir, {
         "request": {key: value for key, value in vars(request).items()
                     if key not in ("resume", "progress")},
         "algo": request.algo, "env_id": request.env_id,
         "env_kwargs": copy.deepcopy(settings.env_kwargs),
         "hyperparameters": hyperparameters, "seed": request.seed, "n_envs": settings.n_envs,
-    }, sort_keys=False))
-    (run_dir / "versions.yaml").write_text(yaml.safe_dump(versions(), sort_keys=False))
+    })
+    write_versions(run_dir, versions())
     if start is not None and start.segments:  # the steps that made the agent count too
-        (run_dir / "training.yaml").write_text(yaml.safe_dump(inherited_segments(start),
-                                                              sort_keys=False))
+        write_training_segments(run_dir, inherited_segments(start))
 
     callbacks: list[BaseCallback] = [ThroughputCallback()]
     curve = None
@@ -349,7 +348,7 @@ def train(request: TrainRequest) -> Path:
     if request.checkpoint_freq > 0:
         callbacks.append(CheckpointCallback(
             save_freq=max(1, request.checkpoint_freq // settings.n_envs),
-            save_path=str(run_dir / "checkpoints"), name_prefix=request.algo,
+            save_path=str(run_dir / CHECKPOINTS_DIR), name_prefix=request.algo,
             save_vecnormalize=settings.normalize is not None))
     started = time.perf_counter()
     interrupted = False
@@ -377,8 +376,7 @@ def train(request: TrainRequest) -> Path:
                         "curve_evaluation_s": round(curve.evaluation_s, 1),
                         "training_env_steps_per_s": round(
                             callbacks[0].steps / max(elapsed - curve.evaluation_s, 1e-9), 1)})
-    with open(run_dir / "training.yaml", "a") as handle:
-        yaml.safe_dump([summary], handle, sort_keys=False)
+    append_training_segment(run_dir, summary)
     env.close()
     eval_env.close()
     plot_learning_curve(run_dir, title=f"{request.algo.upper()} on {request.env_id}")

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agents.policies.sb3 import (ALGORITHM_CLASSES, SB3Policy, normalization_file,
-                                 training_segments)
+from agents.policies.run_dir import normalization_file
+from agents.policies.sb3 import ALGORITHM_CLASSES, SB3Policy, training_segments
 from soft_gym.engines import REFERENCE_ENGINE
 
 TRAINED_AGENT_KEY = "trained_agent"
@@ -56,8 +56,16 @@ def find_trained_agent(agent: str | Path, algo: str) -> TrainedAgent:
     its statistics, or a shipped agent's name), loaded once to check them (a damaged model,
     missing statistics: :meth:`agents.policies.sb3.SB3Policy.load`'s ``ValueError``).
 
-    :param agent: the agent to start from.
-    :param algo: the run's algorithm; ``ValueError`` unless the agent's is the same.
+    Args:
+        agent: the agent to start from.
+        algo: the run's algorithm (``python -m train``'s ``--algo`` name).
+
+    Returns:
+        The agent's files, checked, and the agent loaded.
+
+    Raises:
+        ValueError: naming ``trained_agent``, where the agent does not load, its training
+            record is malformed, or its algorithm is not ``algo``.
     """
     try:
         policy = SB3Policy.load(agent)

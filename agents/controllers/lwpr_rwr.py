@@ -313,9 +313,11 @@ class LWPRRWRController(BaselinePolicy):
         """Transitions ``(p, u, du, dp)`` (mm, fractions of the range) along straight lines
         between random actuator-space waypoints, on an unloaded, fault-free copy of the env.
 
-        :param wrap_env: applied to the copy once made, before its reset (e.g. a recorder of the
-            walk, :class:`eval.datasets.episodes.EpisodeRecorder`); it must pass observations
-            and actions through unchanged. The wrapped env is closed after the walk.
+        Args:
+            wrap_env: applied to the copy once made, before its reset (e.g. a recorder of the
+                walk, :class:`soft_gym.datasets.episodes.EpisodeRecorder`); it must pass
+                observations and actions through unchanged. The wrapped env is closed after the
+                walk.
         """
         env = self.pretraining_env()
         if wrap_env is not None:
@@ -416,9 +418,10 @@ class LWPRRWRController(BaselinePolicy):
         """LWPR epochs on 80 % of the transitions; the epoch with the lowest RMSE on the other
         20 % is kept (ho2018 Fig. 4).
 
-        :param on_epoch: called after each epoch with the model and the indices of the training
-            and test transitions (e.g. :func:`eval.papers.ho2018.experiments.run_pretraining_check`); it must
-            not change the model.
+        Args:
+            on_epoch: called after each epoch with the model and the indices of the training
+                and test transitions (e.g. :func:`eval.papers.ho2018.experiments.run_pretraining_check`);
+                it must not change the model.
         """
         p, u, du, dp = data
         inputs = np.concatenate([p, u, du], axis=1)

@@ -5,7 +5,9 @@
   (:func:`check_observation`, :func:`require_soft_arm_env`);
 * :mod:`agents.policies.registry`: :data:`BASELINES` (name -> class) and :func:`make_policy`;
 * :mod:`agents.policies.sb3`: :class:`SB3Policy` (``sb3:PATH``) and the shipped agents
-  (:data:`SHIPPED_DIR`, :func:`shipped_agents`).
+  (:data:`SHIPPED_DIR`, :func:`shipped_agents`);
+* :mod:`agents.policies.run_dir`: the files of a trained agent's run directory (their names,
+  writers and readers; :func:`normalization_file`).
 
 Every baseline is registered here, by name, in :data:`BASELINES`; the controllers themselves live
 in :mod:`agents.controllers` (docs/architecture.md, "Baselines").
@@ -14,10 +16,10 @@ in :mod:`agents.controllers` (docs/architecture.md, "Baselines").
 from agents.policies.base import (BaselinePolicy, PolicyRefusal, check_observation,
                                   require_soft_arm_env)
 from agents.policies.registry import BASELINES, make_policy
+from agents.policies.run_dir import normalization_file
 from agents.policies.sb3 import (NORMALIZATION_MARK, SB3_ALGORITHMS, SB3_INTERFACE_KEYS,
                                  SHIPPED_DIR, SB3Policy, mark_model_file, mark_normalization,
-                                 model_normalization_mark, normalization_file, resolve_sb3_path,
-                                 shipped_agents)
+                                 model_normalization_mark, resolve_sb3_path, shipped_agents)
 
 # Every baseline is lazy ("module:Class", imported when make_policy first builds it), for two
 # reasons. The controllers subclass BaselinePolicy, so importing one runs this package first: an

@@ -1,31 +1,35 @@
 """Trained stable-baselines3 agents behind the baseline face: ``sb3:PATH`` and the shipped agents.
 
 :class:`SB3Policy` loads a model ``.zip`` with the VecNormalize statistics that belong to it
-(:func:`normalization_file`) and the env interface of its run's ``config.yaml``
-(:data:`SB3_INTERFACE_KEYS`), and refuses a damaged or mismatched file with one ``ValueError``
+(:func:`~agents.policies.run_dir.normalization_file`) and the env interface of its run's
+``config.yaml`` (:data:`SB3_INTERFACE_KEYS`; the files of a run directory and their readers are
+:mod:`agents.policies.run_dir`'s), and refuses a damaged or mismatched file with one ``ValueError``
 naming the file. A model carries whether it was trained with VecNormalize (its
 :data:`NORMALIZATION_MARK` attribute, saved in the zip's ``data`` entry; :func:`mark_normalization`
 sets it on a model, :func:`mark_model_file` on a saved one), so a bare ``model.zip`` copied without
-its statistics is refused rather than run on raw observations. :data:`SHIPPED_DIR` holds the agents kept in the repository
-(:func:`shipped_agents`; ``sb3:<name>`` loads one, :func:`resolve_sb3_path`).
+its statistics is refused rather than run on raw observations. :data:`SHIPPED_DIR` holds the
+agents kept in the repository (:func:`shipped_agents`; ``sb3:<name>`` loads one,
+:func:`resolve_sb3_path`).
 """
 
 from __future__ import annotations
 
 import json
 import pickle
-import re
 import zipfile
 import zlib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from gymnasium import spaces
 
 from agents.policies.base import BaselinePolicy, PolicyRefusal, check_observation, describe_value
 from soft_gym.engines import REFERENCE_ENGINE
+from agents.policies.run_dir import (CONFIG_FILE, MODEL_FILE, NORMALIZATION_FILE,
+                                     has_normalization_files, normalization_file,
+                                     read_run_config, read_training_segments, run_config_file,
+                                     run_directory, write_run_config)
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "trained"
 """Trained agents kept in the repository, one directory each (``sb3:<name>`` loads one)."""
@@ -37,11 +41,11 @@ def shipped_agents(env_id: str | None = None) -> dict[str, Path]:
     if not SHIPPED_DIR.is_dir():
         return {}
     agents = {path.name: path for path in sorted(SHIPPED_DIR.iterdir())
-              if (path / "model.zip").is_file()}
+              if (path / MODEL_FILE).is_file()}
     if env_id is None:
         return agents
     return {name: path for name, path in agents.items()
-            if _read_run_config(path / "config.yaml").get("env_id") == env_id}
+            if read_run_config(path / CONFIG_FILE).get("env_id") == env_id}
 
 
 def training_budget(path: str | Path) -> dict[str, Any] | None:
@@ -62,7 +66,7 @@ def training_budget(path: str | Path) -> dict[str, Any] | None:
     segments = training_segments(path)
     if segments is None:
         return None
-    env_kwargs = _read_run_config(_run_config_file(_run_directory(path) / "model.zip")).get(
+    env_kwargs = read_run_config(run_config_file(_run_directory(path) / MODEL_FILE)).get(
         "env_kwargs") or {}
     return {"timesteps": int(sum(segment["timesteps"] for segment in segments)),
             "wall_s": float(sum(segment.get("wall_s", 0.0) + segment.get("demo_wall_s", 0.0)
@@ -83,10 +87,10 @@ def training_feedbacks(path: str | Path) -> tuple[str, ...] | None:
     tuple where the env's default was used), then those of the envs it was trained on beside it
     (``hyperparameters.arm_env_kwargs``, a run on several feedback sources at once), each once;
     ``None`` where the run has no ``config.yaml``."""
-    config_file = _run_config_file(_run_directory(path) / "model.zip")
+    config_file = run_config_file(_run_directory(path) / MODEL_FILE)
     if config_file is None:
         return None
-    config = _read_run_config(config_file)
+    config = read_run_config(config_file)
     base = (config.get("env_kwargs") or {}).get("feedback")
     found = [base]
     hyperparameters = config.get("hyperparameters")
@@ -100,28 +104,14 @@ def training_feedbacks(path: str | Path) -> tuple[str, ...] | None:
 def _run_directory(path: str | Path) -> Path:
     """The run (or shipped agent's) directory of an agent's directory, model ``.zip``
     (a checkpoint's included) or shipped name."""
-    resolved = resolve_sb3_path(path)
-    directory = resolved if resolved.is_dir() else resolved.parent
-    return directory.parent if directory.name == "checkpoints" else directory
+    return run_directory(resolve_sb3_path(path))
 
 
 def training_segments(path: str | Path) -> list[dict[str, Any]] | None:
     """The segments of the ``training.yaml`` beside an agent (``path`` as
     :func:`training_budget`'s), one per training, each with its ``timesteps``; ``None``
     without one, ``ValueError`` naming the file where it is unreadable or malformed."""
-    record = _run_directory(path) / "training.yaml"
-    if not record.is_file():
-        return None
-    try:
-        segments = yaml.safe_load(record.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
-        raise ValueError(f"training record {str(record)!r} is not readable YAML "
-                         f"({type(error).__name__})") from None
-    if not isinstance(segments, list) or not segments or not all(
-            isinstance(segment, dict) and "timesteps" in segment for segment in segments):
-        raise ValueError(f"training record {str(record)!r} must be a list of training "
-                         f"segments, each with its timesteps")
-    return segments
+    return read_training_segments(_run_directory(path))
 
 
 REPOSITORY_DIR = SHIPPED_DIR.parents[1]
@@ -145,47 +135,11 @@ def resolve_sb3_path(path: str | Path) -> Path:
 SB3_INTERFACE_KEYS = ("obs", "obs_format", "action_mode", "delta_fraction")
 """Env keyword arguments that fix what an SB3 agent reads and writes (kept from its training)."""
 
-_CHECKPOINT = re.compile(r"^(?P<prefix>.+)_(?P<steps>\d+)_steps\.zip$")
-"""A checkpoint of stable-baselines3's ``CheckpointCallback``: ``<prefix>_<N>_steps.zip``."""
-
-
-def normalization_file(model_path: str | Path) -> Path:
-    """The VecNormalize statistics that belong to a model file (whether or not they exist).
-
-    ``best_model.zip`` -> ``best_vecnormalize.pkl`` (and ``best_tracking_model.zip``, the best on
-    the tracking curve, -> ``best_tracking_vecnormalize.pkl``); a checkpoint
-    ``<prefix>_<N>_steps.zip``
-    (``python -m train``'s ``checkpoints/``) -> ``<prefix>_vecnormalize_<N>_steps.pkl``, as
-    ``CheckpointCallback`` saves them; any other model (``model.zip``) -> ``vecnormalize.pkl``;
-    all in the model's directory.
-    """
-    model_path = Path(model_path)
-    checkpoint = _CHECKPOINT.match(model_path.name)
-    if checkpoint is not None:
-        name = f"{checkpoint['prefix']}_vecnormalize_{checkpoint['steps']}_steps.pkl"
-    elif model_path.name.startswith("best_") and model_path.name.endswith("_model.zip"):
-        name = model_path.name[:-len("model.zip")] + "vecnormalize.pkl"
-    elif model_path.name.startswith("best_"):
-        name = "best_vecnormalize.pkl"
-    else:
-        name = "vecnormalize.pkl"
-    return model_path.parent / name
-
-
-def _run_config_file(model_path: Path) -> Path | None:
-    """The ``config.yaml`` of a model: beside it, or in the run directory above a
-    ``checkpoints/`` directory; ``None`` when there is none."""
-    candidates = [model_path.parent / "config.yaml"]
-    if model_path.parent.name == "checkpoints":
-        candidates.append(model_path.parent.parent / "config.yaml")
-    return next((path for path in candidates if path.is_file()), None)
-
-
 NORMALIZATION_MARK = "trained_with_vecnormalize"
 """The model attribute that says whether it was trained in a VecNormalize wrapper (``True``: its
-statistics, :func:`normalization_file`, belong with it). stable-baselines3 saves every plain
-attribute of a model in the zip's ``data`` entry and restores it on load, so the mark travels with
-the file wherever it is copied."""
+statistics, :func:`~agents.policies.run_dir.normalization_file`, belong with it).
+stable-baselines3 saves every plain attribute of a model in the zip's ``data`` entry and restores
+it on load, so the mark travels with the file wherever it is copied."""
 
 
 def _check_mark(normalized: Any) -> bool:
@@ -232,10 +186,7 @@ def _trained_with_normalization(model_path: Path, config: dict, data: dict) -> b
     hyperparameters = config.get("hyperparameters")
     if isinstance(hyperparameters, dict):
         return hyperparameters.get("normalize", False) not in (False, None, "False", "false")
-    directories = [model_path.parent]
-    if model_path.parent.name == "checkpoints":
-        directories.append(model_path.parent.parent)
-    return any(any(directory.glob("*vecnormalize*.pkl")) for directory in directories)
+    return has_normalization_files(model_path)
 
 
 ALGORITHM_CLASSES = {"sac": "SAC", "td3": "TD3", "ppo": "PPO", "a2c": "A2C", "ddpg": "DDPG",
@@ -276,27 +227,6 @@ def _describe_space(space: Any) -> str:
                                    for key, part in space.spaces.items()) + ")"
     kind, shape = shapes
     return f"{kind} {shape}"
-
-
-def _read_run_config(config_path: Path | None) -> dict:
-    """The run's ``config.yaml`` as a dict (``{}`` without one); ``ValueError`` naming the file
-    where it is not YAML or not a mapping."""
-    if config_path is None:
-        return {}
-    try:
-        config = yaml.safe_load(config_path.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
-        detail = " ".join(str(error).split())
-        raise ValueError(f"sb3 run config {str(config_path)!r} is not readable YAML "
-                         f"({type(error).__name__}: {detail})") from None
-    config = {} if config is None else config
-    if not isinstance(config, dict):
-        raise ValueError(f"sb3 run config {str(config_path)!r} must hold a mapping (algo, "
-                         f"env_kwargs, ...), got {describe_value(config)}")
-    if not isinstance(config.get("env_kwargs", {}), dict):
-        raise ValueError(f"sb3 run config {str(config_path)!r}: env_kwargs must be a mapping, "
-                         f"got {describe_value(config['env_kwargs'])}")
-    return config
 
 
 def _check_model_archive(model_path: Path) -> dict:
@@ -386,8 +316,9 @@ class SB3Policy(BaselinePolicy):
     ``PATH`` is a run directory of ``python -m train`` (its ``model.zip``), a shipped agent's
     directory, or a model ``.zip`` (``best_model.zip``, a checkpoint
     ``checkpoints/<algo>_<N>_steps.zip``, ...). The observation normalisation that belongs to
-    the model (:func:`normalization_file`) is applied before the network; a model trained with
-    normalisation whose statistics are missing is refused with a ``ValueError`` naming the file.
+    the model (:func:`~agents.policies.run_dir.normalization_file`) is applied before the
+    network; a model trained with normalisation whose statistics are missing is refused with a
+    ``ValueError`` naming the file.
     The run's ``config.yaml`` (beside the model, or above ``checkpoints/``) gives the env
     interface the agent was trained with (:data:`SB3_INTERFACE_KEYS`).
 
@@ -476,14 +407,15 @@ class SB3Policy(BaselinePolicy):
                                   deterministic=deterministic)
 
     def save(self, path: str | Path) -> None:
-        """Save as a directory: ``model.zip``, ``vecnormalize.pkl`` and ``config.yaml``."""
+        """Save as a directory: ``model.zip``, ``vecnormalize.pkl`` and ``config.yaml``
+        (:mod:`agents.policies.run_dir`)."""
         directory = Path(path)
         directory.mkdir(parents=True, exist_ok=True)
-        self.model.save(directory / "model.zip")
+        self.model.save(directory / MODEL_FILE)
         if self.normalization is not None:
-            with open(directory / "vecnormalize.pkl", "wb") as handle:
+            with open(directory / NORMALIZATION_FILE, "wb") as handle:
                 pickle.dump(self.normalization, handle)
-        (directory / "config.yaml").write_text(yaml.safe_dump(self.config, sort_keys=False))
+        write_run_config(directory, self.config)
 
     @classmethod
     def load(cls, path: str | Path, env=None) -> "SB3Policy":
@@ -496,12 +428,12 @@ class SB3Policy(BaselinePolicy):
         if not path.exists():
             raise ValueError(f"sb3 path {str(path)!r} does not exist and is no shipped agent "
                              f"{sorted(shipped_agents())}")
-        model_path = path / "model.zip" if path.is_dir() else path
+        model_path = path / MODEL_FILE if path.is_dir() else path
         if not model_path.is_file():
             raise ValueError(f"sb3 path {str(path)!r} is a directory without model.zip: give a "
                              "run directory of python -m train, a model .zip or a shipped agent "
                              f"{sorted(shipped_agents())}")
-        config = _read_run_config(_run_config_file(model_path))
+        config = read_run_config(run_config_file(model_path))
         data = _check_model_archive(model_path)
         normalization_path = normalization_file(model_path)
         normalized = _trained_with_normalization(model_path, config, data)

@@ -5,8 +5,8 @@ suite's runs.
   (:data:`PAPER_DATASETS`; ``python -m eval datasets``).
 * :mod:`eval.datasets.suite`: a suite's runs as one dataset per arm and condition
   (``python -m eval suite SPEC --record minari``).
-* :mod:`eval.datasets.episodes`: episodes from env runs (:class:`EpisodeRecorder`) and from
-  procedures' samples.
+* :mod:`soft_gym.datasets.episodes`: episodes from env runs (``EpisodeRecorder``) and from
+  procedures' samples, which the papers' and the suite's datasets are written from.
 * :mod:`soft_gym.datasets.store`: writing (never over an existing dataset without ``force``) and
   loading with checks (:func:`load_dataset`: one ``ValueError`` for an unknown id, a corrupt or
   truncated directory, or another env version).
@@ -18,12 +18,10 @@ suite's runs.
 The ids, fields and units and the data cards are in docs/datasets.md.
 """
 
-from eval.datasets.episodes import EpisodeRecorder
 from eval.datasets.papers import PAPER_DATASETS, Collection, PaperDataset
 from soft_gym.datasets.store import (default_root, list_datasets, load_dataset, recover_env,
                                      write_dataset)
 from eval.datasets.write import write_paper_dataset
 
-__all__ = ["PAPER_DATASETS", "Collection", "EpisodeRecorder", "PaperDataset", "default_root",
-           "list_datasets", "load_dataset", "recover_env", "write_dataset",
-           "write_paper_dataset"]
+__all__ = ["PAPER_DATASETS", "Collection", "PaperDataset", "default_root", "list_datasets",
+           "load_dataset", "recover_env", "write_dataset", "write_paper_dataset"]

@@ -15,9 +15,9 @@ data card needs. :data:`PAPER_DATASETS` names them:
 | ho2018   | ``soft-arm/ho2018/pretraining-v0``   | ``lwpr_rwr``'s pre-training walk                   |
 
 zhao2021, zou2022 and wang2023 hold commands to equilibrium on a private simulator, so their
-samples are stored as :func:`~eval.datasets.episodes.procedure_episode` (one episode); ho2018's
+samples are stored as :func:`~soft_gym.datasets.episodes.procedure_episode` (one episode); ho2018's
 walk is a Gymnasium episode of a copy of the env and is recorded as it ran
-(:class:`~eval.datasets.episodes.EpisodeRecorder`, handed to the walk through its ``wrap_env``
+(:class:`~soft_gym.datasets.episodes.EpisodeRecorder`, handed to the walk through its ``wrap_env``
 seam), so replaying its actions in the recovered env gives its observations back bit for bit.
 Each collection also stores ``match``, the settings its method checks before it trains from the
 dataset (:mod:`soft_gym.datasets.training`).
@@ -32,9 +32,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from eval.datasets.episodes import episode_buffer
 from eval.papers import PaperParts
 from soft_gym._validation import require_integer
+from soft_gym.datasets.episodes import episode_buffer
 
 
 @dataclass
@@ -42,8 +42,8 @@ class Collection:
     """What a collector returns.
 
     Attributes:
-        episodes: episode arrays (:func:`~eval.datasets.episodes.procedure_episode` or
-            :meth:`~eval.datasets.episodes.EpisodeRecorder.episode_arrays`).
+        episodes: episode arrays (:func:`~soft_gym.datasets.episodes.procedure_episode` or
+            :meth:`~soft_gym.datasets.episodes.EpisodeRecorder.episode_arrays`).
         env_id, env_kwargs: the env ``recover_environment()`` makes.
         observation_space, action_space: the stored spaces.
         procedure: the function that collected the samples (dotted name).

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from eval.datasets.cards import suite_card
-from eval.datasets.episodes import episode_buffer
+from soft_gym.datasets.episodes import episode_buffer
 from soft_gym.datasets.store import write_dataset
 from eval.suite.grid import Cell
 from eval.suite.store import episode_path, read_record
@@ -53,12 +53,15 @@ def write_suite_datasets(suite: str, out: str | os.PathLike, cells: Sequence[Cel
     """Write the recorded episodes of ``cells`` as one dataset per arm, condition (and
     observation layout) under ``root`` (default ``<out>/datasets``).
 
-    :param suite: the suite's name (the ids' group ``suite-<name>``).
-    :param out: the suite's output directory.
-    :param cells: the suite's cells.
-    :param root: the datasets root.
-    :returns: ``{"datasets": {id: episodes}, "missing": [cell keys without an episode (runs
-        n/a, failed, or finished before recording)], "root": path}``.
+    Args:
+        suite: the suite's name (the ids' group ``suite-<name>``).
+        out: the suite's output directory.
+        cells: the suite's cells.
+        root: the datasets root.
+
+    Returns:
+        ``{"datasets": {id: episodes}, "missing": [cell keys without an episode (runs n/a,
+        failed, or finished before recording)], "root": path}``.
     """
     root = Path(out) / DATASETS_DIR if root is None else Path(root)
     groups: dict[tuple, list[tuple[Cell, dict[str, Any]]]] = {}

@@ -12,7 +12,7 @@ Running
 -------
 :func:`run_suite` runs every cell whose record is not there yet (all of them without
 ``resume``). A run that finishes writes ``out/records/<key>.json`` at once and, when it ran, the
-per-step record ``out/records/<key>.npz`` (the arrays of :func:`eval.runner.run_episode`: m, s,
+per-step record ``out/records/<key>.npz`` (the arrays of :func:`agents.rollout.run_episode`: m, s,
 Pa), each to a temporary file renamed into place, the JSON last, so a killed suite leaves no
 half record and ``resume`` redoes exactly the unfinished cells.
 

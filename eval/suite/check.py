@@ -11,9 +11,9 @@ from typing import Any
 from tqdm import tqdm
 
 from agents.policies import PolicyRefusal, SB3Policy, make_policy
-from eval.runner import uncalibrated_env_class
 from eval.suite.grid import Cell, arm_env, canonical_json, expand
 from eval.suite.spec import PolicyEntry, SuiteError, SuiteSpec
+from soft_gym.envs.uncalibrated import uncalibrated_env_class
 
 
 class EnvChecker:
@@ -53,8 +53,14 @@ def check_suite(spec: SuiteSpec, progress: bool = False, checker: EnvChecker | N
     makes every baseline on it (see the module docstring, "Validation"); loads every SB3 agent
     once.
 
-    :param checker: builds the envs; one that has built some already (:func:`eval.suite.engine.
-        on_engine`) does not build them again.
+    Args:
+        spec: the suite's spec.
+        progress: show a progress bar over the arms.
+        checker: builds the envs; one that has built some already
+            (:func:`eval.suite.engine.on_engine`) does not build them again.
+
+    Returns:
+        The suite's cells (:func:`eval.suite.grid.expand`).
 
     Raises:
         ValueError: (:class:`SuiteError`) naming the file, the key and the env's or policy's

@@ -19,8 +19,8 @@ from typing import Any
 from tqdm import tqdm
 
 from agents.policies import PolicyRefusal
-from eval.datasets.episodes import EpisodeRecorder
-from eval.runner import RunConfig, build, run_episode
+from agents.rollout import run_episode
+from eval.runner import RunConfig, build
 from eval.suite.check import check_suite
 from eval.suite.locks import LOCKS_DIR, claim, release, remove_locks_dir
 from eval.suite.grid import Cell, expand, label_text
@@ -28,6 +28,7 @@ from eval.suite.spec import SuiteSpec, load_suite
 from eval.suite.store import (cell_metrics, check_records_dir, git_revision, is_finished,
                               library_versions, record_problem, records_dir, write_record)
 from soft_gym._threads import one_compute_thread
+from soft_gym.datasets.episodes import EpisodeRecorder
 from soft_gym.sensing.calibration_cache import disk_cache_enabled
 
 

@@ -335,7 +335,7 @@ def _atomic_write(path: Path, write: Callable[[Any], None], binary: bool) -> Non
 
 EPISODES_DIR = "episodes"
 """Where ``run_suite(..., record=True)`` keeps each run's recorded episode (``<key>.pkl``, the
-arrays of :meth:`eval.datasets.episodes.EpisodeRecorder.episode_arrays` with the env's id,
+arrays of :meth:`soft_gym.datasets.episodes.EpisodeRecorder.episode_arrays` with the env's id,
 keyword arguments and observation layout), for the datasets of ``--record minari``."""
 
 

@@ -108,7 +108,7 @@ def write_dataset(dataset_id: str, episodes: Iterable[Any], *, env_id: str,
     Args:
         dataset_id: ``soft-arm/<group>/<name>-v<N>``.
         episodes: :class:`minari.data_collector.EpisodeBuffer` objects (see
-            :mod:`eval.datasets.episodes`).
+            :mod:`soft_gym.datasets.episodes`).
         env_id, env_kwargs: the env ``recover_environment()`` makes (its registered id and
             keyword arguments).
         observation_space, action_space: the spaces of the stored observations and actions.

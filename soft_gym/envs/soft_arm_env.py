@@ -51,7 +51,7 @@ darkness for both; an occluder in front of each); a dict keyed by sensor name, e
 neither camera refuses them, as it does a dict naming a camera it does not simulate.
 
 Every sensor the env simulates is read once per control step into one
-:class:`~soft_gym.sensing.measurement.Measurement`; the observation, ``info`` and the feedback
+:class:`~soft_gym.sensors.measurement.Measurement`; the observation, ``info`` and the feedback
 source all read it.
 
 ## Domain randomisation
@@ -134,9 +134,9 @@ from soft_gym.scenarios.loads import SwayingMass, heaviest_total_load_n
 from soft_gym.scenarios.randomization import DomainRandomizer, RandomizationConfig
 from soft_gym.sensing import FEEDBACK_SOURCES, make_feedback_source
 from soft_gym.sensing.feedback_base import CalibrationContext, FeedbackEstimate
-from soft_gym.sensing.measurement import Measurement
 from soft_gym.sensors import SENSORS, make_sensor
 from soft_gym.sensors.faults import FAULT_SENSORS, copy_faults, faults_per_sensor, make_faults
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.sensors.reading import measure
 from soft_gym.tasks import ReachTask, Task, TrackTask
 from soft_gym.tasks.tasks import within_reach
@@ -217,7 +217,7 @@ class SoftArmEnv(gym.Env):
         config: the checked arguments (:class:`~soft_gym.envs.config.EnvConfig`).
         arm: the arm (:class:`~soft_gym.robots.spec.ArmSpec`).
         sim: the simulator (:class:`~soft_gym.simulator.Simulator`).
-        measurement: the last step's :class:`~soft_gym.sensing.measurement.Measurement`.
+        measurement: the last step's :class:`~soft_gym.sensors.measurement.Measurement`.
         estimate: the feedback source's last :class:`FeedbackEstimate`.
         step_count: control steps taken in the episode.
         closed: whether :meth:`close` has been called.

@@ -1,14 +1,14 @@
 """The estimators' shared layer: from one step's sensor readings to the tip pose (and backbone).
 
 Here: the protocol (:mod:`~soft_gym.sensing.feedback_base`), the
-:class:`~soft_gym.sensing.measurement.Measurement`, the backbone's key points
+:class:`~soft_gym.sensors.measurement.Measurement`, the backbone's key points
 (:mod:`~soft_gym.sensing.key_points`), the sources of no paper in particular
 (:mod:`~soft_gym.sensing.feedback`: ``ground_truth``, ``em``) and the calibration cache. Each
 paper's estimators and sources are in its folder, ``soft_gym/papers/<key>/``, and join
 :data:`FEEDBACK_SOURCES` when the paper is registered (:mod:`soft_gym.papers`).
 
 Nothing here drives a simulator: an estimator sees a
-:class:`~soft_gym.sensing.measurement.Measurement` (the readings and the commands sent) and what a
+:class:`~soft_gym.sensors.measurement.Measurement` (the readings and the commands sent) and what a
 calibration procedure (:mod:`soft_gym.procedures`) gave it. ``feedback=`` of the env names a
 source registered in :data:`FEEDBACK_SOURCES` (see :mod:`soft_gym.sensing.feedback`).
 """

@@ -2,7 +2,7 @@
 
 A source declares the sensors it needs (the env simulates them), may be calibrated once when the
 env is made (by a procedure of :mod:`soft_gym.procedures.calibration`), and turns one step's
-:class:`~soft_gym.sensing.measurement.Measurement` into a :class:`FeedbackEstimate` (tip pose, and
+:class:`~soft_gym.sensors.measurement.Measurement` into a :class:`FeedbackEstimate` (tip pose, and
 the backbone where the source has one). ``feedback=`` of the env takes a registered name
 (:data:`soft_gym.sensing.FEEDBACK_SOURCES`); a new estimator is one subclass registered there.
 See docs/architecture.md, "Feedback sources".
@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.sensing.key_points import key_points_from_backbone
 
 

@@ -1,6 +1,6 @@
 """The feedback-source protocol: what a source is, what it is given, and what it returns.
 
-A source estimates from one step's :class:`~soft_gym.sensing.measurement.Measurement` alone (the
+A source estimates from one step's :class:`~soft_gym.sensors.measurement.Measurement` alone (the
 sensors' readings and the commands sent), as a real robot's estimator does: it never holds the
 simulator. What it learns before the first step (a calibration) is computed by a procedure
 (:mod:`soft_gym.procedures.calibration`) that drives a private simulator and hands the result
@@ -20,7 +20,7 @@ from typing import Any, Callable, ClassVar
 import numpy as np
 
 from soft_gym.robots.spec import ArmSpec
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 
 
 @dataclass

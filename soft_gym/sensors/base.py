@@ -1,7 +1,7 @@
 """What every sensor shares: its own sample rate (sample and hold), seeded noise, and a space.
 
 The env reads every sensor once per control step with :meth:`Sensor.read` (into one
-:class:`~soft_gym.sensing.measurement.Measurement`); a sensor takes a fresh sample when one is due
+:class:`~soft_gym.sensors.measurement.Measurement`); a sensor takes a fresh sample when one is due
 at its ``rate_hz`` and otherwise repeats the last one, as a slower real sensor would.
 All randomness comes from the generator given to :meth:`Sensor.reset` (the env's ``np_random``),
 so a seed fixes every reading.

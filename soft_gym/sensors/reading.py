@@ -1,4 +1,4 @@
-"""Reading every sensor once into one :class:`~soft_gym.sensing.measurement.Measurement`."""
+"""Reading every sensor once into one :class:`~soft_gym.sensors.measurement.Measurement`."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 
 
 def measure(sensors: Mapping[str, Any], sim, command_pa: np.ndarray | None = None

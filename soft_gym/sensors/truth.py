@@ -1,7 +1,7 @@
 """The simulator's own tip pose and backbone, as a sensor: what the ``ground_truth`` source reads.
 
 No real arm has this sensor. It exists so that every feedback source, ground truth included,
-estimates from a :class:`~soft_gym.sensing.measurement.Measurement` alone and never holds the
+estimates from a :class:`~soft_gym.sensors.measurement.Measurement` alone and never holds the
 simulator. It is :attr:`~TruthSensor.privileged`: no observation part or ``info["sensors"]``
 entry shows it (``info`` carries the ground truth under its own keys).
 """

@@ -457,7 +457,7 @@ def test_comparison_grid_writes_tables_and_plots(tmp_path):
 
 
 def test_agents_are_compared_with_the_model_at_the_first_gain():
-    from eval.__main__ import _agents_against_first_gain
+    from eval.commands.track import _agents_against_first_gain
 
     def row(policy, kp, mean, last, dev):
         return {"policy": policy, "kp": kp, "seed": 0, "track_mean_mm": mean,

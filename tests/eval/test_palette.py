@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 from matplotlib.colors import to_hex
 
-import eval.__main__ as eval_main
 import eval.report
 from agents.policies import BASELINES, shipped_agents
 from eval import suite
+import eval.papers.wang2023.benchmark_command as paper_benchmark
+from eval.commands.track import _track_title
 from eval.palette import (MIN_DELTA_E, PALETTE, agent_family, delta_e, lab, named_policies,
                           policy_color, policy_colors, policy_label)
 from eval.report import error_peaks_mm, plot_error_time
@@ -170,14 +171,14 @@ def test_the_error_plots_of_one_arm_share_a_y_scale(tmp_path, monkeypatch):
 
 
 def test_the_benchmark_plot_title_names_the_load_and_the_occlusion_window():
-    title = eval_main.benchmark_title().format(end_s=61.9)
-    load_g = eval_main.BENCHMARK_LOAD_KG * 1000
-    start = eval_main.BENCHMARK_OCCLUDER["start_s"]
+    title = paper_benchmark.benchmark_title().format(end_s=61.9)
+    load_g = paper_benchmark.BENCHMARK_LOAD_KG * 1000
+    start = paper_benchmark.BENCHMARK_OCCLUDER["start_s"]
     assert f"{load_g:g} g tip load" in title
     assert f"from {start:g} s to 62 s (the end)" in title and "partial occluder" in title
-    args = type("Args", (), {"title": eval_main.benchmark_title(), "preset": "wang2023",
+    args = type("Args", (), {"title": paper_benchmark.benchmark_title(), "preset": "wang2023",
                              "path": "circle"})()
-    assert eval_main._track_title(args, {"a": {"time_s": np.array([0.05, 61.9])}}) == title
+    assert _track_title(args, {"a": {"time_s": np.array([0.05, 61.9])}}) == title
 
 
 DELTA_E = 20.0

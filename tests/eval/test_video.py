@@ -9,7 +9,7 @@ import pytest
 
 import soft_gym  # noqa: F401
 from eval import video as video_module
-from eval.video import VideoWriter, read_video, write_video
+from eval.video import EpisodeVideo, VideoWriter, read_video, write_video
 
 SIZE = (96, 72)
 
@@ -60,13 +60,14 @@ def test_writer_refuses_no_frames_mixed_shapes_and_bad_input(tmp_path):
 
 def _reach_run(video_path=None, panels=None):
     from agents.policies import make_policy
-    from eval.runner import run_episode
+    from agents.rollout import run_episode
 
     env = gym.make("SoftArmReach-v0", preset="wang2023", feedback="fused",
                    faults={"name": "low_light", "strength": 0.5}, episode_steps=6,
                    render_size=SIZE)
     policy = make_policy("cc_model", env=env, kp=0.06)
-    record = run_episode(env, policy, seed=2, video_path=video_path, video_panels=panels)
+    frames = None if video_path is None else EpisodeVideo(env, video_path, panels)
+    record = run_episode(env, policy, seed=2, frames=frames)
     fps = env.unwrapped.metadata["render_fps"]
     env.close()
     return record, fps
@@ -155,10 +156,11 @@ def test_estimation_video(tmp_path):
 
 def test_estimation_video_flag(tmp_path, monkeypatch):
     import eval.__main__ as cli
+    import eval.papers.wang2023.estimation_command as paper_estimation
 
     calls = []
-    monkeypatch.setattr(cli, "run_experiments", lambda *args, **kwargs: calls.append(kwargs)
-                        or [{"experiment": "clean"}])
+    monkeypatch.setattr(paper_estimation, "run_experiments",
+                        lambda *args, **kwargs: calls.append(kwargs) or [{"experiment": "clean"}])
     cli.main(["estimation", "--steps", "600", "--out", str(tmp_path), "--video"])
     cli.main(["estimation", "--steps", "600", "--out", str(tmp_path)])
     assert [call.get("video", False) for call in calls] == [True, False]
@@ -169,12 +171,13 @@ def test_stereo_run_records_and_films(tmp_path):
     """A zou2022 stereo-feedback run keeps its numeric estimates (the SOM nodes and the reasons
     are left out of the record) and films the stereo pair beside the scene."""
     from agents.policies import make_policy
-    from eval.runner import run_episode
+    from agents.rollout import run_episode
 
     env = gym.make("SoftArmReach-v0", preset="zou2022", feedback="stereo", episode_steps=2,
                    render_size=SIZE)
     policy = make_policy("cc_model", env=env, kp=0.06)
-    record = run_episode(env, policy, seed=0, video_path=tmp_path / "stereo.mp4")
+    record = run_episode(env, policy, seed=0,
+                         frames=EpisodeVideo(env, tmp_path / "stereo.mp4", None))
     env.close()
     assert "lost" in record and "som_px" not in record and "reason" not in record
     frames = read_video(tmp_path / "stereo.mp4")

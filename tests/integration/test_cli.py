@@ -15,6 +15,8 @@ import pytest
 import eval.__main__ as eval_main
 import eval.papers.wang2023.estimation as estimation
 import eval.papers.ho2018.factors as ho2018_factors
+import eval.papers.wang2023.estimation_command as paper_estimation
+from eval.commands import track as track_command
 from soft_gym import demo
 from train import ship
 from train.__main__ import main as train_main
@@ -116,10 +118,11 @@ def test_eval_compare_prints_its_output_directory_and_records_the_version(tmp_pa
 def test_eval_benchmark_and_estimation_print_their_output_directories(tmp_path, capsys,
                                                                       monkeypatch):
     """The two long runners, with their work replaced by stand-ins."""
-    monkeypatch.setattr(eval_main, "_track", lambda args, parser, options=None: print("table"))
+    monkeypatch.setattr(track_command, "run_tracks",
+                        lambda args, parser, options=None: print("table"))
     eval_main.main(["benchmark", "--out", str(tmp_path / "b")])
     assert capsys.readouterr().out.strip().splitlines()[-1] == f"output directory: {tmp_path / 'b'}"
-    monkeypatch.setattr(eval_main, "run_experiments",
+    monkeypatch.setattr(paper_estimation, "run_experiments",
                         lambda experiments, out, steps, seed: [{"experiment": "clean"}])
     eval_main.main(["estimation", "--out", str(tmp_path / "e")])
     assert capsys.readouterr().out.strip().splitlines()[-1] == f"output directory: {tmp_path / 'e'}"

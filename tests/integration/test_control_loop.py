@@ -20,7 +20,7 @@ import pytest
 
 import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import BaselinePolicy
-from eval.runner import run_episode
+from agents.rollout import run_episode
 from soft_gym.robots.presets import get_preset
 from soft_gym.tasks.paths import PathSpec, make_reference_trajectory
 from soft_gym.procedures.workspace import reachable_tips

@@ -13,11 +13,13 @@ import pytest
 
 import soft_gym  # noqa: F401
 from agents.policies import make_policy
-from eval.runner import run_episode
+from agents.policies.run_dir import BEST_TRACKING_MODEL_FILE
+from agents.rollout import run_episode
+from agents.tracking_error import last_cycle_error_mm
 from tests.cli_errors import assert_one_line_error
 from train.__main__ import main as train_main
-from train.tracking_curve import (BEST_TRACKING_MODEL_FILE, CURVE_CYCLES, CURVE_FILE, CURVE_SEED,
-                                  evaluation_cases, has_plateaued, last_cycle_error_mm)
+from train.tracking_curve import (CURVE_CYCLES, CURVE_FILE, CURVE_SEED, evaluation_cases,
+                                  has_plateaued)
 from train.trainer import TrainRequest, train
 
 

@@ -331,7 +331,7 @@ def test_drawn_swaying_masses_on_mujoco_name_the_randomisation_file_without_them
     assert line.endswith("--randomization-config train/configs/randomization_mujoco.yaml "
                          "draws none"), line
     assert "RandomizationConfig.load_weights['swaying_mass']" in line, line
-    from eval.runner import make_uncalibrated_env
+    from soft_gym.envs.uncalibrated import make_uncalibrated_env
 
     make_uncalibrated_env("SoftArmTrackWang2023-v0", {  # the file named runs on MuJoCo
         "engine": "mujoco", "feedback": "em", "randomization": str(shipped)}).close()

@@ -3,5 +3,10 @@ study (``factors``), the claims (``claims``) and the pre-training dataset (``dat
 
 from eval.papers.ho2018.claims import CLAIMS, EXPERIMENTS
 from eval.papers.ho2018.dataset import DATASET
+import eval.papers.ho2018.command as _command
+from eval.commands import Command
 
-__all__ = ["CLAIMS", "DATASET", "EXPERIMENTS"]
+COMMANDS = {"ho2018": Command(_command.add_parser, _command.run)}
+"""Its subcommand, ``python -m eval ho2018``."""
+
+__all__ = ["CLAIMS", "COMMANDS", "DATASET", "EXPERIMENTS"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 
-from eval.datasets.episodes import EpisodeRecorder
+from soft_gym.datasets.episodes import EpisodeRecorder
 from eval.datasets.papers import Collection, PaperDataset, sample_count
 from soft_gym._validation import require_seed
 

@@ -3,5 +3,10 @@
 
 from eval.papers.zhao2021.claims import CLAIMS, EXPERIMENTS
 from eval.papers.zhao2021.dataset import DATASET
+import eval.papers.zhao2021.command as _command
+from eval.commands import Command
 
-__all__ = ["CLAIMS", "DATASET", "EXPERIMENTS"]
+COMMANDS = {"zhao2021": Command(_command.add_parser, _command.run)}
+"""Its subcommand, ``python -m eval zhao2021``."""
+
+__all__ = ["CLAIMS", "COMMANDS", "DATASET", "EXPERIMENTS"]

@@ -3,7 +3,7 @@ Minari dataset ``soft-arm/zhao2021/exploration-v0`` (``python -m eval datasets z
 
 from __future__ import annotations
 
-from eval.datasets.episodes import box_dict_space, procedure_episode
+from soft_gym.datasets.episodes import box_dict_space, procedure_episode
 from eval.datasets.papers import (Collection, PaperDataset, absolute_actions, env_calibration_context,
                                  pressure_action_space, sample_count)
 from soft_gym._validation import require_seed

@@ -88,9 +88,9 @@ from matplotlib.figure import Figure
 
 import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import BASELINES, BaselinePolicy, make_policy
+from agents.rollout import run_episode
 from eval.metrics import path_deviation_mm, tracking_error_mm
 from eval.report import markdown_table, save_figure
-from eval.runner import run_episode
 from soft_gym.robots.presets import get_preset
 from soft_gym.procedures.workspace import reachable_tips
 from soft_gym.tasks import TrackTask

@@ -12,7 +12,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.papers.wang2023.pipeline import SensingPipeline
 
 

@@ -27,7 +27,7 @@ import numpy as np
 from soft_gym._quaternion import quaternion_to_matrix
 from soft_gym.papers.wang2023.femp import FEmpEstimator
 from soft_gym.papers.wang2023.fusion import PoseFusion
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.papers.wang2023.vision_pose import VisionEstimate, VisionPoseEstimator
 from soft_gym.sensors.camera import EyeInHandCamera
 from soft_gym.sensors.fbg import FBGFiber

@@ -8,7 +8,7 @@ import numpy as np
 
 from soft_gym._validation import require_positive
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource, dataset_option
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.papers.zhao2021.shape_reconstruction import ReconstructionConfig
 
 

@@ -57,7 +57,7 @@ import numpy as np
 from soft_gym.robots.spec import ArmSpec
 from soft_gym.papers.zou2022.cc_shape import cc_shape
 from soft_gym.sensing.feedback_base import FeedbackEstimate, FeedbackSource, dataset_option
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.papers.zou2022.shape_dnn import STEREO_INTRINSICS, ShapeDNNConfig
 from soft_gym.papers.zou2022.stereo_shape import N_POINTS, ASESConfig, estimate_stereo_shape
 from soft_gym.sensors.stereo import StereoCamera

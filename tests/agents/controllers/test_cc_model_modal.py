@@ -20,7 +20,7 @@ import soft_gym  # noqa: F401
 from agents.controllers.cc_model import CCModelController
 from agents.controllers.modal_map import ModalLengthMap
 from agents.policies import make_policy
-from eval.runner import run_episode
+from agents.rollout import run_episode
 
 SCHEDULED = ModalLengthMap(mean_lengths_m=np.array([0.077, 0.16, 0.20, 0.23]),
                            common_pressures_pa=np.array([0.0, 75e3, 150e3, 225e3]),

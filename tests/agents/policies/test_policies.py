@@ -32,7 +32,8 @@ from agents.learners.sliding_gp import SlidingWindowGP
 from agents.policies import (BASELINES, NORMALIZATION_MARK, PolicyRefusal, SB3Policy,
                              SHIPPED_DIR, check_observation, make_policy, mark_model_file,
                              model_normalization_mark)
-from eval.runner import RunConfig, run, run_episode
+from agents.rollout import run_episode
+from eval.runner import RunConfig, run
 from soft_gym._model_files import write_model_state
 from soft_gym.envs import SoftArmEnv
 

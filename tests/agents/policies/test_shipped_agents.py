@@ -17,7 +17,8 @@ import yaml
 
 import soft_gym  # noqa: F401
 from agents.policies import SHIPPED_DIR, make_policy
-from train.ship import EVALUATION_FILE, nominal_evaluation
+from agents.policies.run_dir import EVALUATION_FILE
+from train.ship import nominal_evaluation
 from train.tracking_curve import read_curve
 
 AGENTS = sorted(path.name for path in SHIPPED_DIR.iterdir() if (path / "model.zip").is_file())

@@ -15,7 +15,7 @@ import pytest
 
 import soft_gym  # noqa: F401 - registers the ids
 from eval.__main__ import main
-from eval.datasets.episodes import EpisodeRecorder
+from soft_gym.datasets.episodes import EpisodeRecorder
 from soft_gym.datasets.store import list_datasets, load_dataset, write_dataset
 from tests.cli_errors import assert_one_line_error
 

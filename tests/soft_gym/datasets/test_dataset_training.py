@@ -128,7 +128,7 @@ def test_lwpr_rwr_from_the_dataset_equals_the_walk(root):
 
 
 def test_the_walk_seam_records_what_the_walk_drove():
-    from eval.datasets.episodes import EpisodeRecorder
+    from soft_gym.datasets.episodes import EpisodeRecorder
 
     env = gym.make("SoftArmTrackHo2018-v0", feedback="em")
     controller = make_policy("lwpr_rwr", env=env, cache=False, progress=False, **HO_SIZE)

@@ -66,7 +66,7 @@ def test_what_mujoco_lacks_is_refused_naming_the_feature_and_the_engine(kwargs, 
 
 def _feedback_mujoco_runs() -> list[str]:
     """The feedback sources an env on the MuJoCo engine accepts, found by making it."""
-    from eval.runner import make_uncalibrated_env
+    from soft_gym.envs.uncalibrated import make_uncalibrated_env
 
     accepted = []
     for name in FEEDBACK_SOURCES:

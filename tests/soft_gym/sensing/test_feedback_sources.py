@@ -21,7 +21,7 @@ from soft_gym.sensing import calibration_cache
 from soft_gym.sensing import FEEDBACK_SOURCES, FeedbackEstimate, FeedbackSource
 from soft_gym.sensing.feedback import EMFeedback, GroundTruthFeedback
 from soft_gym.sensing.feedback_base import CalibrationContext
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.papers.wang2023 import pipeline
 from soft_gym.papers.wang2023.feedback import CameraFeedback, FEmpFeedback, FusedFeedback
 from soft_gym.papers.zhao2021 import shape_reconstruction

@@ -25,7 +25,7 @@ from soft_gym.papers.wang2023.exploration import spiral_fractions
 from soft_gym.papers.wang2023.femp import FEmpEstimator
 from soft_gym.papers.wang2023.fusion import PoseFusion
 from soft_gym.papers.wang2023.calibration import calibrate_pipeline
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.papers.wang2023.pipeline import SensingPipeline
 from soft_gym.papers.wang2023.vision_pose import VisionEstimate
 

@@ -19,7 +19,7 @@ from gymnasium.utils.env_checker import check_env
 import soft_gym  # noqa: F401
 from soft_gym.robots.presets import get_preset
 from soft_gym.papers.zou2022.cc_shape import arc_parameters, cc_shape, cc_shape_points
-from soft_gym.sensing.measurement import Measurement
+from soft_gym.sensors.measurement import Measurement
 from soft_gym.papers.zou2022.dataset import cached_shape_dnn, grid_commands
 from soft_gym.papers.zou2022.shape_dnn import (ShapeDNN, ShapeDNNConfig, axis_errors_mm,
                                         default_stereo, rotate_about_axis, true_shape_points)

@@ -133,12 +133,18 @@ def procedure_episode(actions: np.ndarray, observations: dict[str, np.ndarray],
                       infos: dict[str, np.ndarray], seed: int | None = None) -> dict[str, Any]:
     """A procedure's ``n`` samples as one episode's arrays (layout in the module docstring).
 
-    :param actions: ``(n, n_chambers)`` env actions of the commands held (absolute mode).
-    :param observations: name -> ``(n, ...)`` raw readings after each command.
-    :param infos: name -> ``(n, ...)`` ground truth and labels of each sample (numeric or
-        boolean; booleans are stored as 0/1).
-    :param seed: the procedure's seed (the episode's ``seed`` metadata).
-    :raises ValueError: arrays of different lengths, or no sample.
+    Args:
+        actions: ``(n, n_chambers)`` env actions of the commands held (absolute mode).
+        observations: name -> ``(n, ...)`` raw readings after each command.
+        infos: name -> ``(n, ...)`` ground truth and labels of each sample (numeric or
+            boolean; booleans are stored as 0/1).
+        seed: the procedure's seed (the episode's ``seed`` metadata).
+
+    Returns:
+        The episode's arrays, as :meth:`EpisodeRecorder.episode_arrays` gives them.
+
+    Raises:
+        ValueError: arrays of different lengths, or no sample.
     """
     n = len(actions)
     lengths = {name: len(value) for name, value in {**observations, **infos}.items()}
