@@ -12,6 +12,8 @@ from eval.report import markdown_table
 from eval.runner import ConfigError
 from soft_gym._cli import HelpFormatter, fail, positive_float, positive_int, seed_int
 from soft_gym._validation import SEED_MAX
+from soft_gym.envs.registration import preset_env_id
+from soft_gym.papers import DEFAULT_PRESET
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -53,7 +55,7 @@ def run(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     finishes), print the table."""
     policies = args.policies or (["cc_model", "hybrid_gpr"]
                                  + [f"sb3:{name}" for name in
-                                    shipped_agents("SoftArmTrackWang2023-v0")])
+                                    shipped_agents(preset_env_id("track", DEFAULT_PRESET))])
     if args.feedback not in ("fused", "camera") and "occlusion" in args.conditions:
         parser.error("the occlusion condition needs camera feedback: --feedback fused or "
                      f"camera, got {args.feedback!r}")

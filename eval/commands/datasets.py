@@ -32,9 +32,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     datasets.add_argument("--papers", nargs="+", choices=papers, default=papers,
                           help="papers whose datasets to write")
     datasets.add_argument("--size", choices=list(dataset_write.SIZES), default="paper",
-                          help="the papers' sample counts (zhao2021 4000 + 2000, zou2022 29791,"
-                               " wang2023 450, ho2018 80 waypoints; minutes to an hour), or "
-                               "quick ones (seconds)")
+                          help="the papers' sample counts ("
+                               + "; ".join(f"{paper} " + ", ".join(
+                                   f"{key}={value}" for key, value in recipe.paper_size.items())
+                                   for paper, recipe in datasets_module.PAPER_DATASETS.items())
+                               + "; minutes to an hour), or quick ones (seconds)")
     datasets.add_argument("--seed", type=seed_int, default=0,
                           help="the procedures' seed (0: the one the baselines calibrate with)")
     datasets.add_argument("--out", default=None,

@@ -26,8 +26,11 @@ from eval.suite.spec import POLICY_ENV_DEFAULTS
 from soft_gym._cli import (HelpFormatter, fail, json_or_name, json_value, positive_float,
                            positive_int, seed_int)
 from soft_gym._validation import SEED_MAX
-from soft_gym.engines import REFERENCE_ENGINE, ENGINES
+from soft_gym.engines import ENGINES, REFERENCE_ENGINE
 from soft_gym.envs.observations import OBSERVATION_PARTS
+from soft_gym.papers import DEFAULT_PRESET
+from soft_gym.robots.presets import PRESETS
+from soft_gym.tasks.paths import PATH_SHAPES
 
 
 TRACK_OPTIONS = {"env_kwargs.preset": "--preset", "env_kwargs.path": "--path",
@@ -189,10 +192,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     track.add_argument("--kp", type=positive_float, nargs="+", default=[0.06],
                        help="K_p gains of eq. (26), finite numbers > 0 (paper: 0.04 0.06 0.08 "
                             "0.10)")
-    track.add_argument("--preset", default="wang2023",
-                       help="arm preset: wang2023, ho2018, zhao2021 or zou2022")
+    track.add_argument("--preset", default=DEFAULT_PRESET,
+                       help=f"arm preset: {', '.join(sorted(PRESETS))}")
     track.add_argument("--path", default="circle",
-                       help="circle, pentagram, rectangle, spiral, star")
+                       help=", ".join(sorted(PATH_SHAPES)))
     track.add_argument("--cycles", type=positive_int, default=3,
                        help="path cycles per run (>= 1)")
     track.add_argument("--feedback", default="ground_truth",
