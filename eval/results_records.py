@@ -33,6 +33,7 @@ from eval.report import markdown_table
 from eval.suite.report import (ENV_DEFAULT_FEEDBACK, SCORE, agent_budgets,
                                agents_against_baselines, budget_text, leaderboards)
 from eval.suite.spec import SuiteSpec, load_suite
+from soft_gym.engines import ENGINES, REFERENCE_ENGINE
 
 SUITE_NAME = "default"
 """The bundled suite whose last run ``docs/leaderboard/`` keeps."""
@@ -249,9 +250,8 @@ def _evaluation_row(name: str, directory: Path) -> dict[str, str]:
     per_engine = engines.get("settled_error_mm") or {}
     feedback = (record.get("env_kwargs") or {}).get("feedback", "the env's default")
     return {"agent": code(name), "env": f"`{record['env_id']}`", "feedback": str(feedback),
-            "trained on": str(engines.get("training_engine", "pybullet")),
-            "PyBullet (mm)": mm(per_engine.get("pybullet")),
-            "MuJoCo (mm)": mm(per_engine.get("mujoco"))}
+            "trained on": str(engines.get("training_engine", REFERENCE_ENGINE)),
+            **{f"{engine} (mm)": mm(per_engine.get(engine)) for engine in ENGINES}}
 
 
 # ------------------------------------------------------------------------ the claims ledger
