@@ -17,6 +17,7 @@ import argparse
 from pathlib import Path
 
 from soft_gym._cli import HelpFormatter
+from soft_gym.papers import DEFAULT_PRESET
 from soft_gym.robots.arm_file import save_preset
 from soft_gym.robots.presets import PRESETS
 
@@ -37,7 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
                      "as a template to edit. Load it back with soft_gym.robots.load_preset(FILE),\n"
                      "or pass the path as an env's preset= (a path ending in .yaml/.yml or\n"
                      "holding a path separator is a file)."),
-        epilog=("example:\n  python -m soft_gym preset export wang2023 my_arm.yaml\n"
+        epilog=(f"example:\n  python -m soft_gym preset export {DEFAULT_PRESET} my_arm.yaml\n"
                 "  then edit my_arm.yaml (its name too) and use "
                 "gym.make(\"SoftArmReach-v0\", preset=\"my_arm.yaml\")"))
     export.add_argument("name", metavar="NAME",

@@ -101,13 +101,13 @@ positive_float = finite_float(0.0, low_open=True)
 
 def json_value(text: str) -> Any:
     """An ``add_argument`` type: JSON text (``'{"name": "tip_mass", "mass_kg": 0.01}'``,
-    ``'"wang2023_occlusion"'``); a syntax error names where it is."""
+    ``'"low_light"'``); a syntax error names where it is."""
     try:
         return json.loads(text)
     except json.JSONDecodeError as error:
         raise argparse.ArgumentTypeError(
             f"must be JSON (e.g. '{{\"name\": \"tip_mass\", \"mass_kg\": 0.01}}' or "
-            f"'\"wang2023_occlusion\"'), got {text!r}: {error.msg} at character {error.pos}") \
+            f"'\"low_light\"'), got {text!r}: {error.msg} at character {error.pos}") \
             from None
 
 

@@ -135,7 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-i", "--trained-agent", default=None, metavar="AGENT",
                         help="start a new run from a trained agent's weights and normalisation "
                              "statistics (a run directory, a model .zip or a shipped agent's "
-                             "name, e.g. ppo_lstm_wang2023_track), trained on this run's env and "
+                             "name, e.g. one of agents/trained/), trained on this run's env and "
                              "hyperparameters; its training segments open this run's "
                              "training.yaml (train/warm_start.py)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -46,7 +46,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
                           help="replace datasets that exist (otherwise refused before any work)")
     datasets.add_argument("--no-cache", action="store_true",
                           help="collect afresh even where the calibration cache holds the "
-                               "collection (zhao2021, zou2022)")
+                               "collection")
     return datasets
 
 

@@ -29,6 +29,7 @@ from soft_gym._validation import SEED_MAX
 from soft_gym.engines import ENGINES, REFERENCE_ENGINE
 from soft_gym.envs.observations import OBSERVATION_PARTS
 from soft_gym.papers import DEFAULT_PRESET
+from soft_gym.sensors.faults import FAULT_PRESETS, FAULTS
 from soft_gym.robots.presets import PRESETS
 from soft_gym.tasks.paths import PATH_SHAPES
 
@@ -204,7 +205,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     track.add_argument("--scenario", type=json_value, default=None,
                        help='loads as JSON, e.g. \'{"name": "tip_mass", "mass_kg": 0.01}\'')
     track.add_argument("--faults", type=json_or_name, default=None,
-                       help="visual faults: a fault's name (wang2023_occlusion, low_light, ...) "
+                       help=f"visual faults: a fault's or a paper's preset name "
+                            f"({', '.join([*FAULTS, *FAULT_PRESETS])}) "
                             'or JSON, e.g. \'{"name": "moving_occluder", "mode": "full"}\'')
     track.add_argument("--obs", nargs="+", default=None, choices=list(OBSERVATION_PARTS),
                        metavar="PART",

@@ -111,12 +111,12 @@ for _part in (
         ObservationPart("pressure", "chamber pressures over p_max", _pressure, _pressure_bound),
         ObservationPart("shape", "feedback backbone points P_0..P_6 (m)", _shape,
                         _positions(21)),
-        ObservationPart("fbg", "FBG Bragg wavelength shifts (nm, wang2023)", sensor=True),
-        ObservationPart("strain", "strain-gauge readings (zhao2021)", sensor=True),
-        ObservationPart("encoder", "chamber lengths from cable encoders (m, zou2022)",
+        ObservationPart("fbg", "FBG Bragg wavelength shifts (nm)", sensor=True),
+        ObservationPart("strain", "strain-gauge readings", sensor=True),
+        ObservationPart("encoder", "chamber lengths from cable encoders (m)",
                         sensor=True),
-        ObservationPart("em", "EM-tracked tip position (m) + quaternion (ho2018)", sensor=True),
-        ObservationPart("image", "eye-in-hand camera frame (uint8, wang2023)", sensor=True)):
+        ObservationPart("em", "EM-tracked tip position (m) + quaternion", sensor=True),
+        ObservationPart("image", "eye-in-hand camera frame (uint8)", sensor=True)):
     OBSERVATION_PARTS.register(_part.name, _part)
 
 STATE_PARTS = ("pose", "target", "pressure")
