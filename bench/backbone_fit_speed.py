@@ -31,7 +31,7 @@ import scipy
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from soft_gym._cli import HelpFormatter  # noqa: E402
+from soft_gym._cli import CommandParser, HelpFormatter  # noqa: E402
 from soft_gym.kinematics import cc_backbone, lengths_from_curvature  # noqa: E402
 from soft_gym.papers.zhao2021.backbone_fit import (BACKBONE_CURVES, fit_backbone,  # noqa: E402
                                                     mean_backbone_error_m)
@@ -54,7 +54,7 @@ def random_shapes(count: int, max_bend_deg: float, seed: int) -> tuple[np.ndarra
 
 
 def main(argv: list[str] | None = None) -> dict:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--shapes", type=int, default=200, help="random arm shapes")
     parser.add_argument("--repeats", type=int, default=5, help="timed fits per shape")

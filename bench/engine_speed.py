@@ -38,7 +38,7 @@ import mujoco
 import numpy as np
 
 import soft_gym  # noqa: F401  (registers the ids)
-from soft_gym._cli import HelpFormatter, positive_int
+from soft_gym._cli import CommandParser, HelpFormatter, positive_int
 from soft_gym.engines import make_simulator
 from soft_gym.robots.presets import PRESETS, get_preset
 
@@ -163,7 +163,7 @@ def format_table(rows: list[dict]) -> str:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="python bench/engine_speed.py", description=__doc__,
+    parser = CommandParser(prog="python bench/engine_speed.py", description=__doc__,
                                      formatter_class=HelpFormatter)
     parser.add_argument("--presets", nargs="+", choices=list(PRESETS), default=list(PRESETS),
                         help="arm presets")

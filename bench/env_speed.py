@@ -79,7 +79,7 @@ import numpy as np
 import pybullet
 
 import soft_gym  # noqa: F401  (registers the environment ids)
-from soft_gym._cli import HelpFormatter
+from soft_gym._cli import CommandParser, HelpFormatter
 from soft_gym.envs.config import TASKS
 from soft_gym.envs.registration import TASK_IDS
 from soft_gym.robots import PRESETS, get_preset
@@ -409,7 +409,7 @@ def format_table(rows: list[dict]) -> str:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         description="Benchmark soft_gym environments: env step rate, physics-only bound, reset "
                     "time, simulated time per wall second and tip accuracy against a 4x finer "
                     "physics step. Prints a table, then JSON (or writes it to --json).",

@@ -43,7 +43,7 @@ from scipy.spatial.distance import cdist
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from agents.learners import SlidingWindowGP  # noqa: E402
-from soft_gym._cli import HelpFormatter  # noqa: E402
+from soft_gym._cli import CommandParser, HelpFormatter  # noqa: E402
 
 
 def make_stream(steps: int, input_dim: int, output_dim: int, seed: int
@@ -85,7 +85,7 @@ def scratch_step(X: np.ndarray, Y: np.ndarray, xq: np.ndarray, scales: np.ndarra
 
 
 def main(argv: list[str] | None = None) -> dict:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         description="Time add + predict per control step of SlidingWindowGP against a "
                     "from-scratch GP refit on the same window.",
         formatter_class=HelpFormatter)

@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from soft_gym._cli import HelpFormatter
+from soft_gym._cli import CommandParser, HelpFormatter
 from soft_gym.robots.pneumatics import chamber_loads
 from soft_gym.robots.presets import PRESETS
 from soft_gym.robots.spec import ArmSpec
@@ -94,7 +94,7 @@ def beam_error_percent(spec: ArmSpec) -> float:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--preset", default="wang2023", choices=sorted(PRESETS),
                         help="arm preset to vary")
     parser.add_argument("--links", type=int, nargs="+", default=[3, 4, 6, 8],

@@ -37,14 +37,15 @@ import gymnasium as gym  # noqa: E402
 
 import soft_gym  # noqa: E402,F401
 from agents.policies import make_policy  # noqa: E402
-from soft_gym._cli import HelpFormatter, int_at_least, positive_int, seed_int  # noqa: E402
+from soft_gym._cli import (CommandParser, HelpFormatter, int_at_least,  # noqa: E402
+                           positive_int, seed_int)
 
 BUDGET_MS = 1000.0 / 23.0
 """ho2018's online update rate, about 23 Hz (ms per update)."""
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--window", type=positive_int, default=550,
                         help="online window (samples; the filling experiment's)")
     parser.add_argument("--updates", type=int_at_least(10), default=600,

@@ -52,7 +52,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from agents.learners import LWPR  # noqa: E402
 from agents.learners.lwpr import UPDATE_CUTOFF  # noqa: E402
-from soft_gym._cli import HelpFormatter  # noqa: E402
+from soft_gym._cli import CommandParser, HelpFormatter  # noqa: E402
 
 NORM_IN = np.r_[np.full(3, 0.3), np.full(3, 0.03), np.full(3, 0.3)]   # p, du, u scales
 
@@ -299,7 +299,7 @@ def summary(seconds: np.ndarray) -> dict[str, float]:
 
 
 def main(argv: list[str] | None = None) -> dict:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         description=__doc__.split("\n\n")[0] + "\n\nSee the module docstring for details.",
         formatter_class=HelpFormatter)
     parser.add_argument("--fields", type=int, default=350,

@@ -33,7 +33,7 @@ import time
 
 import numpy as np
 
-from soft_gym._cli import HelpFormatter
+from soft_gym._cli import CommandParser, HelpFormatter
 from soft_gym.envs import SoftArmEnv
 from soft_gym.robots import PRESETS
 
@@ -117,7 +117,7 @@ def time_video(size: tuple[int, int], seed: int, folder: str) -> dict[str, float
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--presets", nargs="+", default=sorted(PRESETS), choices=sorted(PRESETS),
                         help="arm presets to time")
     parser.add_argument("--frames", type=int, default=30, help="frames timed per preset")

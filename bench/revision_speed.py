@@ -35,7 +35,7 @@ import tarfile
 import tempfile
 from pathlib import Path
 
-from soft_gym._cli import HelpFormatter, check_output_dir, positive_int
+from soft_gym._cli import CommandParser, HelpFormatter, check_output_dir, positive_int
 from soft_gym.engines import ENGINES
 from soft_gym.robots.presets import PRESETS
 from soft_gym.sensing import FEEDBACK_SOURCES
@@ -115,7 +115,7 @@ def take_turns(revision_tree: Path, preset: str, feedback: str, steps: int, seed
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--against", required=True, metavar="REVISION",
                         help="git revision to compare with (commit, tag or branch)")
     parser.add_argument("--presets", nargs="+", choices=list(PRESETS), default=list(PRESETS),

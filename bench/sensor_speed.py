@@ -39,7 +39,7 @@ import gymnasium as gym
 import numpy as np
 
 import soft_gym  # noqa: F401
-from soft_gym._cli import HelpFormatter, positive_int
+from soft_gym._cli import CommandParser, HelpFormatter, positive_int
 from soft_gym.robots import get_preset
 from soft_gym.papers.wang2023.elm import OSELM
 from soft_gym.papers.wang2023.exploration import spiral_fractions
@@ -59,7 +59,7 @@ def stats(samples_s: list[float]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--steps", type=int, default=300, help="timed steps per measurement")
     parser.add_argument("--json", default=None, help="also write the results to this file")
     parser.add_argument("--against", metavar="REVISION", default=None,

@@ -23,11 +23,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from soft_gym._cli import HelpFormatter  # noqa: E402
+from soft_gym._cli import CommandParser, HelpFormatter  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--repeats", type=int, default=500, help="estimates timed")
     args = parser.parse_args(argv)
     if args.repeats < 1:

@@ -41,7 +41,7 @@ import numpy as np
 from tqdm import tqdm
 
 import soft_gym  # noqa: F401  (registers the ids)
-from soft_gym._cli import HelpFormatter, int_at_least
+from soft_gym._cli import CommandParser, HelpFormatter, int_at_least
 from soft_gym.engines.pybullet.quiet_import import pybullet  # imported without its banner
 from soft_gym.robots.presets import PRESETS, get_preset
 
@@ -189,7 +189,7 @@ def fused_soak(schedule: str, steps: int, seed: int = 0, progress: bool = True) 
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="bench/soak.py", description=__doc__.split("\n\n")[0],
         epilog="Soaks: 1 random-action per preset, 2 create/close cycles, 3 fused under faults.",
         formatter_class=HelpFormatter)

@@ -37,7 +37,7 @@ import torch
 
 import yaml
 
-from soft_gym._cli import HelpFormatter, positive_int
+from soft_gym._cli import CommandParser, HelpFormatter, positive_int
 from soft_gym.robots.presets import PRESETS
 from train.config import (CONFIG_DIR, parse_key_values, read_hyperparameters,
                           split_hyperparameters)
@@ -130,7 +130,7 @@ def print_engine_table(rows: list[dict], batch: int) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--algo", default="sac", help="algorithm (its train/configs entry)")
     parser.add_argument("--env", default="SoftArmTrackWang2023-v0", help="Gymnasium id")
     parser.add_argument("--steps", type=int, default=3000, help="timed env steps per run")

@@ -35,7 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from revision_speed import extract_commit, resolve_commit  # noqa: E402
 
-from soft_gym._cli import HelpFormatter, positive_int  # noqa: E402
+from soft_gym._cli import CommandParser, HelpFormatter, positive_int  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -158,7 +158,7 @@ def digests(tree: Path, cases: dict[str, dict]) -> dict[str, str]:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--against", metavar="REVISION", default=None,
                         help="git revision to compare with (commit, tag or branch)")
     parser.add_argument("--only", nargs="+", choices=list(CASES), metavar="CASE",

@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from soft_gym._cli import HelpFormatter  # noqa: E402
+from soft_gym._cli import CommandParser, HelpFormatter  # noqa: E402
 
 
 def _summary(name: str, seconds: list[float], target_ms: float) -> None:
@@ -37,7 +37,7 @@ def _summary(name: str, seconds: list[float], target_ms: float) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=HelpFormatter)
+    parser = CommandParser(description=__doc__, formatter_class=HelpFormatter)
     parser.add_argument("--poses", type=int, default=8, help="rendered stereo pairs")
     parser.add_argument("--repeats", type=int, default=20,
                         help="ASES runs per pair; DNN estimates are 100 times as many")

@@ -47,7 +47,7 @@ import argparse
 from eval import results_page
 from eval.commands import Command, claims, compare, datasets, suite, track
 from eval.papers import evaluations
-from soft_gym._cli import HelpFormatter, check_environment, check_output_dir
+from soft_gym._cli import CommandParser, HelpFormatter, check_environment, check_output_dir
 
 SHARED_COMMANDS: dict[str, Command] = {
     "track": Command(track.add_parser, track.run),
@@ -94,7 +94,7 @@ def _check_distinct(parser: argparse.ArgumentParser, args: argparse.Namespace) -
 
 def main(argv: list[str] | None = None) -> None:
     """``python -m eval``: parse and check every option (one-line errors, exit 2), then run."""
-    parser = argparse.ArgumentParser(prog="python -m eval", description=__doc__,
+    parser = CommandParser(prog="python -m eval", description=__doc__,
                                      formatter_class=HelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     present = commands()

@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from soft_gym._cli import HelpFormatter
+from soft_gym._cli import CommandParser, HelpFormatter
 from soft_gym.papers import DEFAULT_PRESET
 from soft_gym.robots.arm_file import save_preset
 from soft_gym.robots.presets import PRESETS
@@ -25,7 +25,7 @@ PROG = "python -m soft_gym"
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog=PROG, description=__doc__,
+    parser = CommandParser(prog=PROG, description=__doc__,
                                      formatter_class=HelpFormatter)
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     preset = commands.add_parser(

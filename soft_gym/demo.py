@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from soft_gym._cli import HelpFormatter, finite_float
+from soft_gym._cli import CommandParser, HelpFormatter, finite_float
 from soft_gym.robots.actuation import pressure_at_fraction
 from soft_gym.robots.presets import PRESETS
 from soft_gym.engines import make_simulator
@@ -57,7 +57,7 @@ def run(presets: list[str], hold_s: float) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m soft_gym.demo", description=__doc__,
+    parser = CommandParser(prog="python -m soft_gym.demo", description=__doc__,
                                      formatter_class=HelpFormatter)
     parser.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS),
                         help="arm presets to roll out")

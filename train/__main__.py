@@ -40,7 +40,7 @@ from pathlib import Path
 import yaml
 
 from agents.policies.run_dir import CONFIG_FILE, MODEL_FILE
-from soft_gym._cli import (HelpFormatter, check_environment, check_file, check_output_dir, fail,
+from soft_gym._cli import (CommandParser, HelpFormatter, check_environment, check_file, check_output_dir, fail,
                            finite_float, non_negative_int, positive_int, seed_int)
 from soft_gym.engines import REFERENCE_ENGINE, engine_supports
 from train.cli_options import (add_env_options, check_arm_env_kwargs, check_conf_file,
@@ -61,7 +61,7 @@ class Given(argparse.Action):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m train", description=__doc__,
+    parser = CommandParser(prog="python -m train", description=__doc__,
                                      formatter_class=HelpFormatter)
     parser.set_defaults(given=frozenset())
     parser.add_argument("--algo", default="sac", choices=ALGORITHMS, help="SB3 algorithm")

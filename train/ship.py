@@ -27,7 +27,7 @@ from agents.policies.run_dir import (BEST_MODEL_FILE, BEST_TRACKING_MODEL_FILE, 
                                      EVALUATION_FILE, MODEL_FILE, NORMALIZATION_FILE, SOURCE_FILE,
                                      TRAINING_FILE, VERSIONS_FILE)
 from agents.rollout import run_episode
-from soft_gym._cli import HelpFormatter
+from soft_gym._cli import CommandParser, HelpFormatter
 from soft_gym.engines import ENGINES, REFERENCE_ENGINE, EngineFeatureError
 from train.tracking_curve import CURVE_FILE
 
@@ -168,7 +168,7 @@ def ship(run_dir: str | Path, name: str, model: str = "final",
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m train.ship", description=__doc__,
+    parser = CommandParser(prog="python -m train.ship", description=__doc__,
                                      formatter_class=HelpFormatter)
     parser.add_argument("run_dir", nargs="?", help="a run directory of python -m train")
     parser.add_argument("name", nargs="?", help="the shipped agent's name (sb3:<name> loads it)")

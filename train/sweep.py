@@ -88,7 +88,8 @@ import yaml
 from tqdm import tqdm
 
 import soft_gym  # noqa: F401  (registers the env ids)
-from soft_gym._cli import HelpFormatter, check_environment, check_output_dir, seed_int
+from soft_gym._cli import (CommandParser, HelpFormatter, check_environment, check_output_dir,
+                           seed_int)
 from soft_gym._validation import SEED_MAX
 from soft_gym.engines import REFERENCE_ENGINE, engine_supports
 from soft_gym.envs.config import EnvConfig
@@ -635,7 +636,7 @@ def run_sweep(request: SweepRequest) -> SweepResult:
 
 # ------------------------------------------------------------------------------ command line
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m train sweep", description=__doc__,
+    parser = CommandParser(prog="python -m train sweep", description=__doc__,
                                      formatter_class=HelpFormatter)
     add_env_options(parser)
     parser.add_argument("-hp", "--hyperparams", nargs="*", default=[], metavar="KEY=VALUE",

@@ -37,7 +37,7 @@ import numpy as np
 from tqdm import tqdm
 
 from eval.papers.ho2018.experiments import run_experiment
-from soft_gym._cli import HelpFormatter, check_output_dir, seed_int
+from soft_gym._cli import CommandParser, HelpFormatter, check_output_dir, seed_int
 
 NO_EM_NOISE = {"sensor_config": {"em": {"position_noise_m": 0.0, "orientation_noise_deg": 0.0}}}
 
@@ -111,7 +111,7 @@ def report(results: dict[str, dict[str, Any]]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="python -m eval.papers.ho2018.factors", formatter_class=HelpFormatter,
         description="ho2018's static experiment (Table 1) on the shorter protocol with "
                     "pressure-driven chambers, one factor changed at a time: what sets the "

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from soft_gym._cli import HelpFormatter, finite_float, int_at_least
+from soft_gym._cli import CommandParser, HelpFormatter, finite_float, int_at_least
 from soft_gym.procedures.static_reach import closest_reach
 from soft_gym.papers.zhao2021.arm import ZHAO2021
 from soft_gym.papers.zhao2021.frames import (ZHAO2021_PAPER_CHAMBERS, base_point_from_paper,
@@ -338,7 +338,7 @@ def report(result: FitResult) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="python -m soft_gym.papers.zhao2021.arm_fit", description=__doc__,
         formatter_class=HelpFormatter)
     parser.add_argument("--pose-weight", type=finite_float(low=0.0), default=20.0,
