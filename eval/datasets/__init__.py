@@ -9,7 +9,8 @@ suite's runs.
   procedures' samples, which the papers' and the suite's datasets are written from.
 * :mod:`soft_gym.datasets.store`: writing (never over an existing dataset without ``force``) and
   loading with checks (:func:`load_dataset`: one ``ValueError`` for an unknown id, a corrupt or
-  truncated directory, or another env version).
+  truncated directory, a data file whose SHA-256 digest differs from the one recorded when it
+  was written, or another env version).
 * :mod:`eval.datasets.cards`: the data card written next to each dataset.
 * :mod:`soft_gym.datasets.training`: a paper's dataset read back as the data its method trains on
   (``local_ik_asdm``, ``strain_sr``, ``encoder_dnn``, ``lwpr_rwr``; ``dataset=<id>``), checked

@@ -8,8 +8,10 @@ another root, :func:`load_dataset` or ``MINARI_DATASETS_PATH=<root>`` does.
 
 :func:`write_dataset` refuses to replace an existing dataset unless ``force=True`` and writes
 into a temporary sibling directory first, so a failed write leaves the old dataset (or nothing)
-behind. :func:`load_dataset` turns every bad input (an unknown id, a corrupt or truncated
-directory, a dataset recorded on another env version) into one ``ValueError`` naming it.
+behind, and records the SHA-256 digest of every data file in the metadata
+(:mod:`soft_gym.datasets.digest`). :func:`load_dataset` turns every bad input (an unknown id, a
+corrupt or truncated directory, a data file changed after it was written, a dataset recorded on
+another env version) into one ``ValueError`` naming it.
 The env ids it checks and recovers are registered by importing :mod:`soft_gym`, which
 importing this module does first.
 """
@@ -30,14 +32,20 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from soft_gym.datasets.digest import DIGEST_KEY, METADATA_FILE, check_digests, data_digests
+
 NAMESPACE = "soft-arm"
 """The Minari namespace of every dataset this package writes."""
 DATA_FORMAT = "arrow"
 """Minari's storage backend (pyarrow; lossless for every array)."""
 CARD_FILE = "card.md"
 """The data card written next to a dataset's ``data/``."""
-FORMAT_VERSION = 1
-"""Version of the layout this package writes (``metadata["soft_arm_gym"]["format"]``)."""
+FORMAT_VERSION = 2
+"""Version of the layout this package writes (``metadata["soft_arm_gym"]["format"]``): 2 records
+the digests of the data files, which every load checks; 1 (written before digests) records none
+and still loads, unchecked."""
+READABLE_FORMATS = (None, 1, FORMAT_VERSION)
+"""Layout versions :func:`load_dataset` reads (``None``: no ``soft_arm_gym`` metadata)."""
 
 _ID = re.compile(r"^soft-arm/[a-z0-9][a-z0-9_.-]*/[a-z0-9][a-z0-9_.-]*-v\d+$")
 
@@ -153,7 +161,8 @@ def write_dataset(dataset_id: str, episodes: Iterable[Any], *, env_id: str,
             storage.update_episode_metadata([_json_ready(m) for m in episode_metadata],
                                             range(len(episodes)))
         _write_extra_metadata(staging / "data", {
-            "format": FORMAT_VERSION, "env_id": env_id, **_json_ready(dict(info or {}))})
+            "format": FORMAT_VERSION, "env_id": env_id, **_json_ready(dict(info or {})),
+            DIGEST_KEY: data_digests(staging / "data")})
         (staging / CARD_FILE).write_text(card)
         if target.exists():
             shutil.rmtree(target)
@@ -180,7 +189,7 @@ def _requirements() -> list[str]:
 def _write_extra_metadata(data_path: Path, extra: dict[str, Any]) -> None:
     """Add ``extra`` to Minari's ``metadata.json`` under ``soft_arm_gym`` (Minari keeps
     unknown keys and returns them in ``dataset.storage.metadata``)."""
-    path = data_path / "metadata.json"
+    path = data_path / METADATA_FILE
     metadata = json.loads(path.read_text())
     metadata["soft_arm_gym"] = json.dumps(extra)
     path.write_text(json.dumps(metadata))
@@ -210,8 +219,9 @@ def load_dataset(dataset_id: str, root: str | os.PathLike | None = None):
         ValueError: one, naming the id or the directory: an id not of this package's form or
             not under ``root`` (listing those there), a directory whose metadata or episodes are
             missing, unreadable or short of what its metadata counts (corrupt or truncated),
-            or a dataset recorded on an env id this installation does not register (another
-            env version).
+            a data file whose SHA-256 digest is not the one recorded when it was written (or a
+            dataset of the digest layout that records none), or a dataset recorded on an env id
+            this installation does not register (another env version).
     """
     import minari
 
@@ -231,8 +241,9 @@ def load_dataset(dataset_id: str, root: str | os.PathLike | None = None):
 
 
 def check_dataset(dataset, dataset_id: str, directory: Path) -> None:
-    """Refuse (``ValueError``) a dataset whose episodes are missing or short, or whose env id
-    is not registered here (see :func:`load_dataset`)."""
+    """Refuse (``ValueError``) a dataset whose episodes are missing or short, whose data files
+    changed after it was written, or whose env id is not registered here (see
+    :func:`load_dataset`)."""
     metadata = dataset.storage.metadata
     if metadata.get("dataset_id") != dataset_id:
         raise ValueError(f"dataset {dataset_id!r} at {str(directory)!r} is corrupt: its "
@@ -248,9 +259,10 @@ def check_dataset(dataset, dataset_id: str, directory: Path) -> None:
                          f"installation does not register (registered versions: "
                          f"{registered or 'none'}): another env version")
     info = dataset_info(dataset)
-    if info.get("format") not in (None, FORMAT_VERSION):
+    if info.get("format") not in READABLE_FORMATS:
         raise ValueError(f"dataset {dataset_id!r} has layout version {info.get('format')!r}; "
-                         f"this installation reads version {FORMAT_VERSION}")
+                         f"this installation reads versions "
+                         f"{[v for v in READABLE_FORMATS if v is not None]}")
     total = int(metadata.get("total_episodes", -1))
     data = directory / "data"
     missing = [str(i) for i in range(total) if not (data / str(i)).is_dir()
@@ -258,6 +270,8 @@ def check_dataset(dataset, dataset_id: str, directory: Path) -> None:
     if total < 1 or missing:
         raise ValueError(f"dataset {dataset_id!r} at {str(directory)!r} is truncated: episodes "
                          f"{missing[:5] or '(none counted)'} of {max(total, 0)} are missing")
+    if info.get("format") == FORMAT_VERSION:
+        check_digests(dataset_id, data, info.get(DIGEST_KEY), rewrite_hint(info))
     try:
         steps = sum(len(episode) for episode in dataset.iterate_episodes())
     except Exception as error:  # noqa: BLE001 - a damaged episode file is one ValueError
@@ -267,6 +281,18 @@ def check_dataset(dataset, dataset_id: str, directory: Path) -> None:
         raise ValueError(f"dataset {dataset_id!r} at {str(directory)!r} is truncated: "
                          f"{steps} steps of the {metadata.get('total_steps')} its metadata "
                          "counts")
+
+
+def rewrite_hint(info: Mapping[str, Any]) -> str:
+    """How to write a dataset with the ``soft_arm_gym`` metadata ``info`` again (the end of an
+    error message): the command that wrote it, from what its metadata names."""
+    if info.get("paper"):
+        return f"write it again with `python -m eval datasets --papers {info['paper']} --force`"
+    if info.get("suite"):
+        return "write it again with `python -m eval suite SPEC --record minari`"
+    if info.get("policy"):
+        return f"write it again with `python -m train --demos {info['policy']}`"
+    return "write it again (write_dataset(..., force=True))"
 
 
 def recover_env(dataset, **kwargs) -> gym.Env:
