@@ -60,6 +60,7 @@ from train.config import (OFF_POLICY, VEC_KINDS, TrainSettings, algorithm_class,
 from train.curves import plot_learning_curve, plot_tracking_curve
 from train.demonstrations import (load_demonstrations, record_demonstrations,
                                   start_from_demonstrations)
+from train.progress import StepProgress
 from train.tracking_curve import (PLATEAU_FRACTION, PLATEAU_IMPROVEMENT, TrackingCurveCallback,
                                   evaluation_cases)
 from train.warm_start import (check_fits, find_trained_agent, inherited_segments,
@@ -329,6 +330,8 @@ def train(request: TrainRequest) -> Path:
         write_training_segments(run_dir, inherited_segments(start))
 
     callbacks: list[BaseCallback] = [ThroughputCallback()]
+    if request.progress:
+        callbacks.append(StepProgress(settings.n_timesteps, f"{request.algo} {request.env_id}"))
     curve = None
     if request.curve_freq > 0:
         curve = TrackingCurveCallback(
@@ -354,7 +357,7 @@ def train(request: TrainRequest) -> Path:
     interrupted = False
     try:
         model.learn(total_timesteps=settings.n_timesteps, callback=CallbackList(callbacks),
-                    progress_bar=request.progress, reset_num_timesteps=request.resume is None)
+                    reset_num_timesteps=request.resume is None)
     except KeyboardInterrupt:  # Ctrl-C: keep the run so far (saved and summarised below)
         interrupted = True
         print(f"\ninterrupted at {model.num_timesteps} steps: saving the run", flush=True)
