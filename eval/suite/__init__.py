@@ -31,7 +31,8 @@ on one output directory never run the same cell: the second leaves the cells the
 to it. A claim whose process has died is taken over by the next run; a run that ends
 with ``out/locks/`` empty removes it. Pool workers end with the
 process that started them (:func:`exit_with_parent`), so a killed suite leaves no process
-behind. The JSON record::
+behind; a dead worker costs only its run, tried once more in a process of its own and failed
+with the signal that killed it if that one dies too (:mod:`eval.pool`). The JSON record::
 
     {"key", "suite", "labels": {"preset", "path", "condition", "policy", "seed"},
      "config": resolved config, "status": "done" | "n/a", "reason": why n/a (else null),
@@ -68,12 +69,14 @@ from __future__ import annotations
 #   grid.py          spec -> cells (one run each) and their keys (the hash of a resolved config)
 #   check.py         the spec checked before any run (envs built, baselines made, agents loaded)
 #   engine.py        the suite on another physics engine, less what that engine cannot run
-#   run.py           one cell in a worker, the backends (process pool, serial), run_suite
+#   run.py           one cell in a worker, the backends (eval.pool: process pool, serial),
+#                    run_suite
 #   store.py         the records on disk: write, read and verify, finished or not (resume),
 #                    provenance
 #   locks.py         a cell claimed by one process (lock files), taken over from a dead one
 #   report.py        records -> leaderboard, aggregates with bootstrap CIs, plots
 #   ray_backend.py   the optional "ray" backend (importing it registers it)
+from eval.pool import exit_with_parent, process_map, serial_map
 from eval.suite.check import EnvChecker, check_suite
 from eval.suite.engine import LeftOut, on_engine
 from eval.suite.grid import ENV_ID, KEY_DIGITS, Cell, canonical_json, cell_key, expand
@@ -83,8 +86,8 @@ from eval.suite.report import (DEFAULT_REPS, PROFILE_REPS, SCORE, aggregate_scor
                                leaderboards, performance_profiles, profile_taus,
                                require_rliable, score_matrices, write_report)
 from eval.suite.run import (BACKENDS, MapFunction, SuiteRunError, cell_metrics,
-                            exit_with_parent, one_compute_thread, order_cells, process_map,
-                            register_backend, run_cell, run_suite, serial_map)
+                            one_compute_thread, order_cells, register_backend, run_cell,
+                            run_suite)
 from eval.suite.spec import (ARM_KEYS, DEFAULT_CYCLES, ENV_KEYS, POLICY_ENV_DEFAULTS,
                              POLICY_KEYS, SUITE_ENV_KEYS, SUITES_DIR, TOP_KEYS, ArmEntry,
                              PolicyEntry, SuiteError, SuiteSpec, bundled_suites, load_suite,

@@ -5,14 +5,11 @@ finished yet and writes each record as its run ends (:mod:`eval.suite`, "Running
 from __future__ import annotations
 
 import copy
-import multiprocessing
 import os
 import sys
-import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +17,7 @@ from tqdm import tqdm
 
 from agents.policies import PolicyRefusal
 from agents.rollout import run_episode
+from eval.pool import WorkerDeathError, process_map, serial_map
 from eval.runner import RunConfig, build
 from eval.suite.check import check_suite
 from eval.suite.locks import LOCKS_DIR, claim, release, remove_locks_dir
@@ -99,66 +97,8 @@ def recorded_episode(recorder: EpisodeRecorder) -> dict[str, Any]:
 
 MapFunction = Callable[[Callable[[Any], Any], Sequence[Any], int], Iterator[Any]]
 """A backend: ``map(fn, items, workers)`` yields ``fn(item)`` for every item, as each completes
-(in any order)."""
-
-
-def serial_map(fn: Callable[[Any], Any], items: Sequence[Any], workers: int = 1) -> Iterator[Any]:
-    """Run ``fn`` on every item in this process, in order."""
-    for item in items:
-        yield fn(item)
-
-
-PARENT_POLL_S = 0.5
-"""How often a pool worker checks that the process that started it is alive (s)."""
-
-
-def exit_with_parent(parent_pid: int, poll_s: float = PARENT_POLL_S) -> None:
-    """A pool worker's initializer: a daemon thread that ends this process (exit status 1) as
-    soon as its parent ``parent_pid`` is gone (this process handed to another parent).
-
-    Without it a ``kill -9`` of the suite leaves its workers blocked on the pool's pipe for
-    good: each worker holds the pipe's writing end too, so it never reads end-of-file.
-    """
-    def watch() -> None:
-        while os.getppid() == parent_pid:
-            time.sleep(poll_s)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
-
-
-def process_map(fn: Callable[[Any], Any], items: Sequence[Any],
-                workers: int = 1) -> Iterator[Any]:
-    """Run ``fn`` on every item in ``workers`` spawned processes (in this process when
-    ``workers == 1`` or there is one item), yielding results as they complete.
-
-    At most ``2 * workers`` items are submitted ahead, so a stopped iteration leaves little
-    work behind, which is cancelled. Each worker ends itself when this process dies (killed
-    too: :func:`exit_with_parent`), and the pool's resource tracker with them.
-    """
-    if workers == 1 or len(items) <= 1:
-        yield from serial_map(fn, items)
-        return
-    context = multiprocessing.get_context("spawn")
-    pending_items = iter(items)
-    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=context,
-                             initializer=exit_with_parent, initargs=(os.getpid(),)) as pool:
-        running = set()
-        try:
-            for item in pending_items:
-                running.add(pool.submit(fn, item))
-                if len(running) >= 2 * workers:
-                    break
-            while running:
-                done, running = wait(running, return_when=FIRST_COMPLETED)
-                for future in done:
-                    for item in pending_items:
-                        running.add(pool.submit(fn, item))
-                        break
-                    yield future.result()
-        finally:
-            for future in running:
-                future.cancel()
+(in any order); it may end by raising :class:`eval.pool.WorkerDeathError` for the items whose
+worker process died (:func:`run_suite` fails those runs)."""
 
 
 BACKENDS: dict[str, MapFunction] = {"process": process_map, "serial": serial_map}
@@ -172,6 +112,22 @@ def register_backend(name: str, map_function: MapFunction) -> None:
     if not callable(map_function):
         raise ValueError(f"map_function must be callable, got {map_function!r}")
     BACKENDS[name] = map_function
+
+
+def died(task: Mapping[str, Any], cause: str) -> dict[str, Any]:
+    """The failed result of a run whose worker process died running it (twice: in the pool,
+    then in a process of its own), with the ``cause`` as its error."""
+    return {"key": task["key"], "labels": dict(task["labels"]), "status": "error",
+            "error": cause, "traceback": f"{cause}: the run was tried twice and no result came "
+                                         "back (see eval.pool)\n"}
+
+
+def write_error(out: str | os.PathLike, result: Mapping[str, Any]) -> None:
+    """Write a failed run's labels and traceback to ``out/errors/<key>.txt``."""
+    errors = Path(out) / "errors"
+    errors.mkdir(parents=True, exist_ok=True)
+    (errors / f"{result['key']}.txt").write_text(
+        f"{label_text(result['labels'])}\n{result['traceback']}", encoding="utf-8")
 
 
 def order_cells(cells: Sequence[Cell]) -> list[Cell]:
@@ -215,7 +171,8 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
 
     Raises:
         ValueError: a bad argument, suite or output directory (before any run).
-        SuiteRunError: some runs failed with an error other than a refusal (after the others).
+        SuiteRunError: some runs failed with an error other than a refusal, or their worker
+            process died twice (after the others).
     """
     if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
@@ -264,19 +221,22 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
         failures = []
         bar = tqdm(total=len(tasks), desc=f"suite {spec.name}", unit="run",
                    disable=not progress)
-        for result in map_function(run_cell, tasks, workers):
-            if result["status"] == "error":
-                failures.append(result)
-                errors = Path(out) / "errors"
-                errors.mkdir(parents=True, exist_ok=True)
-                (errors / f"{result['key']}.txt").write_text(
-                    f"{label_text(result['labels'])}\n{result['traceback']}", encoding="utf-8")
-            else:
-                write_record(out, result)
-                counts[result["status"]] += 1
-            release(out, result["key"])
-            bar.set_postfix_str(label_text(result["labels"]), refresh=False)
-            bar.update(1)
+        try:
+            for result in map_function(run_cell, tasks, workers):
+                if result["status"] == "error":
+                    failures.append(result)
+                    write_error(out, result)
+                else:
+                    write_record(out, result)
+                    counts[result["status"]] += 1
+                release(out, result["key"])
+                bar.set_postfix_str(label_text(result["labels"]), refresh=False)
+                bar.update(1)
+        except WorkerDeathError as error:  # raised after every other run's result
+            for death in error.deaths:
+                failures.append(died(death.item, death.cause))
+                write_error(out, failures[-1])
+                bar.update(1)
         bar.close()
     finally:
         for cell in claimed:
