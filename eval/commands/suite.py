@@ -113,7 +113,7 @@ def run(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
                                    record=args.record is not None)
         except suite_module.SuiteRunError as error:
             failure = str(error)
-    print(suite_module.write_report(spec, out, cells=cells))
+    print(suite_module.write_report(spec, out, cells=cells, progress=True))
     if args.record is not None:
         from eval.datasets.suite import write_suite_datasets
 

@@ -65,11 +65,12 @@ import csv
 import math
 import os
 import re
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -82,6 +83,7 @@ from eval.suite.grid import Cell, expand
 from eval.suite.spec import SuiteSpec
 from eval.suite.store import (RecordError, git_revision, library_versions, read_record,
                               read_steps)
+from soft_gym._progress import heartbeat
 from soft_gym.envs.config import EnvConfig
 
 SCORE = "last_cycle_error_mm"
@@ -485,7 +487,7 @@ def performance_profiles(matrices: Mapping[str, np.ndarray], taus: Sequence[floa
 # ---------------------------------------------------------------------------- the report
 def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] | None = None,
                  reps: int = DEFAULT_REPS, profile_reps: int = PROFILE_REPS, seed: int = 0,
-                 plots: bool = True) -> str:
+                 plots: bool = True, progress: bool = False) -> str:
     """Write the report of ``spec``'s records under ``out`` (see the module docstring).
 
     Args:
@@ -496,6 +498,7 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
         reps, profile_reps: bootstrap resamples of the aggregate and profile CIs.
         seed: bootstrap seed.
         plots: also draw the PNGs.
+        progress: show a bar over the report's steps (each arm's bootstrap, each plot).
 
     Returns:
         The leaderboard (Markdown), as written to ``leaderboard.md``.
@@ -505,17 +508,36 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
     out.mkdir(parents=True, exist_ok=True)
     cells = list(expand(spec) if cells is None else cells)
     rows = collect_rows(cells, out)
-    boards = leaderboards(rows)
     arms = list(dict.fromkeys(arm.preset for arm in spec.arms))
+    groups = _first_seed_groups(cells, rows, spec.seeds[0]) if plots else {}
+    bar = tqdm(total=2 * len(arms) + 1 + (2 + len(groups) if plots else 0),
+               desc=f"suite {spec.name} report", unit="step", disable=not progress,
+               mininterval=1.0)
+    with heartbeat(bar):
+        text = _write_report(spec, out, cells, rows, arms, groups, bar, reps, profile_reps,
+                             seed, plots)
+    bar.close()
+    return text
+
+
+def _write_report(spec: SuiteSpec, out: Path, cells: Sequence[Cell],
+                  rows: Sequence[Mapping[str, Any]], arms: Sequence[str],
+                  groups: Mapping[tuple[str, str, str], Mapping[str, str]], bar: Any, reps: int,
+                  profile_reps: int, seed: int, plots: bool) -> str:
+    """:func:`write_report`'s work, each step counted on ``bar``."""
+    boards = leaderboards(rows)
     per_arm: dict[str, dict[str, Any]] = {}
     for index, preset in enumerate(arms):
+        bar.set_postfix_str(f"{preset}: bootstrap")
         matrices, tasks, excluded = score_matrices(rows, preset)
         taus = profile_taus(matrices)
         profiled = {policy: matrix for policy, matrix in matrices.items()
                     if matrix.size >= PROFILE_MIN_RUNS}
+        aggregates = aggregate_scores(matrices, reps=reps, seed=seed + index)
+        bar.update()
         per_arm[preset] = {
             "tasks": [list(task) for task in tasks],
-            "aggregates": aggregate_scores(matrices, reps=reps, seed=seed + index),
+            "aggregates": aggregates,
             "excluded": excluded,
             "profile_taus_mm": taus.tolist(),
             "profile_min_runs": PROFILE_MIN_RUNS,
@@ -526,6 +548,7 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
                 for policy, matrix in matrices.items() if policy not in profiled},
             "scores_mm": {policy: matrix.tolist() for policy, matrix in matrices.items()},
         }
+        bar.update()
     counts = {status: sum(r["status"] == status for r in rows)
               for status in ("done", "n/a", "missing", "bad")}
     budgets = agent_budgets(spec)
@@ -563,11 +586,15 @@ def write_report(spec: SuiteSpec, out: str | os.PathLike, cells: Sequence[Cell] 
         "agents_against_baselines": versus,
         "feedback_mismatches": mismatches,
     })
+    bar.update()
     if plots:
         colors = suite_colors(spec)
+        bar.set_postfix_str("plots")
         _plot_aggregates(out / "aggregate_iqm.png", per_arm, colors)
+        bar.update()
         _plot_profiles(out / "performance_profiles.png", per_arm, colors)
-        _plot_first_seed(out / "plots", cells, rows, out, spec.seeds[0], colors)
+        bar.update()
+        _plot_first_seed(out / "plots", groups, out, spec.seeds[0], colors, tick=bar.update)
     return text
 
 
@@ -840,9 +867,9 @@ def _file_part(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", str(text)).strip("_") or "x"
 
 
-def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapping[str, Any]],
-                     out: Path, seed: int, colors: Mapping[str, str] | None = None) -> None:
-    """Error against time and trajectories of every policy, per arm/path/condition, one seed."""
+def _first_seed_groups(cells: Sequence[Cell], rows: Sequence[Mapping[str, Any]], seed: int
+                       ) -> dict[tuple[str, str, str], dict[str, str]]:
+    """The finished runs of ``seed`` by (arm, path, condition): policy -> record key."""
     status = {row["key"]: row["status"] for row in rows}
     groups: dict[tuple[str, str, str], dict[str, str]] = {}
     for cell in cells:
@@ -850,6 +877,14 @@ def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapp
         if labels["seed"] == seed and status.get(cell.key) == "done":
             groups.setdefault((labels["preset"], labels["path"], labels["condition"]),
                               {})[labels["policy"]] = cell.key
+    return groups
+
+
+def _plot_first_seed(directory: Path, groups: Mapping[tuple[str, str, str], Mapping[str, str]],
+                     out: Path, seed: int, colors: Mapping[str, str] | None = None,
+                     tick: Callable[[], Any] = lambda: None) -> None:
+    """Error against time and trajectories of every policy, per arm/path/condition
+    (:func:`_first_seed_groups`), one seed; ``tick()`` after each group."""
     loaded: dict[tuple[str, str, str], dict[str, Mapping[str, np.ndarray]]] = {}
     for group, keys in groups.items():
         records = {policy: _steps_or_none(out, key) for policy, key in keys.items()}
@@ -861,14 +896,18 @@ def _plot_first_seed(directory: Path, cells: Sequence[Cell], rows: Sequence[Mapp
     for (preset, _, _), records in loaded.items():
         arm = peaks.setdefault(preset, [0.0, 0.0])
         arm[:] = np.maximum(arm, error_peaks_mm(list(records.values()))).tolist()
-    for (preset, path, condition), records in loaded.items():
-        stem = f"{_file_part(preset)}_{_file_part(path)}_{_file_part(condition)}"
-        title = f"{preset} {path}, {condition} (seed {seed})"
-        shown = _colors(records) if colors is None else colors
-        plot_error_time(directory / f"error_{stem}.png", records, title,
-                        colors={policy: shown[policy] for policy in records},
-                        ymax_mm=peaks[preset])
-        _plot_trajectories(directory / f"trajectory_{stem}.png", records, title, shown)
+    for group in groups:
+        if group in loaded:
+            preset, path, condition = group
+            records = loaded[group]
+            stem = f"{_file_part(preset)}_{_file_part(path)}_{_file_part(condition)}"
+            title = f"{preset} {path}, {condition} (seed {seed})"
+            shown = _colors(records) if colors is None else colors
+            plot_error_time(directory / f"error_{stem}.png", records, title,
+                            colors={policy: shown[policy] for policy in records},
+                            ymax_mm=peaks[preset])
+            _plot_trajectories(directory / f"trajectory_{stem}.png", records, title, shown)
+        tick()
 
 
 def _steps_or_none(out: Path, key: str) -> dict[str, np.ndarray] | None:

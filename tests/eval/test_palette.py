@@ -163,7 +163,8 @@ def test_the_error_plots_of_one_arm_share_a_y_scale(tmp_path, monkeypatch):
     monkeypatch.setattr(report, "read_steps", lambda out, key: steps[key])
     figures = _capture(monkeypatch, eval.report)
     rows = [{"key": cell.key, "status": "done"} for cell in cells]
-    report._plot_first_seed(tmp_path / "plots", cells, rows, tmp_path, 0)
+    report._plot_first_seed(tmp_path / "plots", report._first_seed_groups(cells, rows, 0),
+                            tmp_path, 0)
     assert len(figures) == 2  # nominal and loaded error plots
     for figure in figures:  # the loaded hybrid_gpr's 40 mm peak sets both
         assert figure[0].ylim == pytest.approx((0.0, 40.0 * 1.08))
