@@ -428,6 +428,12 @@ class SoftArmEnv(gym.Env):
         return np.asarray(observation)[self._part_slices[part]]
 
     @property
+    def part_slices(self) -> dict[str, slice] | None:
+        """Each observation part's slice of a flat observation (``obs_format="flat"``), in
+        ``obs`` order; ``None`` for dict observations."""
+        return None if self.obs_format == "dict" else dict(self._part_slices)
+
+    @property
     def pipeline(self):
         """The camera/F-emp sensing pipeline of a ``fused``/``camera``/``fbg`` env, else None."""
         return getattr(self.feedback_source, "pipeline", None)

@@ -33,6 +33,7 @@ from gymnasium.vector.utils import batch_space, concatenate, create_empty_array
 from soft_gym._validation import require_integer
 from soft_gym.engines import REFERENCE_ENGINE, engine_supports, engines_supporting
 from soft_gym.envs.soft_arm_env import ClosedEnvError, ResetNeededError, SoftArmEnv
+from soft_gym.envs.space_difference import space_difference
 
 MAX_NUM_ENVS = 4096
 """The most arms one vector env holds (each a MuJoCo model of ~1 MB and an env)."""
@@ -67,19 +68,29 @@ def _per_env_kwargs(value: Any, num_envs: int) -> list[dict[str, Any]]:
 
 def _check_alike(envs: list[SoftArmEnv]) -> None:
     """Every arm with the first's observation and action spaces and control period (what one
-    batch's arrays and lockstep clock need)."""
+    batch's arrays and lockstep clock need); a refusal names the first difference and the two
+    values (:func:`~soft_gym.envs.space_difference.space_difference`)."""
     first = envs[0]
     for i, env in enumerate(envs[1:], start=1):
-        for name, mine, theirs in (
-                ("observation space", env.observation_space, first.observation_space),
-                ("action space", env.action_space, first.action_space),
-                ("control period (s)", env.arm.control_period_s, first.arm.control_period_s)):
-            if mine != theirs:
-                _close_all(envs)
-                raise ValueError(f"per_env_kwargs[{i}] gives arm {i} the {name} {mine}, arm 0 "
-                                 f"has {theirs}: the arms of one batch must share it (another "
-                                 f"preset, feedback source or observation parts needs a batch "
-                                 f"of its own)")
+        for name, mine, theirs, parts in (
+                ("observation space", env.observation_space, first.observation_space,
+                 (env.part_slices, first.part_slices)),
+                ("action space", env.action_space, first.action_space, (None, None))):
+            difference = space_difference(mine, theirs, *parts)
+            if difference is not None:
+                _refuse_unlike(envs, i, f"the {name} whose {difference.what} is "
+                                        f"{difference.mine}, arm 0's is {difference.theirs}")
+        period, first_period = env.arm.control_period_s, first.arm.control_period_s
+        if period != first_period:
+            _refuse_unlike(envs, i, f"the control period (s) {period}, arm 0 has {first_period}")
+
+
+def _refuse_unlike(envs: list[SoftArmEnv], i: int, difference: str) -> None:
+    """Close every arm and refuse arm ``i``, unlike arm 0 in ``difference``."""
+    _close_all(envs)
+    raise ValueError(f"per_env_kwargs[{i}] gives arm {i} {difference}: the arms of one batch "
+                     f"must share it (another preset, feedback source or observation parts needs "
+                     f"a batch of its own)")
 
 
 def _close_all(envs: list[SoftArmEnv]) -> None:

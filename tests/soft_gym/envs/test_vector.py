@@ -117,6 +117,25 @@ def test_mismatched_per_env_kwargs_are_refused_by_name(per_env_kwargs, named):
                          per_env_kwargs=per_env_kwargs)
 
 
+@pytest.mark.parametrize("own, named", [
+    ({"obs": ("pose", "pressure", "target")},
+     r"the observation space whose low bound at index 7 is 0 \(part 'pressure' entry 0\), "
+     r"arm 0's is -1\.54 \(part 'target' entry 0\): "),
+    ({"preset": "zhao2021"},
+     r"the observation space whose shape is \(19,\) \(parts pose 7, target 6, pressure 6\), "
+     r"arm 0's is \(16,\) \(parts pose 7, target 6, pressure 3\): "),
+    ({"obs_format": "dict"}, r"the observation space whose type is Dict, arm 0's is Box: "),
+])
+def test_an_unlike_arm_is_refused_naming_the_first_difference_not_both_spaces(own, named):
+    """The refusal names what differs (bound and index with its part, shape with the parts, or
+    type) and the two values, in one short line, rather than printing both spaces whole."""
+    with pytest.raises(ValueError, match=r"^per_env_kwargs\[1\] gives arm 1 " + named) as refused:
+        SoftArmVectorEnv(2, engine="mujoco", feedback="ground_truth", preset="zou2022",
+                         per_env_kwargs=[{}, own])
+    message = str(refused.value)
+    assert "Box(" not in message and "\n" not in message and len(message) < 300
+
+
 def test_an_arm_of_another_preset_is_refused_on_a_preset_id():
     with pytest.raises(ValueError, match="preset must be 'zou2022' on SoftArmTrackZou2022-v0"):
         gym.make_vec("SoftArmTrackZou2022-v0", num_envs=2, vectorization_mode="vector_entry_point",
