@@ -66,7 +66,7 @@ class Sb3VectorEnv(VecEnv):
         return self.vector.stack_observations(observations)
 
     def step_async(self, actions: np.ndarray) -> None:
-        self._actions = np.asarray(actions)
+        self._actions = self.vector.actions_array(actions)
 
     def step_wait(self):
         observations, rewards, terminated, truncated, infos = self.vector.step_arms(self._actions)

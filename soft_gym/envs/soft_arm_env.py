@@ -669,6 +669,9 @@ class SoftArmEnv(gym.Env):
         ``ValueError`` naming what is wrong."""
         if _is_boolean(action):
             raise ValueError(f"action must be real numbers (float), got booleans {action!r}")
+        if _is_ragged(action):
+            raise ValueError(f"action must have shape {self.action_space.shape} (one number per "
+                             f"chamber), got a ragged sequence {action!r}")
         array = as_finite_array("action", action)
         if array.shape != self.action_space.shape:
             raise ValueError(f"action must have shape {self.action_space.shape}, got {array.shape}")
@@ -734,6 +737,19 @@ def _is_boolean(value: Any) -> bool:
         return np.asarray(value).dtype == np.bool_
     except (TypeError, ValueError):  # ragged: as_finite_array says what is wrong
         return False
+
+
+def _is_ragged(value: Any) -> bool:
+    """Whether ``value`` nests sequences of unequal lengths (NumPy makes no array of it)."""
+    if isinstance(value, np.ndarray):
+        return False
+    try:
+        np.asarray(value)
+    except ValueError:
+        return True
+    except TypeError:  # not numbers at all: as_finite_array says what is wrong
+        return False
+    return False
 
 
 def _rebuild_env(cls: type, config: EnvConfig) -> "SoftArmEnv":

@@ -99,6 +99,18 @@ def _close_all(envs: list[SoftArmEnv]) -> None:
         env.close()
 
 
+def _ragged_rows(actions: Any, row_shape: tuple[int, ...]) -> str:
+    """What a ragged ``actions`` holds: its first row not of ``row_shape``."""
+    for i, row in enumerate(actions):
+        try:
+            shape = np.shape(row)
+        except ValueError:
+            return f"a ragged sequence whose row {i} is itself ragged: {row!r}"
+        if shape != row_shape:
+            return f"a ragged sequence whose row {i} has shape {shape}"
+    return f"a ragged sequence {actions!r}"
+
+
 class SoftArmVectorEnv(gym.vector.VectorEnv):
     """``num_envs`` soft-arm envs on the MuJoCo engine, stepped as one batch.
 
@@ -203,10 +215,7 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         :class:`train.batched.Sb3VectorEnv` reads (it resets the arms itself)."""
         if self.closed or not all(env.ready for env in self.envs):
             raise self._not_ready_error("step")
-        actions = np.asarray(actions)
-        if actions.shape != self.action_space.shape:
-            raise ValueError(f"actions must have shape {self.action_space.shape} "
-                             f"(num_envs, n_chambers), got {actions.shape}")
+        actions = self.actions_array(actions)
         resetting = self._needs_reset.copy()
         # every action checked before any arm is commanded
         checked = {i: env.check_action(actions[i]) for i, env in enumerate(self.envs)
@@ -233,6 +242,25 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         return tuple(list(column) for column in zip(*results))  # type: ignore[return-value]
 
     # ------------------------------------------------------------------ helpers
+    def actions_array(self, actions) -> np.ndarray:
+        """``actions`` as an array of shape ``(num_envs, n_chambers)`` (each row checked when
+        its arm steps).
+
+        Raises:
+            ValueError: ``actions`` of another shape, or ragged (rows of unequal lengths),
+                naming the shape expected and the row that is not.
+        """
+        try:
+            array = np.asarray(actions)
+        except ValueError:  # ragged: NumPy makes no array of it
+            given = _ragged_rows(actions, self.single_action_space.shape)
+            raise ValueError(f"actions must have shape {self.action_space.shape} (num_envs, "
+                             f"n_chambers), got {given}") from None
+        if array.shape != self.action_space.shape:
+            raise ValueError(f"actions must have shape {self.action_space.shape} "
+                             f"(num_envs, n_chambers), got {array.shape}")
+        return array
+
     def _not_ready_error(self, call: str) -> RuntimeError:
         """Why ``call`` (``"step"`` or ``"reset"``) cannot run now, as the error to raise."""
         if self.closed:

@@ -569,6 +569,22 @@ def test_bad_actions_are_refused_by_name(env, action):
         env.step(action)
 
 
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_a_ragged_or_wrong_length_action_is_one_line_naming_the_shape(engine):
+    """A ragged action (NumPy's "setting an array element with a sequence") and one of the wrong
+    length are refused naming ``action``, the shape expected and what was given."""
+    env = SoftArmEnv(feedback="ground_truth", engine=engine)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"^action must have shape \(3,\) \(one number per "
+                                         r"chamber\), got a ragged sequence "
+                                         r"\[0\.1, \[0\.2, 0\.3\], 0\.4\]$"):
+        env.step([0.1, [0.2, 0.3], 0.4])
+    with pytest.raises(ValueError, match=r"^action must have shape \(3,\), got \(2,\)$"):
+        env.step([0.1, 0.2])
+    assert env.step_count == 0
+    env.close()
+
+
 def test_complex_actions_are_refused():
     env = gym.make(REACH, feedback="ground_truth", action_mode="delta")
     env.reset(seed=0)

@@ -171,6 +171,26 @@ def test_bad_actions_and_seeds_are_refused_before_any_arm_moves():
         env.reset(seed=[1, 2, 3])
 
 
+@pytest.mark.parametrize("actions, given", [
+    ([[0.1, 0.2, 0.3], [0.1, [0.2, 0.3], 0.4]],
+     r"a ragged sequence whose row 1 is itself ragged: \[0\.1, \[0\.2, 0\.3\], 0\.4\]"),
+    ([[0.1, 0.2, 0.3], [0.1, 0.2]], r"a ragged sequence whose row 1 has shape \(2,\)"),
+    ([[0.1, 0.2, 0.3], [0.1, 0.2, 0.3, 0.4]], r"a ragged sequence whose row 1 has shape \(4,\)"),
+])
+def test_ragged_actions_are_refused_naming_the_shape_and_the_row(actions, given):
+    """Rows of unequal lengths (NumPy's "setting an array element with a sequence") are one
+    ValueError naming ``actions``, the shape expected and the row given, before any arm moves."""
+    env = gym.make_vec("SoftArmReach-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                       engine="mujoco", feedback="ground_truth")
+    env.reset(seed=0)
+    times = [arm.sim.time_s for arm in env.unwrapped.envs]
+    with pytest.raises(ValueError, match=r"^actions must have shape \(2, 3\) \(num_envs, "
+                                         r"n_chambers\), got " + given + "$"):
+        env.step(actions)
+    assert [arm.sim.time_s for arm in env.unwrapped.envs] == times
+    env.close()
+
+
 
 def test_the_batch_refuses_step_before_reset():
     reset_needed = gym.error.ResetNeeded
