@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import inspect
 import os
 from dataclasses import dataclass, fields
 from typing import Any
@@ -144,6 +145,35 @@ class EnvConfig:
                              f"task={self.task!r}")
         return list(paths)
 
+    def __deepcopy__(self, memo: dict) -> "EnvConfig":
+        """A deep copy, as ``copy.deepcopy`` makes of any object (it copies objects defined
+        inside a function as they are, which pickling, below, cannot)."""
+        twin = object.__new__(type(self))
+        memo[id(self)] = twin
+        twin.__dict__.update(copy.deepcopy(self.__dict__, memo))
+        return twin
+
+    def __reduce_ex__(self, protocol: Any):
+        """Pickle as any object, after refusing an argument that holds a class or function
+        defined inside a function (pickle finds classes by module and name, and fails there
+        with an ``AttributeError`` that names neither the argument nor the element).
+
+        Raises:
+            ValueError: naming the argument, the object and where it must be defined.
+        """
+        for field in fields(self):
+            local = _local_definition(getattr(self, field.name), set())
+            if local is not None:
+                is_definition = isinstance(local, type) or inspect.isfunction(local)
+                kind, defined = ("", local) if is_definition else ("an instance of ", type(local))
+                raise ValueError(
+                    f"{field.name} holds {local!r}, {kind}{defined.__module__}."
+                    f"{defined.__qualname__} defined inside a function: an env is pickled "
+                    f"(pickle, a subprocess vector env) only with classes and functions defined "
+                    f"at a module's top level; define it there (copy.deepcopy copies the env as "
+                    f"it is)")
+        return super().__reduce_ex__(protocol)
+
     def copied(self) -> "EnvConfig | None":
         """A deep copy to rebuild an env from, or ``None`` if an argument cannot be copied
         (e.g. an object without copy support in ``scenario=``)."""
@@ -164,6 +194,30 @@ def check_arguments(kwargs: dict[str, Any]) -> None:
     if unknown:
         raise ValueError(f"unknown env keyword argument(s) {unknown}: the env takes "
                          f"{list(CONFIG_FIELDS)}")
+
+
+def _local_definition(value: Any, seen: set[int]) -> Any:
+    """The first object in ``value`` (itself, a container's items, a dataclass's fields) that is,
+    or whose class is, a class or function defined inside a function; ``None`` if none."""
+    if id(value) in seen:
+        return None
+    seen.add(id(value))
+    defined = value if isinstance(value, type) or inspect.isfunction(value) else type(value)
+    if "<locals>" in getattr(defined, "__qualname__", ""):
+        return value
+    if isinstance(value, dict):
+        items = [*value.keys(), *value.values()]
+    elif isinstance(value, (list, tuple, set, frozenset)):
+        items = list(value)
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        items = [getattr(value, field.name) for field in fields(value)]
+    else:
+        return None
+    for item in items:
+        found = _local_definition(item, seen)
+        if found is not None:
+            return found
+    return None
 
 
 def _is_default(value: Any, default: Any) -> bool:

@@ -97,7 +97,9 @@ episode goes on); one that fails on the way (a ``start_m`` out of reach) leaves 
 its :class:`~soft_gym.envs.config.EnvConfig` (its own simulator: closing either leaves the other running). The copy
 starts as a freshly made env, un-reset: call ``reset()`` on it before stepping. Arguments that
 cannot be copied (e.g. an object without copy support in ``scenario=``) make pickling raise a
-``ValueError`` naming them.
+``ValueError`` naming them; so does, for pickling only, a class or function defined inside a
+function (e.g. a scenario element's class): pickle needs it defined at a module's top level,
+``copy.deepcopy`` copies it as it is.
 
 ## Info
 Ground truth: ``tip_position_m``, ``tip_quaternion``, ``target_m``, ``error_mm``, ``backbone_m``,

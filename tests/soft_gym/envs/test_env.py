@@ -642,6 +642,28 @@ def test_an_uncopyable_argument_makes_pickling_fail_by_name():
     env.close()
 
 
+def test_a_scenario_element_defined_in_a_function_is_deep_copied_and_refused_by_pickle():
+    """``copy.deepcopy`` copies an env whose scenario element's class is defined inside a
+    function; pickling it is one ValueError naming the argument and the element and saying
+    where the class must be defined (not pickle's ``AttributeError: Can't pickle local
+    object``)."""
+    class LocalMass(TipMass):
+        pass
+
+    env = gym.make(REACH, feedback="ground_truth", engine="mujoco",
+                   scenario=[LocalMass(mass_kg=0.01)])
+    duplicate = copy.deepcopy(env)
+    assert [type(load).__name__ for load in duplicate.unwrapped.loads] == ["LocalMass"]
+    duplicate.reset(seed=0)
+    duplicate.step(np.zeros(3, dtype=np.float32))
+    duplicate.close()
+    with pytest.raises(ValueError, match=r"^scenario holds .*LocalMass\(.*mass_kg=0\.01\), an "
+                                         r"instance of .*<locals>\.LocalMass defined inside a "
+                                         r"function: .* defined at a module's top level"):
+        pickle.dumps(env)
+    env.close()
+
+
 # ==========================================================================================
 # Bad input through gymnasium.make and step
 #
