@@ -44,6 +44,15 @@ papers that drive volumes, :data:`soft_gym.robots.presets.CYLINDERS`)."""
 _TRACK_ONLY = (("path", "circle"), ("cycles", 1), ("speed_m_s", None), ("waypoints_m", None))
 
 
+class _DefaultEpisodeSteps(int):
+    """``episode_steps`` left at its default: an ``int`` of its own type, so that a track env
+    (whose episode length its path sets) can refuse any value given, 100 included."""
+
+
+REACH_EPISODE_STEPS = _DefaultEpisodeSteps(100)
+"""A reach episode's default length (control steps, 5 s)."""
+
+
 @dataclass
 class EnvConfig:
     """The arguments of :class:`~soft_gym.envs.soft_arm_env.SoftArmEnv` (see its docstring for
@@ -74,7 +83,7 @@ class EnvConfig:
     delta_fraction: float = 0.1
     actuation: str = "pressure"
     action_rate_weight: float = 0.001
-    episode_steps: int = 100
+    episode_steps: int = REACH_EPISODE_STEPS
     settle_s: float = 0.5
     target_m: Any = None
     start_m: Any = None
@@ -119,7 +128,13 @@ class EnvConfig:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {self.render_mode!r}")
         self.action_rate_weight = float(require_non_negative(
             "action_rate_weight", self.action_rate_weight, maximum=MAX_ACTION_RATE_WEIGHT))
-        self.episode_steps = require_integer("episode_steps", self.episode_steps, 1)
+        if self.task == "track" and not isinstance(self.episode_steps, _DefaultEpisodeSteps):
+            raise ValueError(f"episode_steps belongs to the reach task: a track episode ends "
+                             f"when its path's last target has been presented (its length set "
+                             f"by path, cycles and speed_m_s), got "
+                             f"episode_steps={self.episode_steps!r} with task='track'")
+        if self.task == "reach":
+            self.episode_steps = require_integer("episode_steps", self.episode_steps, 1)
         self.settle_s = float(require_non_negative("settle_s", self.settle_s,
                                                    maximum=MAX_SETTLE_S, unit="seconds"))
         self.render_size = tuple(check_render_size(self.render_size))

@@ -80,9 +80,10 @@ reach (:attr:`~soft_gym.robots.spec.ArmSpec.max_reach_m`), loads within
 :mod:`soft_gym.scenarios.loads`' bounds and the arm's
 :attr:`~soft_gym.robots.spec.ArmSpec.max_load_n`. The track-only arguments (``path``, ``cycles``,
 ``speed_m_s``, ``waypoints_m``) are refused on the reach task, the reach-only ones (``target_m``,
-``start_m``, ``tolerance_mm``) on the track task, and ``sensor_config`` for a sensor the env does
-not simulate. ``reset`` takes ``seed`` (``None`` or an integer >= 0) and ``options`` (``None`` or a
-dict with the only key ``"recalibrate"``, a bool).
+``start_m``, ``tolerance_mm``, ``episode_steps``: a track episode's length is its path's) on the
+track task, and ``sensor_config`` for a sensor the env does not simulate. ``reset`` takes
+``seed`` (``None`` or an integer >= 0) and ``options`` (``None`` or a dict with the only key
+``"recalibrate"``, a bool).
 
 ## Lifecycle
 ``step()`` needs a ``reset()`` first: a new env, and a copy (below), refuses it with
@@ -203,7 +204,9 @@ class SoftArmEnv(gym.Env):
             ``action_mode="absolute"`` and no ``start_m``; ``pressure`` observations still
             report the chamber pressures, and the measurement carries no pressure command.
         action_rate_weight: weight of the action-rate penalty, in [0, ``MAX_ACTION_RATE_WEIGHT``].
-        episode_steps: reach episode length in control steps (an integer >= 1).
+        episode_steps: reach only: episode length in control steps (an integer >= 1; a track
+            episode lasts until its path's last target, set by ``path``, ``cycles`` and
+            ``speed_m_s``).
         settle_s: simulated time the arm rests before each episode (s, in [0, ``MAX_SETTLE_S``]).
         target_m: reach only: a fixed goal (m, base frame) instead of a random reachable one.
         start_m: reach only: the tip is driven there during ``reset`` (the episode's loads in

@@ -596,8 +596,10 @@ def test_complex_actions_are_refused():
 def test_good_inputs_of_odd_types_are_accepted():
     """What the checks must not refuse: numpy integers and floats, lists, float32 actions."""
     env = gym.make(TRACK, feedback="ground_truth", cycles=np.int64(1), speed_m_s=np.float32(0.01),
-                   settle_s=0, episode_steps=np.int64(5), action_rate_weight=np.float64(0.01),
+                   settle_s=0, action_rate_weight=np.float64(0.01),
                    path=("circle", "star"), sensors=["em"], render_size=[64, 48])
+    assert gym.make(REACH, feedback="ground_truth", engine="mujoco",
+                    episode_steps=np.int64(5)).unwrapped.task.episode_steps == 5
     env.reset(seed=np.int64(3), options={"recalibrate": False})
     _, reward, *_ = env.step([0.0, 0.5, -1.0])
     assert np.isfinite(reward)
@@ -662,6 +664,19 @@ def test_a_scenario_element_defined_in_a_function_is_deep_copied_and_refused_by_
                                          r"function: .* defined at a module's top level"):
         pickle.dumps(env)
     env.close()
+
+
+@pytest.mark.parametrize("env_id", [TRACK, "SoftArmTrackZou2022-v0"])
+@pytest.mark.parametrize("steps", [100, 50, np.int64(5)], ids=repr)
+def test_episode_steps_is_refused_on_the_track_task(env_id, steps):
+    """A track episode lasts until its path's last target (path, cycles, speed_m_s): an
+    ``episode_steps`` given to a track env, even the reach default 100, is refused, not
+    ignored."""
+    with pytest.raises(ValueError, match=r"^episode_steps belongs to the reach task: a track "
+                                         r"episode ends when its path's last target has been "
+                                         r"presented \(its length set by path, cycles and "
+                                         r"speed_m_s\), got episode_steps=.* with task='track'$"):
+        gym.make(env_id, feedback="ground_truth", engine="mujoco", episode_steps=steps)
 
 
 # ==========================================================================================

@@ -84,8 +84,7 @@ def test_same_step_autoreset_returns_the_final_observation_in_info():
 def test_per_env_kwargs_give_each_arm_its_own_and_it_moves_as_it_does_alone():
     """Two arms of one batch on their own paths, one carrying a tip mass: each moves bit for
     bit as that env alone."""
-    shared = {"preset": "zou2022", "engine": "mujoco", "feedback": "ground_truth",
-              "episode_steps": 5}
+    shared = {"preset": "zou2022", "engine": "mujoco", "feedback": "ground_truth"}
     own = [{"path": "circle"}, {"path": "star", "scenario": {"name": "tip_mass",
                                                               "mass_kg": 0.02}}]
     env = gym.make_vec("SoftArmTrack-v0", num_envs=2, vectorization_mode="vector_entry_point",
