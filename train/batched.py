@@ -18,6 +18,7 @@ import numpy as np
 from stable_baselines3.common.monitor import ResultsWriter
 from stable_baselines3.common.vec_env import VecEnv
 
+from soft_gym.envs.registration import registered_ids
 from soft_gym.envs.vector import SoftArmVectorEnv
 
 
@@ -34,10 +35,11 @@ class Sb3VectorEnv(VecEnv):
 
     def __init__(self, env_id: str, num_envs: int, threads: int = 1,
                  monitor_dir: str | None = None, **env_kwargs: Any) -> None:
+        if env_id not in registered_ids():  # before any argument only a soft-arm id takes
+            raise ValueError(f"env_id must be a soft-arm id, one of {registered_ids()}, got "
+                             f"{env_id!r}")
         vector = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point",
                               threads=threads, autoreset_mode="SameStep", **env_kwargs)
-        if not isinstance(vector.unwrapped, SoftArmVectorEnv):
-            raise ValueError(f"env_id must be a soft-arm id, got {env_id!r}")
         self.vector: SoftArmVectorEnv = vector.unwrapped
         self._writer = None if monitor_dir is None else ResultsWriter(
             str(Path(monitor_dir) / "batched"), header={"t_start": time.time(), "env_id": env_id})
@@ -66,7 +68,7 @@ class Sb3VectorEnv(VecEnv):
         return self.vector.stack_observations(observations)
 
     def step_async(self, actions: np.ndarray) -> None:
-        self._actions = np.asarray(actions)
+        self._actions = self.vector.actions_array(actions)
 
     def step_wait(self):
         observations, rewards, terminated, truncated, infos = self.vector.step_arms(self._actions)
@@ -107,6 +109,18 @@ class Sb3VectorEnv(VecEnv):
         return [isinstance(self.envs[i], wrapper_class) for i in self._indices(indices)]
 
     def _indices(self, indices) -> Sequence[int]:
+        """The arms ``indices`` names (``None``: all, an index, or an iterable of indices).
+
+        Raises:
+            ValueError: an index that is not an integer in [0, ``num_envs`` - 1], naming it.
+        """
         if indices is None:
             return range(self.num_envs)
-        return [indices] if isinstance(indices, int) else list(indices)
+        chosen = (list(indices) if isinstance(indices, (list, tuple, range, np.ndarray))
+                  else [indices])
+        for index in chosen:
+            if (isinstance(index, (bool, np.bool_)) or not isinstance(index, (int, np.integer))
+                    or not 0 <= index < self.num_envs):
+                raise ValueError(f"indices must be arm indices in [0, {self.num_envs - 1}] (this "
+                                 f"batch has {self.num_envs} arms), got {index!r} in {indices!r}")
+        return chosen

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import inspect
 import os
 from dataclasses import dataclass, fields
 from typing import Any
@@ -43,6 +44,15 @@ papers that drive volumes, :data:`soft_gym.robots.presets.CYLINDERS`)."""
 _TRACK_ONLY = (("path", "circle"), ("cycles", 1), ("speed_m_s", None), ("waypoints_m", None))
 
 
+class _DefaultEpisodeSteps(int):
+    """``episode_steps`` left at its default: an ``int`` of its own type, so that a track env
+    (whose episode length its path sets) can refuse any value given, 100 included."""
+
+
+REACH_EPISODE_STEPS = _DefaultEpisodeSteps(100)
+"""A reach episode's default length (control steps, 5 s)."""
+
+
 @dataclass
 class EnvConfig:
     """The arguments of :class:`~soft_gym.envs.soft_arm_env.SoftArmEnv` (see its docstring for
@@ -73,7 +83,7 @@ class EnvConfig:
     delta_fraction: float = 0.1
     actuation: str = "pressure"
     action_rate_weight: float = 0.001
-    episode_steps: int = 100
+    episode_steps: int = REACH_EPISODE_STEPS
     settle_s: float = 0.5
     target_m: Any = None
     start_m: Any = None
@@ -118,7 +128,13 @@ class EnvConfig:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {self.render_mode!r}")
         self.action_rate_weight = float(require_non_negative(
             "action_rate_weight", self.action_rate_weight, maximum=MAX_ACTION_RATE_WEIGHT))
-        self.episode_steps = require_integer("episode_steps", self.episode_steps, 1)
+        if self.task == "track" and not isinstance(self.episode_steps, _DefaultEpisodeSteps):
+            raise ValueError(f"episode_steps belongs to the reach task: a track episode ends "
+                             f"when its path's last target has been presented (its length set "
+                             f"by path, cycles and speed_m_s), got "
+                             f"episode_steps={self.episode_steps!r} with task='track'")
+        if self.task == "reach":
+            self.episode_steps = require_integer("episode_steps", self.episode_steps, 1)
         self.settle_s = float(require_non_negative("settle_s", self.settle_s,
                                                    maximum=MAX_SETTLE_S, unit="seconds"))
         self.render_size = tuple(check_render_size(self.render_size))
@@ -144,6 +160,35 @@ class EnvConfig:
                              f"task={self.task!r}")
         return list(paths)
 
+    def __deepcopy__(self, memo: dict) -> "EnvConfig":
+        """A deep copy, as ``copy.deepcopy`` makes of any object (it copies objects defined
+        inside a function as they are, which pickling, below, cannot)."""
+        twin = object.__new__(type(self))
+        memo[id(self)] = twin
+        twin.__dict__.update(copy.deepcopy(self.__dict__, memo))
+        return twin
+
+    def __reduce_ex__(self, protocol: Any):
+        """Pickle as any object, after refusing an argument that holds a class or function
+        defined inside a function (pickle finds classes by module and name, and fails there
+        with an ``AttributeError`` that names neither the argument nor the element).
+
+        Raises:
+            ValueError: naming the argument, the object and where it must be defined.
+        """
+        for field in fields(self):
+            local = _local_definition(getattr(self, field.name), set())
+            if local is not None:
+                is_definition = isinstance(local, type) or inspect.isfunction(local)
+                kind, defined = ("", local) if is_definition else ("an instance of ", type(local))
+                raise ValueError(
+                    f"{field.name} holds {local!r}, {kind}{defined.__module__}."
+                    f"{defined.__qualname__} defined inside a function: an env is pickled "
+                    f"(pickle, a subprocess vector env) only with classes and functions defined "
+                    f"at a module's top level; define it there (copy.deepcopy copies the env as "
+                    f"it is)")
+        return super().__reduce_ex__(protocol)
+
     def copied(self) -> "EnvConfig | None":
         """A deep copy to rebuild an env from, or ``None`` if an argument cannot be copied
         (e.g. an object without copy support in ``scenario=``)."""
@@ -164,6 +209,30 @@ def check_arguments(kwargs: dict[str, Any]) -> None:
     if unknown:
         raise ValueError(f"unknown env keyword argument(s) {unknown}: the env takes "
                          f"{list(CONFIG_FIELDS)}")
+
+
+def _local_definition(value: Any, seen: set[int]) -> Any:
+    """The first object in ``value`` (itself, a container's items, a dataclass's fields) that is,
+    or whose class is, a class or function defined inside a function; ``None`` if none."""
+    if id(value) in seen:
+        return None
+    seen.add(id(value))
+    defined = value if isinstance(value, type) or inspect.isfunction(value) else type(value)
+    if "<locals>" in getattr(defined, "__qualname__", ""):
+        return value
+    if isinstance(value, dict):
+        items = [*value.keys(), *value.values()]
+    elif isinstance(value, (list, tuple, set, frozenset)):
+        items = list(value)
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        items = [getattr(value, field.name) for field in fields(value)]
+    else:
+        return None
+    for item in items:
+        found = _local_definition(item, seen)
+        if found is not None:
+            return found
+    return None
 
 
 def _is_default(value: Any, default: Any) -> bool:

@@ -80,9 +80,10 @@ reach (:attr:`~soft_gym.robots.spec.ArmSpec.max_reach_m`), loads within
 :mod:`soft_gym.scenarios.loads`' bounds and the arm's
 :attr:`~soft_gym.robots.spec.ArmSpec.max_load_n`. The track-only arguments (``path``, ``cycles``,
 ``speed_m_s``, ``waypoints_m``) are refused on the reach task, the reach-only ones (``target_m``,
-``start_m``, ``tolerance_mm``) on the track task, and ``sensor_config`` for a sensor the env does
-not simulate. ``reset`` takes ``seed`` (``None`` or an integer >= 0) and ``options`` (``None`` or a
-dict with the only key ``"recalibrate"``, a bool).
+``start_m``, ``tolerance_mm``, ``episode_steps``: a track episode's length is its path's) on the
+track task, and ``sensor_config`` for a sensor the env does not simulate. ``reset`` takes
+``seed`` (``None`` or an integer >= 0) and ``options`` (``None`` or a dict with the only key
+``"recalibrate"``, a bool).
 
 ## Lifecycle
 ``step()`` needs a ``reset()`` first: a new env, and a copy (below), refuses it with
@@ -97,7 +98,9 @@ episode goes on); one that fails on the way (a ``start_m`` out of reach) leaves 
 its :class:`~soft_gym.envs.config.EnvConfig` (its own simulator: closing either leaves the other running). The copy
 starts as a freshly made env, un-reset: call ``reset()`` on it before stepping. Arguments that
 cannot be copied (e.g. an object without copy support in ``scenario=``) make pickling raise a
-``ValueError`` naming them.
+``ValueError`` naming them; so does, for pickling only, a class or function defined inside a
+function (e.g. a scenario element's class): pickle needs it defined at a module's top level,
+``copy.deepcopy`` copies it as it is.
 
 ## Info
 Ground truth: ``tip_position_m``, ``tip_quaternion``, ``target_m``, ``error_mm``, ``backbone_m``,
@@ -201,7 +204,9 @@ class SoftArmEnv(gym.Env):
             ``action_mode="absolute"`` and no ``start_m``; ``pressure`` observations still
             report the chamber pressures, and the measurement carries no pressure command.
         action_rate_weight: weight of the action-rate penalty, in [0, ``MAX_ACTION_RATE_WEIGHT``].
-        episode_steps: reach episode length in control steps (an integer >= 1).
+        episode_steps: reach only: episode length in control steps (an integer >= 1; a track
+            episode lasts until its path's last target, set by ``path``, ``cycles`` and
+            ``speed_m_s``).
         settle_s: simulated time the arm rests before each episode (s, in [0, ``MAX_SETTLE_S``]).
         target_m: reach only: a fixed goal (m, base frame) instead of a random reachable one.
         start_m: reach only: the tip is driven there during ``reset`` (the episode's loads in
@@ -426,6 +431,12 @@ class SoftArmEnv(gym.Env):
         if isinstance(observation, dict):
             return np.asarray(observation[part])
         return np.asarray(observation)[self._part_slices[part]]
+
+    @property
+    def part_slices(self) -> dict[str, slice] | None:
+        """Each observation part's slice of a flat observation (``obs_format="flat"``), in
+        ``obs`` order; ``None`` for dict observations."""
+        return None if self.obs_format == "dict" else dict(self._part_slices)
 
     @property
     def pipeline(self):
@@ -663,6 +674,9 @@ class SoftArmEnv(gym.Env):
         ``ValueError`` naming what is wrong."""
         if _is_boolean(action):
             raise ValueError(f"action must be real numbers (float), got booleans {action!r}")
+        if _is_ragged(action):
+            raise ValueError(f"action must have shape {self.action_space.shape} (one number per "
+                             f"chamber), got a ragged sequence {action!r}")
         array = as_finite_array("action", action)
         if array.shape != self.action_space.shape:
             raise ValueError(f"action must have shape {self.action_space.shape}, got {array.shape}")
@@ -728,6 +742,19 @@ def _is_boolean(value: Any) -> bool:
         return np.asarray(value).dtype == np.bool_
     except (TypeError, ValueError):  # ragged: as_finite_array says what is wrong
         return False
+
+
+def _is_ragged(value: Any) -> bool:
+    """Whether ``value`` nests sequences of unequal lengths (NumPy makes no array of it)."""
+    if isinstance(value, np.ndarray):
+        return False
+    try:
+        np.asarray(value)
+    except ValueError:
+        return True
+    except TypeError:  # not numbers at all: as_finite_array says what is wrong
+        return False
+    return False
 
 
 def _rebuild_env(cls: type, config: EnvConfig) -> "SoftArmEnv":

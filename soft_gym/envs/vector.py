@@ -33,6 +33,7 @@ from gymnasium.vector.utils import batch_space, concatenate, create_empty_array
 from soft_gym._validation import require_integer
 from soft_gym.engines import REFERENCE_ENGINE, engine_supports, engines_supporting
 from soft_gym.envs.soft_arm_env import ClosedEnvError, ResetNeededError, SoftArmEnv
+from soft_gym.envs.space_difference import space_difference
 
 MAX_NUM_ENVS = 4096
 """The most arms one vector env holds (each a MuJoCo model of ~1 MB and an env)."""
@@ -67,25 +68,47 @@ def _per_env_kwargs(value: Any, num_envs: int) -> list[dict[str, Any]]:
 
 def _check_alike(envs: list[SoftArmEnv]) -> None:
     """Every arm with the first's observation and action spaces and control period (what one
-    batch's arrays and lockstep clock need)."""
+    batch's arrays and lockstep clock need); a refusal names the first difference and the two
+    values (:func:`~soft_gym.envs.space_difference.space_difference`)."""
     first = envs[0]
     for i, env in enumerate(envs[1:], start=1):
-        for name, mine, theirs in (
-                ("observation space", env.observation_space, first.observation_space),
-                ("action space", env.action_space, first.action_space),
-                ("control period (s)", env.arm.control_period_s, first.arm.control_period_s)):
-            if mine != theirs:
-                _close_all(envs)
-                raise ValueError(f"per_env_kwargs[{i}] gives arm {i} the {name} {mine}, arm 0 "
-                                 f"has {theirs}: the arms of one batch must share it (another "
-                                 f"preset, feedback source or observation parts needs a batch "
-                                 f"of its own)")
+        for name, mine, theirs, parts in (
+                ("observation space", env.observation_space, first.observation_space,
+                 (env.part_slices, first.part_slices)),
+                ("action space", env.action_space, first.action_space, (None, None))):
+            difference = space_difference(mine, theirs, *parts)
+            if difference is not None:
+                _refuse_unlike(envs, i, f"the {name} whose {difference.what} is "
+                                        f"{difference.mine}, arm 0's is {difference.theirs}")
+        period, first_period = env.arm.control_period_s, first.arm.control_period_s
+        if period != first_period:
+            _refuse_unlike(envs, i, f"the control period (s) {period}, arm 0 has {first_period}")
+
+
+def _refuse_unlike(envs: list[SoftArmEnv], i: int, difference: str) -> None:
+    """Close every arm and refuse arm ``i``, unlike arm 0 in ``difference``."""
+    _close_all(envs)
+    raise ValueError(f"per_env_kwargs[{i}] gives arm {i} {difference}: the arms of one batch "
+                     f"must share it (another preset, feedback source or observation parts needs "
+                     f"a batch of its own)")
 
 
 def _close_all(envs: list[SoftArmEnv]) -> None:
     """Close every env of ``envs`` (an arm refused after others were built)."""
     for env in envs:
         env.close()
+
+
+def _ragged_rows(actions: Any, row_shape: tuple[int, ...]) -> str:
+    """What a ragged ``actions`` holds: its first row not of ``row_shape``."""
+    for i, row in enumerate(actions):
+        try:
+            shape = np.shape(row)
+        except ValueError:
+            return f"a ragged sequence whose row {i} is itself ragged: {row!r}"
+        if shape != row_shape:
+            return f"a ragged sequence whose row {i} has shape {shape}"
+    return f"a ragged sequence {actions!r}"
 
 
 class SoftArmVectorEnv(gym.vector.VectorEnv):
@@ -192,10 +215,7 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         :class:`train.batched.Sb3VectorEnv` reads (it resets the arms itself)."""
         if self.closed or not all(env.ready for env in self.envs):
             raise self._not_ready_error("step")
-        actions = np.asarray(actions)
-        if actions.shape != self.action_space.shape:
-            raise ValueError(f"actions must have shape {self.action_space.shape} "
-                             f"(num_envs, n_chambers), got {actions.shape}")
+        actions = self.actions_array(actions)
         resetting = self._needs_reset.copy()
         # every action checked before any arm is commanded
         checked = {i: env.check_action(actions[i]) for i, env in enumerate(self.envs)
@@ -222,6 +242,25 @@ class SoftArmVectorEnv(gym.vector.VectorEnv):
         return tuple(list(column) for column in zip(*results))  # type: ignore[return-value]
 
     # ------------------------------------------------------------------ helpers
+    def actions_array(self, actions) -> np.ndarray:
+        """``actions`` as an array of shape ``(num_envs, n_chambers)`` (each row checked when
+        its arm steps).
+
+        Raises:
+            ValueError: ``actions`` of another shape, or ragged (rows of unequal lengths),
+                naming the shape expected and the row that is not.
+        """
+        try:
+            array = np.asarray(actions)
+        except ValueError:  # ragged: NumPy makes no array of it
+            given = _ragged_rows(actions, self.single_action_space.shape)
+            raise ValueError(f"actions must have shape {self.action_space.shape} (num_envs, "
+                             f"n_chambers), got {given}") from None
+        if array.shape != self.action_space.shape:
+            raise ValueError(f"actions must have shape {self.action_space.shape} "
+                             f"(num_envs, n_chambers), got {array.shape}")
+        return array
+
     def _not_ready_error(self, call: str) -> RuntimeError:
         """Why ``call`` (``"step"`` or ``"reset"``) cannot run now, as the error to raise."""
         if self.closed:

@@ -141,3 +141,40 @@ def test_arm_env_kwargs_outside_a_batch_is_refused_by_the_trainer():
     with pytest.raises(ValueError, match="arm_env_kwargs .* --vec batched"):
         make_vec_env("SoftArmTrackWang2023-v0", {"feedback": "em"}, 2, 0,
                      per_arm=[{}, {"feedback": "ground_truth"}])
+
+
+# ---------------------------------------------------------------------- bad input
+def test_an_id_other_than_a_soft_arm_one_is_refused_before_its_arguments():
+    """``CartPole-v1`` is refused by ``env_id``, listing the soft-arm ids, not by the
+    ``threads`` its vector entry point does not take."""
+    with pytest.raises(ValueError, match=r"^env_id must be a soft-arm id, one of "
+                                         r"\['SoftArmReach-v0', 'SoftArmTrack-v0', .*\], got "
+                                         r"'CartPole-v1'$"):
+        Sb3VectorEnv("CartPole-v1", 2)
+
+
+@pytest.mark.parametrize("call", [
+    lambda vec, indices: vec.env_method("reset", indices=indices),
+    lambda vec, indices: vec.get_attr("step_count", indices=indices),
+    lambda vec, indices: vec.set_attr("step_count", 0, indices=indices),
+    lambda vec, indices: vec.env_is_wrapped(gym.Wrapper, indices=indices),
+], ids=["env_method", "get_attr", "set_attr", "env_is_wrapped"])
+@pytest.mark.parametrize("indices, bad", [([5], "5"), (2, "2"), ([0, -1], "-1"),
+                                          ([0, 1.0], "1.0")], ids=repr)
+def test_an_index_outside_the_batch_is_refused_naming_the_range(call, indices, bad):
+    batched = Sb3VectorEnv("SoftArmReach-v0", 2, engine="mujoco", feedback="ground_truth")
+    with pytest.raises(ValueError, match=rf"^indices must be arm indices in \[0, 1\] \(this "
+                                         rf"batch has 2 arms\), got {bad} in "):
+        call(batched, indices)
+    assert batched.get_attr("step_count", indices=[1, 0]) == [0, 0]
+    batched.close()
+
+
+def test_ragged_actions_are_refused_naming_the_shape():
+    batched = Sb3VectorEnv("SoftArmReach-v0", 2, engine="mujoco", feedback="ground_truth")
+    batched.reset()
+    with pytest.raises(ValueError, match=r"^actions must have shape \(2, 3\) \(num_envs, "
+                                         r"n_chambers\), got a ragged sequence whose row 1 "
+                                         r"has shape \(2,\)$"):
+        batched.step([[0.1, 0.2, 0.3], [0.1, 0.2]])
+    batched.close()

@@ -74,7 +74,7 @@ def test_cc_model_says_once_that_targets_below_the_upright_arm_are_out_of_reach(
     circle = [(0.0687 * np.cos(a), 0.0687 * np.sin(a), 0.0962)
               for a in np.linspace(0.0, 2 * np.pi, 12, endpoint=False)]
     env = gym.make("SoftArmTrack-v0", preset="ho2018", feedback="ground_truth", path="waypoints",
-                   waypoints_m=circle, episode_steps=120)
+                   waypoints_m=circle)
     policy = make_policy(name, env=env)
     messages = _warnings(lambda: _episode(policy, env))
     assert len(messages) == 1, messages

@@ -569,6 +569,22 @@ def test_bad_actions_are_refused_by_name(env, action):
         env.step(action)
 
 
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_a_ragged_or_wrong_length_action_is_one_line_naming_the_shape(engine):
+    """A ragged action (NumPy's "setting an array element with a sequence") and one of the wrong
+    length are refused naming ``action``, the shape expected and what was given."""
+    env = SoftArmEnv(feedback="ground_truth", engine=engine)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"^action must have shape \(3,\) \(one number per "
+                                         r"chamber\), got a ragged sequence "
+                                         r"\[0\.1, \[0\.2, 0\.3\], 0\.4\]$"):
+        env.step([0.1, [0.2, 0.3], 0.4])
+    with pytest.raises(ValueError, match=r"^action must have shape \(3,\), got \(2,\)$"):
+        env.step([0.1, 0.2])
+    assert env.step_count == 0
+    env.close()
+
+
 def test_complex_actions_are_refused():
     env = gym.make(REACH, feedback="ground_truth", action_mode="delta")
     env.reset(seed=0)
@@ -580,8 +596,10 @@ def test_complex_actions_are_refused():
 def test_good_inputs_of_odd_types_are_accepted():
     """What the checks must not refuse: numpy integers and floats, lists, float32 actions."""
     env = gym.make(TRACK, feedback="ground_truth", cycles=np.int64(1), speed_m_s=np.float32(0.01),
-                   settle_s=0, episode_steps=np.int64(5), action_rate_weight=np.float64(0.01),
+                   settle_s=0, action_rate_weight=np.float64(0.01),
                    path=("circle", "star"), sensors=["em"], render_size=[64, 48])
+    assert gym.make(REACH, feedback="ground_truth", engine="mujoco",
+                    episode_steps=np.int64(5)).unwrapped.task.episode_steps == 5
     env.reset(seed=np.int64(3), options={"recalibrate": False})
     _, reward, *_ = env.step([0.0, 0.5, -1.0])
     assert np.isfinite(reward)
@@ -624,6 +642,41 @@ def test_an_uncopyable_argument_makes_pickling_fail_by_name():
     with pytest.raises(ValueError, match="cannot be copied or pickled"):
         pickle.dumps(env)
     env.close()
+
+
+def test_a_scenario_element_defined_in_a_function_is_deep_copied_and_refused_by_pickle():
+    """``copy.deepcopy`` copies an env whose scenario element's class is defined inside a
+    function; pickling it is one ValueError naming the argument and the element and saying
+    where the class must be defined (not pickle's ``AttributeError: Can't pickle local
+    object``)."""
+    class LocalMass(TipMass):
+        pass
+
+    env = gym.make(REACH, feedback="ground_truth", engine="mujoco",
+                   scenario=[LocalMass(mass_kg=0.01)])
+    duplicate = copy.deepcopy(env)
+    assert [type(load).__name__ for load in duplicate.unwrapped.loads] == ["LocalMass"]
+    duplicate.reset(seed=0)
+    duplicate.step(np.zeros(3, dtype=np.float32))
+    duplicate.close()
+    with pytest.raises(ValueError, match=r"^scenario holds .*LocalMass\(.*mass_kg=0\.01\), an "
+                                         r"instance of .*<locals>\.LocalMass defined inside a "
+                                         r"function: .* defined at a module's top level"):
+        pickle.dumps(env)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", [TRACK, "SoftArmTrackZou2022-v0"])
+@pytest.mark.parametrize("steps", [100, 50, np.int64(5)], ids=repr)
+def test_episode_steps_is_refused_on_the_track_task(env_id, steps):
+    """A track episode lasts until its path's last target (path, cycles, speed_m_s): an
+    ``episode_steps`` given to a track env, even the reach default 100, is refused, not
+    ignored."""
+    with pytest.raises(ValueError, match=r"^episode_steps belongs to the reach task: a track "
+                                         r"episode ends when its path's last target has been "
+                                         r"presented \(its length set by path, cycles and "
+                                         r"speed_m_s\), got episode_steps=.* with task='track'$"):
+        gym.make(env_id, feedback="ground_truth", engine="mujoco", episode_steps=steps)
 
 
 # ==========================================================================================

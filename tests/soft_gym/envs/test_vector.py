@@ -84,8 +84,7 @@ def test_same_step_autoreset_returns_the_final_observation_in_info():
 def test_per_env_kwargs_give_each_arm_its_own_and_it_moves_as_it_does_alone():
     """Two arms of one batch on their own paths, one carrying a tip mass: each moves bit for
     bit as that env alone."""
-    shared = {"preset": "zou2022", "engine": "mujoco", "feedback": "ground_truth",
-              "episode_steps": 5}
+    shared = {"preset": "zou2022", "engine": "mujoco", "feedback": "ground_truth"}
     own = [{"path": "circle"}, {"path": "star", "scenario": {"name": "tip_mass",
                                                               "mass_kg": 0.02}}]
     env = gym.make_vec("SoftArmTrack-v0", num_envs=2, vectorization_mode="vector_entry_point",
@@ -115,6 +114,25 @@ def test_mismatched_per_env_kwargs_are_refused_by_name(per_env_kwargs, named):
     with pytest.raises(ValueError, match=named):
         SoftArmVectorEnv(2, engine="mujoco", feedback="ground_truth", preset="zou2022",
                          per_env_kwargs=per_env_kwargs)
+
+
+@pytest.mark.parametrize("own, named", [
+    ({"obs": ("pose", "pressure", "target")},
+     r"the observation space whose low bound at index 7 is 0 \(part 'pressure' entry 0\), "
+     r"arm 0's is -1\.54 \(part 'target' entry 0\): "),
+    ({"preset": "zhao2021"},
+     r"the observation space whose shape is \(19,\) \(parts pose 7, target 6, pressure 6\), "
+     r"arm 0's is \(16,\) \(parts pose 7, target 6, pressure 3\): "),
+    ({"obs_format": "dict"}, r"the observation space whose type is Dict, arm 0's is Box: "),
+])
+def test_an_unlike_arm_is_refused_naming_the_first_difference_not_both_spaces(own, named):
+    """The refusal names what differs (bound and index with its part, shape with the parts, or
+    type) and the two values, in one short line, rather than printing both spaces whole."""
+    with pytest.raises(ValueError, match=r"^per_env_kwargs\[1\] gives arm 1 " + named) as refused:
+        SoftArmVectorEnv(2, engine="mujoco", feedback="ground_truth", preset="zou2022",
+                         per_env_kwargs=[{}, own])
+    message = str(refused.value)
+    assert "Box(" not in message and "\n" not in message and len(message) < 300
 
 
 def test_an_arm_of_another_preset_is_refused_on_a_preset_id():
@@ -150,6 +168,26 @@ def test_bad_actions_and_seeds_are_refused_before_any_arm_moves():
     assert [arm.sim.time_s for arm in env.envs] == times
     with pytest.raises(ValueError, match="seed must be an integer or 2 seeds"):
         env.reset(seed=[1, 2, 3])
+
+
+@pytest.mark.parametrize("actions, given", [
+    ([[0.1, 0.2, 0.3], [0.1, [0.2, 0.3], 0.4]],
+     r"a ragged sequence whose row 1 is itself ragged: \[0\.1, \[0\.2, 0\.3\], 0\.4\]"),
+    ([[0.1, 0.2, 0.3], [0.1, 0.2]], r"a ragged sequence whose row 1 has shape \(2,\)"),
+    ([[0.1, 0.2, 0.3], [0.1, 0.2, 0.3, 0.4]], r"a ragged sequence whose row 1 has shape \(4,\)"),
+])
+def test_ragged_actions_are_refused_naming_the_shape_and_the_row(actions, given):
+    """Rows of unequal lengths (NumPy's "setting an array element with a sequence") are one
+    ValueError naming ``actions``, the shape expected and the row given, before any arm moves."""
+    env = gym.make_vec("SoftArmReach-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                       engine="mujoco", feedback="ground_truth")
+    env.reset(seed=0)
+    times = [arm.sim.time_s for arm in env.unwrapped.envs]
+    with pytest.raises(ValueError, match=r"^actions must have shape \(2, 3\) \(num_envs, "
+                                         r"n_chambers\), got " + given + "$"):
+        env.step(actions)
+    assert [arm.sim.time_s for arm in env.unwrapped.envs] == times
+    env.close()
 
 
 
