@@ -32,6 +32,7 @@ import soft_gym  # noqa: F401  (registers the env ids)
 from agents.policies import BASELINES, BaselinePolicy, SB3Policy, make_policy
 from agents.rollout import run_episode
 from eval.video import EpisodeVideo
+from soft_gym._progress import heartbeat
 from soft_gym.envs.uncalibrated import make_uncalibrated_env
 
 
@@ -138,7 +139,8 @@ def run_many(configs: list[RunConfig], workers: int = 1, progress: bool = False,
     context = multiprocessing.get_context("spawn")
     bar = tqdm(total=len(configs), desc="runs", disable=not progress)
     first_error: BaseException | None = None
-    with ProcessPoolExecutor(max_workers=min(workers, len(configs)), mp_context=context) as pool:
+    with heartbeat(bar), ProcessPoolExecutor(max_workers=min(workers, len(configs)),
+                                             mp_context=context) as pool:
         futures = {pool.submit(run, config): index for index, config in enumerate(configs)}
         pending = set(futures)
         while pending:

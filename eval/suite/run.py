@@ -25,6 +25,7 @@ from eval.suite.grid import Cell, expand, label_text
 from eval.suite.spec import SuiteSpec, load_suite
 from eval.suite.store import (cell_metrics, check_records_dir, git_revision, is_finished,
                               library_versions, record_problem, records_dir, write_record)
+from soft_gym._progress import heartbeat
 from soft_gym._threads import one_compute_thread
 from soft_gym.datasets.episodes import EpisodeRecorder
 from soft_gym.sensing.calibration_cache import disk_cache_enabled
@@ -222,16 +223,17 @@ def run_suite(spec: SuiteSpec | str | os.PathLike, out: str | os.PathLike, worke
         bar = tqdm(total=len(tasks), desc=f"suite {spec.name}", unit="run",
                    disable=not progress)
         try:
-            for result in map_function(run_cell, tasks, workers):
-                if result["status"] == "error":
-                    failures.append(result)
-                    write_error(out, result)
-                else:
-                    write_record(out, result)
-                    counts[result["status"]] += 1
-                release(out, result["key"])
-                bar.set_postfix_str(label_text(result["labels"]), refresh=False)
-                bar.update(1)
+            with heartbeat(bar):
+                for result in map_function(run_cell, tasks, workers):
+                    if result["status"] == "error":
+                        failures.append(result)
+                        write_error(out, result)
+                    else:
+                        write_record(out, result)
+                        counts[result["status"]] += 1
+                    release(out, result["key"])
+                    bar.set_postfix_str(label_text(result["labels"]), refresh=False)
+                    bar.update(1)
         except WorkerDeathError as error:  # raised after every other run's result
             for death in error.deaths:
                 failures.append(died(death.item, death.cause))

@@ -23,13 +23,12 @@ from train.trainer import TrainRequest, train
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV_ID = "SoftArmTrackWang2023-v0"
-SHORT_ENV = {"feedback": "ground_truth", "path": "circle", "speed_m_s": 0.02,
-             "episode_steps": 60}
+SHORT_ENV = {"feedback": "ground_truth", "path": "circle", "speed_m_s": 0.02}
 
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):
-    """Two 60-step episodes of cc_model on the short circle, and the dataset's root."""
+    """Two episodes of cc_model on the short circle, and the dataset's root."""
     root = tmp_path_factory.mktemp("demos")
     dataset_id = record_demonstrations(ENV_ID, SHORT_ENV, "cc_model", episodes=2, seed=3,
                                        root=root, policy_params={"kp": 0.06})
