@@ -81,6 +81,9 @@ def _check(paper: Paper) -> None:
             raise ValueError(f"Paper.feedback_sources of {paper.key!r} must hold named "
                              f"FeedbackSource subclasses, got {source!r}")
         names.append(source.name)
+    if len(set(names)) != len(names) or len({arm.name for arm in paper.arms}) != len(paper.arms):
+        raise ValueError(f"Paper {paper.key!r} names a feedback source or an arm twice: sources "
+                         f"{names}, arms {[arm.name for arm in paper.arms]}")
     calibrating = [source.name for source in paper.feedback_sources if source.calibrates]
     missing = sorted(set(calibrating) - set(paper.calibrations))
     stray = sorted(set(paper.calibrations) - set(calibrating))

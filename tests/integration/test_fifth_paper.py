@@ -145,4 +145,7 @@ def test_a_malformed_paper_is_refused_before_anything_is_registered():
         register_paper(Paper(key="fused2026", citation="x",
                              feedback_sources=(type("Fused2", (FEEDBACK_SOURCES["fused"],),
                                                     {"name": "fused2"}),)))
+    with pytest.raises(ValueError, match="names a feedback source or an arm twice"):
+        register_paper(Paper(key="twice2026", citation="x",
+                             feedback_sources=(FEEDBACK_SOURCES["em"],) * 2))
     assert (list(PAPERS), list(PRESETS), list(FEEDBACK_SOURCES), list(CALIBRATIONS)) == before
