@@ -142,8 +142,9 @@ def check_log(times_s: np.ndarray, commands_pa: np.ndarray, tip_positions_m: np.
     if (steps <= 0).any():
         row = int(np.argmax(steps <= 0)) + 2
         kind = "repeats" if steps[row - 2] == 0 else "goes back from"
-        raise ValueError(f"{source}: column t at row {row}: time {times[row - 1]!r} s {kind} the "
-                         f"row before ({times[row - 2]!r} s); t must be strictly increasing")
+        raise ValueError(f"{source}: column t at row {row}: time {float(times[row - 1])!r} s "
+                         f"{kind} the row before ({float(times[row - 2])!r} s); t must be "
+                         f"strictly increasing")
     distance = np.linalg.norm(positions, axis=1)
     limit = MILLIMETRE_FACTOR * spec.max_reach_m
     if (distance > limit).any():
@@ -156,7 +157,7 @@ def check_log(times_s: np.ndarray, commands_pa: np.ndarray, tip_positions_m: np.
     if outside.any():
         row, chamber = (int(i) for i in np.argwhere(outside)[0])
         raise ValueError(f"{source}: column p{chamber} at row {row + 1}: command "
-                         f"{commands[row, chamber]!r} Pa is outside [0, {p_max[chamber]:g}] Pa "
+                         f"{float(commands[row, chamber])!r} Pa is outside [0, {p_max[chamber]:g}] Pa "
                          f"(0 to the segment's p_max_pa, gauge)")
     quaternions = None
     if tip_quaternions is not None:
@@ -203,15 +204,17 @@ def _columns(header: list[str], spec: ArmSpec, path: Path) -> dict:
     if present_q and len(present_q) < len(QUATERNION_COLUMNS):
         missing += [name for name in QUATERNION_COLUMNS if name not in header]
     extra = [f"p{i}" for i in chambers if i >= spec.n_chambers]
-    if extra or (missing and chambers and len(chambers) != spec.n_chambers):
+    if extra:
         raise ValueError(
             f"log {str(path)!r}: {len(chambers)} command columns "
             f"({', '.join(f'p{i}' for i in chambers)}), but arm {spec.name!r} has "
             f"{spec.n_chambers} chambers: give columns {', '.join(wanted)}")
     if missing:
+        count = (f"; arm {spec.name!r} has {spec.n_chambers} chambers, one column each"
+                 if any(name in wanted for name in missing) else "")
         raise ValueError(f"log {str(path)!r}: missing column{'s' if len(missing) > 1 else ''} "
                          f"{', '.join(missing)} (needed: t, {', '.join(wanted)}, x, y, z in s, "
-                         f"Pa and m; optional qx, qy, qz, qw)")
+                         f"Pa and m; optional qx, qy, qz, qw){count}")
     return {"t": header.index("t"), "commands": [header.index(name) for name in wanted],
             "position": [header.index(name) for name in POSITION_COLUMNS],
             "quaternion": [header.index(name) for name in present_q]}
