@@ -16,7 +16,7 @@ from tqdm import tqdm
 from soft_gym._cli import check_file, fail
 from soft_gym._progress import heartbeat
 from soft_gym.engines import ENGINES
-from soft_gym.identify.fit import fit_arm
+from soft_gym.identify.fit import fit_arm, fit_split
 from soft_gym.identify.log import read_log
 from soft_gym.identify.parameters import FAMILIES, default_parameters, parse_parameters
 from soft_gym.identify.replay import DEFAULT_ENGINE
@@ -80,15 +80,14 @@ def run_identify(args: argparse.Namespace, parser: argparse.ArgumentParser) -> N
     except ValueError as error:
         fail(parser, "--params", error)
 
-    bar = tqdm(desc="identify: simulations", unit="sim", file=sys.stderr)
     try:
-        with heartbeat(bar):
-            result = fit_arm(base, log, parameters, engine=args.engine,
-                             on_evaluation=lambda: bar.update(1))
+        fit_split(log.n_samples, len(parameters))
     except ValueError as error:
-        bar.close()
         fail(parser, "--data", error)
-    bar.close()
+
+    with tqdm(desc="identify: simulations", unit="sim", file=sys.stderr) as bar, heartbeat(bar):
+        result = fit_arm(base, log, parameters, engine=args.engine,
+                         on_evaluation=lambda: bar.update(1))
     fitted = replace(result.spec, name=name)
     result = replace(result, spec=fitted)
     report_path, plot_path = outputs[1], outputs[2]

@@ -103,6 +103,20 @@ def rms_tip_error_mm(simulated_m: np.ndarray, measured_m: np.ndarray) -> float:
     return float(np.sqrt(np.mean(distances**2)) * 1e3)
 
 
+def fit_split(n_samples: int, n_parameters: int) -> int:
+    """How many of a log's ``n_samples`` the fit sees (the first :data:`FIT_FRACTION`).
+
+    Raises:
+        ValueError: a log too short to keep more samples than ``n_parameters`` (and at least
+            :data:`soft_gym.identify.log.MIN_ROWS`) in the fit and ``MIN_ROWS`` held out.
+    """
+    n_fit = int(math.floor(FIT_FRACTION * n_samples))
+    if n_fit < max(MIN_ROWS, n_parameters + 1) or n_samples - n_fit < MIN_ROWS:
+        raise ValueError(f"log has {n_samples} samples: too few to fit {n_parameters} "
+                         f"parameters on the first {FIT_FRACTION:.0%} and score the rest")
+    return n_fit
+
+
 def fit_arm(base: ArmSpec, log: ArmLog, parameters: list[Parameter] | None = None,
             engine: str = DEFAULT_ENGINE,
             on_evaluation: Callable[[], None] | None = None) -> FitResult:
@@ -126,10 +140,7 @@ def fit_arm(base: ArmSpec, log: ArmLog, parameters: list[Parameter] | None = Non
     """
     if parameters is None:
         parameters = default_parameters(base)
-    n_fit = int(math.floor(FIT_FRACTION * log.n_samples))
-    if n_fit < max(MIN_ROWS, len(parameters) + 1) or log.n_samples - n_fit < MIN_ROWS:
-        raise ValueError(f"log has {log.n_samples} samples: too few to fit {len(parameters)} "
-                         f"parameters on the first {FIT_FRACTION:.0%} and score the rest")
+    n_fit = fit_split(log.n_samples, len(parameters))
     fit_log = log.head(n_fit)
     starts = np.array([parameter.value(base) for parameter in parameters])
     measured_mm = fit_log.tip_positions_m * 1e3

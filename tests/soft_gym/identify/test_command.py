@@ -72,6 +72,11 @@ def test_bad_options_are_one_line_before_any_work(log_file, tmp_path, capsys):
     bad.write_text("t,p0,p1,p2,x,y\n0,0,0,0,0,0\n", encoding="utf-8")
     assert_one_line_error(main, [*run[:4], str(bad), *run[5:]], "--data", capsys, out=out,
                           also="missing column z")
+    short = tmp_path / "short.csv"
+    short.write_text("t,p0,p1,p2,x,y,z\n" + "".join(f"{i},0,0,0,0,0,0.09\n" for i in range(5)),
+                     encoding="utf-8")
+    assert_one_line_error(main, [*run[:4], str(short), *run[5:]], "--data", capsys, out=out,
+                          also="5 samples: too few")
     assert_one_line_error(main, [*run, "--params", "stiffness"], "--params", capsys, out=out,
                           also="'stiffness'")
     assert_one_line_error(main, [*run, "--engine", "bullet"], "--engine", capsys, out=out)
@@ -83,7 +88,8 @@ def test_bad_options_are_one_line_before_any_work(log_file, tmp_path, capsys):
     report.write_text("keep", encoding="utf-8")
     assert_one_line_error(main, run, "--out", capsys, out=out, also="--force")
     assert report.read_text(encoding="utf-8") == "keep"
-    assert sorted(path.name for path in tmp_path.iterdir()) == ["arm.identify.yaml", "bad.csv"]
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["arm.identify.yaml", "bad.csv",
+                                                                 "short.csv"]
 
 
 def test_python_m_soft_gym_identify_shows_progress_when_piped(log_file, tmp_path):
@@ -97,3 +103,13 @@ def test_python_m_soft_gym_identify_shows_progress_when_piped(log_file, tmp_path
     report = yaml.safe_load(_outputs(out)[1].read_text(encoding="utf-8"))
     fitted = report["parameters"]["pneumatic_time_constant_s"]["value"]
     assert load_preset(out).pneumatic_time_constant_s == fitted != 0.12
+
+
+def test_help_explains_identify(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["identify", "--help"])
+    assert exit_info.value.code == 0
+    text = capsys.readouterr().out
+    for part in ("--preset", "--data", "--out", "--params", "--engine", "youngs_modulus_pa",
+                 "identify.yaml", "mujoco"):
+        assert part in text, part

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from soft_gym.identify.log import ArmLog, read_log, write_log
+from soft_gym.identify.log import ArmLog, check_log, read_log, write_log
 from soft_gym.robots.presets import get_preset
 
 pytestmark = pytest.mark.smoke
@@ -109,3 +109,12 @@ def test_a_short_ragged_or_empty_log_is_refused(tmp_path):
     duplicated = _write(tmp_path, [[*row, row[1]] for row in _rows()], HEADER + ",p0")
     with pytest.raises(ValueError, match="column 'p0' appears more than once"):
         read_log(duplicated, SPEC)
+
+
+@pytest.mark.parametrize("array, what", [(0, "t"), (1, "command"), (2, "tip position")])
+def test_check_log_names_the_row_of_a_nan(array, what):
+    rows = np.array(_rows())
+    arrays = [rows[:, 0].copy(), rows[:, 1:4].copy(), rows[:, 4:7].copy()]
+    arrays[array].reshape(5, -1)[3, 0] = np.nan
+    with pytest.raises(ValueError, match=f"run.csv: row 4 holds a {what} that is not a finite"):
+        check_log(*arrays, None, SPEC, source="run.csv")
