@@ -1,6 +1,7 @@
 """soft_gym's command line.
 
     python -m soft_gym preset export NAME FILE [--force]
+    python -m soft_gym identify --preset BASE --data LOG.csv --out ARM.yaml [--params NAME ...]
 
 ``preset export`` writes the arm preset NAME to the YAML arm file FILE, every field included
 (geometry, material, actuation and timing, SI units; docs/architecture.md, "Your own arm").
@@ -9,6 +10,10 @@ Edit the copy (give it a name of its own) and use it wherever a preset name is t
     python -m soft_gym preset export wang2023 my_arm.yaml
     # edit my_arm.yaml: name: my_arm, segments[0].length_m: 0.12, ...
     gym.make("SoftArmReach-v0", preset="my_arm.yaml")
+
+``identify`` fits an arm's physical parameters to a log of commanded pressures and measured tip
+positions and writes the fitted arm file, a report and a plot (docs/architecture.md, "Fit the arm
+to your data").
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import argparse
 from pathlib import Path
 
 from soft_gym._cli import CommandParser, HelpFormatter
+from soft_gym.identify.command import add_identify
 from soft_gym.papers import DEFAULT_PRESET
 from soft_gym.robots.arm_file import save_preset
 from soft_gym.robots.presets import PRESETS
@@ -48,6 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("--force", action="store_true",
                         help="replace FILE if it exists (refused otherwise)")
     export.set_defaults(run=_export, command_parser=export)  # errors show its usage line
+    add_identify(commands, HelpFormatter)
     return parser
 
 
