@@ -35,6 +35,10 @@ ENGINES.register("mujoco", MujocoArmSimulator)
 REFERENCE_ENGINE = "pybullet"
 """The engine the papers' experiments run on, and every engine argument's default."""
 
+FAST_ENGINE = "mujoco"
+"""The engine for many short simulations of the bare arm (system identification's replays):
+several times faster than the reference (docs/architecture.md, "The MuJoCo engine")."""
+
 ENGINE_FEATURES: dict[str, str] = {
     "bodies": "rigid bodies beside the arm (a swaying mass, an obstacle rod) and their contacts",
     "rendering": "camera frames (the eye-in-hand camera, the stereo pair, render())",
@@ -147,6 +151,6 @@ def require_engine_features(engine: str,
                 engine, need)
 
 
-__all__ = ["ENGINES", "REFERENCE_ENGINE", "ENGINE_FEATURES",
+__all__ = ["ENGINES", "FAST_ENGINE", "REFERENCE_ENGINE", "ENGINE_FEATURES",
            "EngineFeatureError", "EngineNeed", "engine_supports", "engines_supporting",
            "make_simulator", "require_engine_features"]

@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from soft_gym.engines import make_simulator
+from soft_gym.engines import FAST_ENGINE, make_simulator
 from soft_gym.identify.log import ArmLog
 from soft_gym.robots.spec import ArmSpec
 
-DEFAULT_ENGINE = "mujoco"
+DEFAULT_ENGINE = FAST_ENGINE
 """The engine fits run on: the faster one; a replay needs the arm's physics alone."""
 
 SETTLE_S = 1.0
