@@ -82,10 +82,12 @@ def test_the_small_suite_description_matches_its_agents():
     """Its description says every arm runs its shipped SB3 agents: every arm lists one."""
     spec = yaml.safe_load((SUITES_DIR / "small.yaml").read_text())
     description = " ".join(spec["description"].split())
-    assert "its shipped SB3 agents (SAC on every arm, TD3 too on wang2023)" in description
+    assert ("its shipped SB3 agents (SAC and the recurrent PPO on every arm, TD3 too on "
+            "wang2023)") in description
     for arm, block in spec["arms"].items():
         names = [p if isinstance(p, str) else p["name"] for p in block["policies"]]
         assert f"sb3:sac_{arm}_track" in names, arm
+        assert f"sb3:ppo_lstm_{arm}_track" in names, arm
         assert (f"sb3:td3_{arm}_track" in names) == (arm == "wang2023"), arm
 
 
