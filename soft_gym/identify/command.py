@@ -61,6 +61,10 @@ def run_identify(args: argparse.Namespace, parser: argparse.ArgumentParser) -> N
         base = arm_from_preset(args.preset)
     except ValueError as error:
         fail(parser, "--preset", error)
+    if base.cylinders is not None:
+        fail(parser, "--preset", f"arm {base.name!r} drives its chambers' volumes with cylinders; "
+                                 f"a log is replayed as chamber pressures: give the arm without "
+                                 f"its cylinders section")
     out: Path = args.out
     outputs = (out, *companion_paths(out))
     _check_outputs(parser, out, outputs, args.force)

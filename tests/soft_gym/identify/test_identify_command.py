@@ -17,8 +17,8 @@ from soft_gym.identify.log import write_log
 from soft_gym.identify.parameters import parse_parameters, with_values
 from soft_gym.identify.report import file_sha256
 from soft_gym.identify.synthetic import random_commands, simulated_log
-from soft_gym.robots import load_preset
-from soft_gym.robots.presets import get_preset
+from soft_gym.robots import load_preset, save_preset
+from soft_gym.robots.presets import get_preset, volume_actuated
 
 ROOT = Path(__file__).resolve().parents[3]
 BASE = get_preset("wang2023")
@@ -90,6 +90,16 @@ def test_bad_options_are_one_line_before_any_work(log_file, tmp_path, capsys):
     assert report.read_text(encoding="utf-8") == "keep"
     assert sorted(path.name for path in tmp_path.iterdir()) == ["arm.identify.yaml", "bad.csv",
                                                                  "short.csv"]
+
+
+def test_a_volume_driven_arm_is_refused_before_any_work(log_file, tmp_path, capsys):
+    """An arm file with cylinders drives volumes, which a pressure log cannot replay."""
+    arm = tmp_path / "volume_arm.yaml"
+    save_preset(volume_actuated(get_preset("ho2018")), arm)
+    out = tmp_path / "fitted.yaml"
+    assert_one_line_error(main, ["identify", "--preset", str(arm), "--data", str(log_file),
+                                 "--out", str(out)], "--preset", capsys, out=out,
+                          also="cylinders")
 
 
 def test_python_m_soft_gym_identify_shows_progress_when_piped(log_file, tmp_path):
