@@ -15,11 +15,10 @@ from tqdm import tqdm
 
 from soft_gym._cli import check_file, fail
 from soft_gym._progress import heartbeat
-from soft_gym.engines import ENGINES
+from soft_gym.engines import ENGINES, FAST_ENGINE
 from soft_gym.identify.fit import fit_arm, fit_split
 from soft_gym.identify.log import read_log
 from soft_gym.identify.parameters import FAMILIES, default_parameters, parse_parameters
-from soft_gym.identify.replay import DEFAULT_ENGINE
 from soft_gym.identify.report import (companion_paths, plot_tip_paths, report_document,
                                       write_report)
 from soft_gym.robots.arm_file import ARM_FILE_SUFFIXES, arm_from_preset, save_preset
@@ -46,7 +45,7 @@ def add_identify(commands: argparse._SubParsersAction, formatter: type) -> None:
                           help=f"what to fit, from {list(FAMILIES)} (a segment field with [k] "
                                f"for segment k alone); default: every one, the tip mass only "
                                f"where BASE has one")
-    identify.add_argument("--engine", default=DEFAULT_ENGINE, choices=sorted(ENGINES),
+    identify.add_argument("--engine", default=FAST_ENGINE, choices=sorted(ENGINES),
                           help="the engine simulating each candidate arm")
     identify.add_argument("--name", default=None,
                           help="the fitted arm's name; default: OUT's file stem")

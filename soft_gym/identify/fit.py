@@ -24,10 +24,11 @@ from typing import Callable
 import numpy as np
 from scipy.optimize import least_squares
 
+from soft_gym.engines import FAST_ENGINE
 from soft_gym.identify.log import MIN_ROWS, ArmLog
 from soft_gym.identify.parameters import (LOWER_FACTOR, UPPER_FACTOR, Parameter,
                                           default_parameters, with_values)
-from soft_gym.identify.replay import DEFAULT_ENGINE, replay
+from soft_gym.identify.replay import replay
 from soft_gym.robots.spec import ArmSpec
 
 FIT_FRACTION = 0.75
@@ -118,7 +119,7 @@ def fit_split(n_samples: int, n_parameters: int) -> int:
 
 
 def fit_arm(base: ArmSpec, log: ArmLog, parameters: list[Parameter] | None = None,
-            engine: str = DEFAULT_ENGINE,
+            engine: str = FAST_ENGINE,
             on_evaluation: Callable[[], None] | None = None) -> FitResult:
     """Fit ``parameters`` of the arm ``base`` to ``log`` (method in the module docstring).
 

@@ -9,14 +9,11 @@ from soft_gym.engines import FAST_ENGINE, make_simulator
 from soft_gym.identify.log import ArmLog
 from soft_gym.robots.spec import ArmSpec
 
-DEFAULT_ENGINE = FAST_ENGINE
-"""The engine fits run on: the faster one; a replay needs the arm's physics alone."""
-
 SETTLE_S = 1.0
 """How long the simulated arm settles under the log's first command before the first sample (s)."""
 
 
-def replay(spec: ArmSpec, log: ArmLog, engine: str = DEFAULT_ENGINE) -> np.ndarray:
+def replay(spec: ArmSpec, log: ArmLog, engine: str = FAST_ENGINE) -> np.ndarray:
     """Simulate ``log``'s commands on a fresh simulator of ``spec`` and read the tip at its times.
 
     The arm starts at rest under the first row's command (``sim.reset(pressure_pa=...,

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from soft_gym.engines import FAST_ENGINE
 from soft_gym.identify.log import ArmLog, check_log
-from soft_gym.identify.replay import DEFAULT_ENGINE, replay
+from soft_gym.identify.replay import replay
 from soft_gym.robots.spec import ArmSpec
 
 
@@ -45,7 +46,7 @@ def random_commands(spec: ArmSpec, duration_s: float, hold_s: float, rng: np.ran
 
 def simulated_log(spec: ArmSpec, times_s: np.ndarray, commands_pa: np.ndarray,
                   noise_std_m: float, rng: np.random.Generator,
-                  engine: str = DEFAULT_ENGINE) -> ArmLog:
+                  engine: str = FAST_ENGINE) -> ArmLog:
     """The log ``spec`` would give under ``commands_pa``, with Gaussian noise on every
     coordinate of the tip position.
 
